@@ -1,0 +1,38 @@
+# sosdyn — one command per experiment. `make run` and `make test` work on a fresh clone.
+PY      ?= python3
+VENV    := .venv
+BIN     := $(VENV)/bin
+STAMP   := $(VENV)/.installed
+PYTEST  := $(BIN)/python -m pytest
+
+.PHONY: venv run test test-slow bench bench-sos fig1 fig2 fig3 fig4 lasa-all demo3d report clean
+
+venv: $(STAMP)
+$(STAMP): pyproject.toml
+	test -d $(VENV) || $(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q -e '.[all]'
+	touch $(STAMP)
+
+run: venv
+	$(BIN)/python -m problems run
+
+test: venv
+	$(PYTEST) -q -m "not slow"
+
+test-slow: venv
+	$(PYTEST) -q -m slow
+
+bench: venv
+	$(BIN)/python -m pip install -q -e '.[bench]'
+	$(BIN)/python -m problems bench
+
+bench-sos: venv
+	$(BIN)/python -m pip install -q -e '.[bench]'
+	$(BIN)/python -m problems bench-sos
+
+fig1 fig2 fig3 fig4 lasa-all demo3d report: venv
+	$(BIN)/python -m problems $@
+
+clean:
+	rm -rf reports/cache reports/figures reports/index.html reports/report.pdf

@@ -1,0 +1,12 @@
+"""sosdyn: sum-of-squares programming and provably convergent motion learning (CDSP).
+
+Layers: :mod:`sosdyn.poly` (numeric polynomials) -> :mod:`sosdyn.sos` (SOS programs and
+their conic lowering) -> :mod:`sosdyn.lfd` (learning from demonstrations).
+"""
+from .errors import (DemonstrationError, InfeasibleError, InputError, ModelFileError,
+                     NotCertifiedError, NotFittedError, NotSymmetricError, PolynomialError,
+                     SolverError, SosdynError)
+from .poly import PolyMatrix, Polynomial, from_sympy, jacobian, to_sympy, variables
+from .sos import SOSProgram, Solution, sum_squares
+
+__version__ = "0.1.0"

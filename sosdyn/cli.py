@@ -1,0 +1,228 @@
+"""The ``sosdyn`` command: fit, roll out, run experiments, build reports, list LASA shapes.
+
+    sosdyn fit demo1.csv demo2.csv --out model.json [--components K ...]
+    sosdyn fit lasa:Leaf_1 --out leaf.json
+    sosdyn rollout model.json --from 10,-5 [--duration T --dt DT --out traj.csv]
+    sosdyn experiment fig1              # runs problems.fig1.main() (from the repo root)
+    sosdyn report [--results reports/results.json --out reports]
+    sosdyn lasa list
+
+Global options ``--quiet`` (no progress or summaries) and ``--debug`` (full
+tracebacks, debug logging) go before the command. Any sosdyn error or missing file ends
+the command with one red line on stderr and exit status 1.
+
+sosdyn itself and its solvers are imported inside the commands, so ``sosdyn --help``
+is quick.
+"""
+
+from __future__ import annotations
+
+import enum
+import importlib
+import logging
+import pkgutil
+import sys
+import time
+from contextlib import nullcontext
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.logging import RichHandler
+from rich.markup import escape
+
+from .errors import InputError, SosdynError
+
+app = typer.Typer(name="sosdyn", no_args_is_help=True, add_completion=False,
+                  help="SOS programming and provably convergent motion learning (CDSP).")
+lasa_app = typer.Typer(no_args_is_help=True, help="The LASA handwriting data set.")
+app.add_typer(lasa_app, name="lasa")
+
+out = Console()
+err = Console(stderr=True)
+
+
+class _State:
+    """Global options, set by the app callback."""
+
+    quiet = False
+    debug = False
+
+
+class SolverMethod(str, enum.Enum):
+    alternating = "alternating"
+    ica = "ica"
+
+
+@app.callback()
+def _global_options(
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print results only: no progress, no summaries.")] = False,
+    debug: Annotated[bool, typer.Option("--debug", help="Show full tracebacks and debug logs.")] = False,
+) -> None:
+    _State.quiet, _State.debug = quiet, debug
+    if debug:
+        logging.basicConfig(level=logging.DEBUG, format="%(message)s",
+                            handlers=[RichHandler(console=err, show_path=True)])
+
+
+def _info(message: str) -> None:
+    if not _State.quiet:
+        out.print(message)
+
+
+def _status(message: str):
+    """A spinner while a long single call runs (nothing when --quiet)."""
+    return nullcontext() if _State.quiet else err.status(message)
+
+
+def _existing(path: Path, what: str) -> Path:
+    """``path``, or FileNotFoundError naming ``what`` (checked before sosdyn is asked)."""
+    if not path.is_file():
+        raise FileNotFoundError(f"{what} not found: {path}")
+    return path
+
+
+def _parse_point(text: str) -> np.ndarray:
+    try:
+        point = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise InputError(f"--from expects comma-separated numbers like 10,-5; got {text!r}.") from None
+    if not np.all(np.isfinite(point)):
+        raise InputError(f"--from must be finite; got {text!r}.")
+    return point
+
+
+# --------------------------------------------------------------------------- commands
+
+@app.command()
+def fit(
+    demos: Annotated[list[str], typer.Argument(
+        help="Demonstration files (CSV/NPY, one demonstration each), or lasa:NAME.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="Where to save the model (JSON).")] = Path("model.json"),
+    components: Annotated[int | None, typer.Option("--components", "-k", min=1, help="Gaussian components K.")] = None,
+    metric_degree: Annotated[int | None, typer.Option(min=0, help="Degree of the polynomial metric.")] = None,
+    field_degree: Annotated[int | None, typer.Option(min=1, help="Degree of the polynomial field.")] = None,
+    gamma: Annotated[float | None, typer.Option(help="Contraction rate.")] = None,
+    solver: Annotated[str | None, typer.Option(help="Conic solver, e.g. CLARABEL or SCS.")] = None,
+    method: Annotated[SolverMethod | None, typer.Option(help="How the bilinear program is solved.")] = None,
+    seed: Annotated[int | None, typer.Option(help="Random seed (EM initialisation).")] = None,
+) -> None:
+    """Learn a certified CDSP model from demonstrations and save it.
+
+    Options left out use the model's defaults.
+    """
+    import sosdyn as sd
+
+    if len(demos) == 1 and demos[0].startswith("lasa:"):
+        data = sd.load_lasa(demos[0].removeprefix("lasa:"))
+    else:
+        paths = [_existing(Path(p), "demonstration file") for p in demos]
+        data = sd.load_demos(paths)
+    options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
+               "gamma": gamma, "solver": solver, "solver_method": method and method.value,
+               "random_state": seed}
+    model = sd.CDSP(**{k: v for k, v in options.items() if v is not None})
+    start = time.perf_counter()
+    with _status(f"fitting CDSP to {len(data)} demonstrations of {data.name} ..."):
+        model.fit(data)
+    model.save(out_path)
+    _info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} demonstrations, "
+          f"fit in {time.perf_counter() - start:.1f} s)")
+
+
+@app.command()
+def rollout(
+    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
+    start: Annotated[str, typer.Option("--from", help="Start state, comma-separated, e.g. 10,-5.",
+                                       show_default=False)],
+    duration: Annotated[float, typer.Option(min=0.0, help="Seconds to integrate.")] = 10.0,
+    dt: Annotated[float | None, typer.Option(min=0.0, help="Time step (s); default: the model's.")] = None,
+    out_path: Annotated[Path | None, typer.Option("--out", "-o", help="Write t and positions as CSV.")] = None,
+) -> None:
+    """Integrate a saved model from a start state; print the end point, optionally write
+    a CSV (columns t,x1..xn: loadable again as a demonstration)."""
+    import sosdyn as sd
+
+    x0 = _parse_point(start)
+    _existing(model_path, "model file")
+    model = sd.load_model(model_path)
+    traj = model.rollout(x0, duration, **({} if dt is None else {"dt": dt}))
+    t, pos = np.asarray(traj.t), np.asarray(traj.pos)
+    if out_path is not None:
+        out_path.parent.mkdir(parents=True, exist_ok=True)     # same layout as load_demos reads
+        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="",
+                   header=",".join(["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]))
+        _info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
+    end = ", ".join(f"{v:.4g}" for v in pos[-1])
+    out.print(f"t = {t[-1]:.3g} s: x = ({end})")
+
+
+@app.command()
+def experiment(name: Annotated[str, typer.Argument(help="Experiment module in problems/, e.g. fig1.",
+                                                   show_default=False)]) -> None:
+    """Run one experiment, problems/<name>.py (run from the repository root)."""
+    module_name = name.replace("-", "_")
+    if not module_name.isidentifier():
+        raise InputError(f"{name!r} is not an experiment name.")
+    if str(Path.cwd()) not in sys.path:          # problems/ lives in the repo, not the package
+        sys.path.insert(0, str(Path.cwd()))
+    try:
+        module = importlib.import_module(f"problems.{module_name}")
+    except ModuleNotFoundError as exc:
+        if exc.name not in ("problems", f"problems.{module_name}"):
+            raise                                 # a missing dependency of the experiment
+        raise InputError(f"no experiment {name!r}; available: {', '.join(_experiments()) or 'none'} "
+                         "(run sosdyn from the repository root).") from None
+    module.main()
+
+
+def _experiments() -> list[str]:
+    try:
+        package = importlib.import_module("problems")
+    except ModuleNotFoundError:
+        return []
+    return sorted(m.name for m in pkgutil.iter_modules(package.__path__) if not m.name.startswith("_"))
+
+
+@app.command()
+def report(
+    results: Annotated[Path, typer.Option(help="Results JSON written by the experiments.")] = Path("reports/results.json"),
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="Folder for index.html and report.pdf.")] = Path("reports"),
+) -> None:
+    """Build the HTML report and its PDF from a results JSON."""
+    from .report.html import build_report
+
+    with _status("rendering the report ..."):
+        paths = build_report(results, out_dir)
+    _info(f"[green]wrote[/] {escape(str(paths['html']))} and {escape(str(paths['pdf']))}")
+
+
+@lasa_app.command("list")
+def lasa_list() -> None:
+    """Print the names of the 30 LASA shapes, one per line."""
+    import sosdyn as sd
+
+    for name in sd.lasa_names():
+        out.print(name, highlight=False)
+
+
+# ------------------------------------------------------------------------ entry point
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the CLI; sosdyn errors and missing files become one red line and exit 1."""
+    try:
+        app(args=argv, prog_name="sosdyn")
+    except (SosdynError, FileNotFoundError) as exc:
+        if _State.debug:
+            raise
+        err.print(f"[bold red]error:[/] {escape(str(exc))}", soft_wrap=True, highlight=False)
+        raise SystemExit(1) from None
+    except KeyboardInterrupt:
+        err.print("[red]interrupted[/]")
+        raise SystemExit(130) from None
+
+
+if __name__ == "__main__":
+    main()

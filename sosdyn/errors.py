@@ -1,0 +1,55 @@
+"""The exception hierarchy of sosdyn: one root, a few typed branches.
+
+Every error raised on purpose by sosdyn derives from :class:`SosdynError`, so a caller
+can catch all of them at once; each message says what was wrong and what to try.
+"""
+
+
+class SosdynError(Exception):
+    """Root of every error sosdyn raises on purpose."""
+
+
+class InputError(SosdynError, ValueError):
+    """Bad input caught at the boundary, before any optimisation starts."""
+
+
+class PolynomialError(InputError):
+    """Polynomial algebra misuse: mismatched shapes, bilinear products, bad degrees."""
+
+
+class NotSymmetricError(PolynomialError):
+    """A matrix that must be symmetric (SOS matrix, metric) is not."""
+
+
+class DemonstrationError(InputError):
+    """Demonstrations that cannot be learned from (NaN, ragged, too short, goals disagree)."""
+
+
+class ModelFileError(SosdynError):
+    """A saved model that is corrupt, truncated, from another version, or was edited."""
+
+
+class SolverError(SosdynError):
+    """A conic solve did not produce a usable answer.
+
+    ``status`` is the normalised status ("infeasible", "unbounded", "solver_error",
+    "optimal_inaccurate"); ``hint`` says what to try next.
+    """
+
+    def __init__(self, message, status="solver_error", hint=None):
+        self.status = status
+        self.hint = hint
+        text = message if hint is None else f"{message} Try: {hint}"
+        super().__init__(text)
+
+
+class InfeasibleError(SolverError):
+    """The solver proved the program infeasible (no certificate exists at this degree)."""
+
+
+class NotCertifiedError(SolverError):
+    """A learned model whose independent check of the certificate failed."""
+
+
+class NotFittedError(SosdynError, AttributeError):
+    """An estimator used before ``fit``."""

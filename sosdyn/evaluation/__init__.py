@@ -1,0 +1,1 @@
+"""Evaluation of learned motions: accuracy metrics and the perturbation protocol."""

@@ -1,0 +1,1 @@
+"""Learning from demonstration: demonstration data and rollouts of learned vector fields."""

@@ -1,0 +1,88 @@
+"""Monomial exponent arrays: the numeric core shared by every polynomial operation.
+
+A polynomial in variables (v_1, ..., v_n) stores its monomials as an integer array E of
+shape (m, n); row i is the exponent vector alpha_i of the monomial v^alpha_i.
+"""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+_MAX_KEY = 2**62
+
+
+def monomial_keys(exps: np.ndarray, base: int | None = None) -> np.ndarray | None:
+    """Encode exponent rows as int64 keys in mixed radix ``base`` (None if they overflow)."""
+    m, n = exps.shape
+    if base is None:
+        base = int(exps.max()) + 1 if exps.size else 1
+    if n == 0:
+        return np.zeros(m, dtype=np.int64)
+    if float(base) ** n >= _MAX_KEY:
+        return None
+    weights = base ** np.arange(n - 1, -1, -1, dtype=np.int64)
+    return exps.astype(np.int64) @ weights
+
+
+def unique_rows(exps: np.ndarray):
+    """Unique exponent rows (sorted lexicographically) and the inverse index of every row."""
+    if exps.shape[0] == 0:
+        return exps.reshape(0, exps.shape[1]), np.zeros(0, dtype=np.int64)
+    keys = monomial_keys(exps)
+    if keys is None:
+        uniq, inv = np.unique(exps, axis=0, return_inverse=True)
+        return uniq, inv.ravel()
+    _, first, inv = np.unique(keys, return_index=True, return_inverse=True)
+    return exps[first], inv.ravel()
+
+
+def sum_rows(exps: np.ndarray, coef: np.ndarray):
+    """Combine like monomials: unique exponent rows and the summed coefficient rows."""
+    uniq, inv = unique_rows(exps)
+    order = np.argsort(inv, kind="stable")
+    sorted_inv = inv[order]
+    if sorted_inv.size == 0:
+        return uniq, coef[:0]
+    starts = np.flatnonzero(np.r_[True, sorted_inv[1:] != sorted_inv[:-1]])
+    return uniq, np.add.reduceat(coef[order], starts, axis=0)
+
+
+def monomials_up_to(n: int, degree: int, min_degree: int = 0,
+                    max_per_var: np.ndarray | None = None) -> np.ndarray:
+    """All exponent vectors in n variables with min_degree <= |alpha| <= degree.
+
+    ``max_per_var`` optionally caps each variable's exponent. Rows are ordered by total
+    degree, then lexicographically (graded order).
+    """
+    if degree < 0 or degree < min_degree:
+        return np.zeros((0, n), dtype=np.int64)
+    if n == 0:
+        return np.zeros((1 if min_degree <= 0 else 0, 0), dtype=np.int64)
+    caps = np.full(n, degree) if max_per_var is None else np.minimum(max_per_var, degree)
+    rows = [a for a in itertools.product(*(range(int(c) + 1) for c in caps))
+            if min_degree <= sum(a) <= degree]
+    if not rows:
+        return np.zeros((0, n), dtype=np.int64)
+    arr = np.array(rows, dtype=np.int64).reshape(-1, n)
+    order = np.lexsort(tuple(-arr[:, i] for i in range(n - 1, -1, -1)) + (arr.sum(1),))
+    return arr[order]
+
+
+def match_rows(table: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Index of each query row in ``table`` (rows unique), -1 where absent."""
+    if queries.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    if table.shape[0] == 0:
+        return np.full(queries.shape[0], -1, dtype=np.int64)
+    base = int(max(table.max(initial=0), queries.max(initial=0))) + 1
+    tk = monomial_keys(table, base)
+    qk = monomial_keys(queries, base)
+    if tk is None:
+        lookup = {tuple(r): i for i, r in enumerate(table)}
+        return np.array([lookup.get(tuple(r), -1) for r in queries], dtype=np.int64)
+    order = np.argsort(tk)
+    pos = np.searchsorted(tk[order], qk)
+    pos = np.clip(pos, 0, len(tk) - 1)
+    found = tk[order][pos] == qk
+    return np.where(found, order[pos], -1)

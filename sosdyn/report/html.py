@@ -1,0 +1,338 @@
+"""The experiment report: one self-contained HTML page and the same page as PDF.
+
+:func:`render_html` turns a *results dict* into ``out_dir/index.html`` (figures are
+embedded as data URIs, so the file can be mailed or opened from anywhere);
+:func:`render_pdf` prints that page with WeasyPrint; :func:`build_report` does both
+from a ``results.json``.
+
+Results schema
+--------------
+Every key is optional: a missing (or unreadable) section is shown as "not run".
+Lengths are in the demonstrations' unit (mm for LASA), times in seconds. A *stat* is
+``{"mean": float, "std": float, "per_demo": [float, ...]}`` (``per_demo`` optional).
+
+.. code-block:: text
+
+    {"meta": {"sosdyn_version", "git_commit", "created", "python", "platform",
+              "packages": {name: version}, "seed", "command"},
+     "findings": [{"title": str, "text": str (trusted HTML), "numbers": {label: value}}],
+     "methods": {method: {"description": str, "settings": {name: value}}},
+     "accuracy": {shape: {method: {
+         "sea": stat, "dtwd_total": stat, "dtwd_per_point": stat,
+         "vel_rmse": float, "goal_error": stat,
+         "grid_convergence": float | null,      # fraction of grid starts reaching the goal
+         "n_points": int, "fit_time_s": float, "certified": bool | null}}},
+     "robustness": {shape: {method: {
+         "push":        {"dtwd_total": stat, "goal_error": stat, "converged": float},
+         "goal_change": {"dtwd_total": stat, "goal_error": stat, "converged": float}}}},
+     "certificates": {shape: {method: {
+         "min_gram_eig", "max_coeff_residual", "max_sampled_eig", "n_samples",
+         "passed": bool, "metric_collapse": {label: value} | null}}},
+     "timings": {shape: {method: {"em_s", "build_s", "solve_s", "verify_s", "total_s"}}},
+     "figures": {name: {"svg": path, "png": path, "caption": str}},
+     "bench": markdown str | null}
+
+Figure paths are relative to ``base_dir`` (for :func:`build_report`: the folder of
+``results.json``); SVG is embedded when present and below 2 MB, PNG otherwise.
+``findings[*].text`` is inserted unescaped: it is written by sosdyn's own experiment
+code, never by a user.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import warnings
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import jinja2
+from markupsafe import escape
+
+from ..errors import InputError, SosdynError
+
+__all__ = ["build_report", "load_results", "render_html", "render_pdf"]
+
+_MAX_INLINE_SVG = 2_000_000      # bytes; larger SVGs (dense streamplots) go in as PNG
+
+# (key, column header, better) for the accuracy table; better: "low", "high" or None.
+_ACCURACY_COLUMNS = (
+    ("sea", "SEA (mm²)", "low"),
+    ("dtwd_total", "DTWD total (mm)", "low"),
+    ("dtwd_per_point", "DTWD / point (mm)", "low"),
+    ("vel_rmse", "vel. RMSE (mm/s)", "low"),
+    ("goal_error", "goal error (mm)", "low"),
+    ("grid_convergence", "grid conv.", "high"),
+    ("n_points", "points", None),
+    ("fit_time_s", "fit (s)", None),
+    ("certified", "certified", None),
+)
+_SCENARIOS = (("push", "after pushes"), ("goal_change", "after goal changes"))
+_SCENARIO_COLUMNS = (("dtwd_total", "DTWD (mm)"), ("goal_error", "goal error (mm)"),
+                     ("converged", "converged"))
+_CERTIFICATE_COLUMNS = (("min_gram_eig", "min Gram eig."), ("max_coeff_residual", "max coeff. residual"),
+                        ("max_sampled_eig", "max sampled eig."), ("n_samples", "samples"))
+_TIMING_COLUMNS = (("em_s", "EM"), ("build_s", "build"), ("solve_s", "solve"),
+                   ("verify_s", "verify"), ("total_s", "total"))
+
+
+# ----------------------------------------------------------------------- formatting
+
+def fmt(value, digits: int = 3) -> str:
+    """A table cell: ``digits`` significant digits, scientific outside [1e-3, 1e5),
+    "—" for None."""
+    if value is None:
+        return "—"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "∞" if value > 0 else "−∞"
+        size = abs(value)
+        if size == 0:
+            return "0"
+        if 1e-3 <= size < 1e5:
+            return f"{value:.{max(0, digits - 1 - math.floor(math.log10(size)))}f}"
+        return f"{value:.{digits - 1}e}"
+    if isinstance(value, Mapping):
+        return "; ".join(f"{k}: {fmt(v)}" for k, v in value.items())
+    return str(value)
+
+
+def _mean(entry) -> float | None:
+    """Mean of a stat dict or a bare number; None when absent."""
+    value = entry.get("mean") if isinstance(entry, Mapping) else entry
+    return None if value is None or isinstance(value, bool) else float(value)
+
+
+def _stat_text(entry) -> str:
+    if isinstance(entry, Mapping):
+        if entry.get("std") is None:
+            return fmt(entry.get("mean"))
+        return f"{fmt(entry.get('mean'))} ± {fmt(entry.get('std'), digits=2)}"
+    return fmt(entry)
+
+
+def _percent(value) -> str:
+    return "—" if value is None else f"{100 * float(value):.0f} %"
+
+
+def _pairs(section: Mapping) -> list[tuple[str, str, Mapping]]:
+    """(shape, method, entry) triples of a shape -> method -> entry section."""
+    return [(shape, method, entry or {}) for shape, per_method in section.items()
+            for method, entry in (per_method or {}).items()]
+
+
+def _group_rows(rows: list[dict]) -> list[dict]:
+    """Mark the first row of each shape (``first``): it starts a visual group.
+
+    The shape is repeated on every row (muted after the first) rather than spanned, so a
+    page break inside a group still shows which shape a row belongs to.
+    """
+    for i, row in enumerate(rows):
+        row["first"] = i == 0 or rows[i - 1]["shape"] != row["shape"]
+    return rows
+
+
+# ------------------------------------------------------------------ section builders
+
+def _accuracy(section: Mapping) -> dict:
+    triples = _pairs(section)
+    best: dict[tuple[str, str], float] = {}
+    for key, _, better in _ACCURACY_COLUMNS:
+        if better is None:
+            continue
+        for shape in section:
+            means = [m for s, _, e in triples if s == shape and (m := _mean(e.get(key))) is not None
+                     and math.isfinite(m)]
+            if len(means) > 1:
+                best[shape, key] = min(means) if better == "low" else max(means)
+    rows = []
+    for shape, method, entry in triples:
+        cells = []
+        for key, _, better in _ACCURACY_COLUMNS:
+            value = entry.get(key)
+            if key == "certified":
+                text = {True: "✓", False: "✗ failed", None: "n/a"}[value]
+            elif key == "grid_convergence":
+                text = _percent(value)
+            else:
+                text = _stat_text(value)
+            cells.append({"text": text, "best": better is not None
+                          and best.get((shape, key)) == _mean(value)})
+        rows.append({"shape": shape, "method": method, "cells": cells})
+    return {"headers": [h for _, h, _ in _ACCURACY_COLUMNS], "rows": _group_rows(rows)}
+
+
+def _robustness(section: Mapping) -> dict:
+    rows = []
+    for shape, method, entry in _pairs(section):
+        cells = []
+        for scenario, _ in _SCENARIOS:
+            part = entry.get(scenario) or {}
+            for key, _ in _SCENARIO_COLUMNS:
+                value = part.get(key)
+                cells.append({"text": _percent(value) if key == "converged" else _stat_text(value),
+                              "warn": key == "converged" and value is not None and value < 1.0})
+        rows.append({"shape": shape, "method": method, "cells": cells})
+    return {"scenarios": [label for _, label in _SCENARIOS],
+            "headers": [h for _, h in _SCENARIO_COLUMNS], "rows": _group_rows(rows)}
+
+
+def _certificates(section: Mapping) -> dict:
+    rows = [{"shape": shape, "method": method,
+             "cells": [fmt(entry.get(key)) for key, _ in _CERTIFICATE_COLUMNS],
+             "passed": entry.get("passed"),
+             "collapse": fmt(entry.get("metric_collapse"))}
+            for shape, method, entry in _pairs(section)]
+    return {"headers": [h for _, h in _CERTIFICATE_COLUMNS], "rows": _group_rows(rows)}
+
+
+def _timings(section: Mapping) -> dict:
+    triples = _pairs(section)
+    rows = [{"shape": shape, "method": method, "cells": [fmt(entry.get(key)) for key, _ in _TIMING_COLUMNS]}
+            for shape, method, entry in triples]
+    total = sum(float(e.get("total_s") or 0.0) for _, _, e in triples)
+    return {"headers": [f"{h} (s)" for _, h in _TIMING_COLUMNS], "rows": _group_rows(rows),
+            "total": fmt(total)}
+
+
+def _methods(section: Mapping) -> list[dict]:
+    return [{"name": name, "description": (spec or {}).get("description", ""),
+             "settings": [(k, fmt(v)) for k, v in ((spec or {}).get("settings") or {}).items()]}
+            for name, spec in section.items()]
+
+
+def _findings(section) -> list[dict]:
+    return [{"title": f.get("title", ""), "text": f.get("text", ""),
+             "numbers": [(k, fmt(v)) for k, v in (f.get("numbers") or {}).items()]}
+            for f in section]
+
+
+def _environment(meta: Mapping) -> dict:
+    return {"rows": [(k, fmt(v)) for k, v in meta.items() if k != "packages"],
+            "packages": sorted((k, str(v)) for k, v in (meta.get("packages") or {}).items())}
+
+
+def _bench(text: str) -> str:
+    """Markdown to HTML with markdown-it (installed with rich); <pre> without it."""
+    try:
+        from markdown_it import MarkdownIt
+    except ImportError:
+        return f"<pre>{escape(text)}</pre>"
+    return MarkdownIt("commonmark", {"html": False}).enable("table").render(text)
+
+
+def _figures(section: Mapping, base_dir: Path) -> list[dict]:
+    figures = []
+    for name, spec in section.items():
+        spec = spec or {}
+        src, missing = None, []
+        for kind, mime in (("svg", "image/svg+xml"), ("png", "image/png")):
+            if not spec.get(kind):
+                continue
+            path = base_dir / spec[kind]
+            if not path.is_file():
+                missing.append(str(spec[kind]))
+                continue
+            data = path.read_bytes()
+            if kind == "svg" and len(data) > _MAX_INLINE_SVG and spec.get("png"):
+                continue
+            src = f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
+            break
+        figures.append({"name": name, "caption": spec.get("caption", name), "src": src,
+                        "missing": ", ".join(missing) or "no file given"})
+    return figures
+
+
+_SECTIONS: dict[str, Callable] = {
+    "findings": _findings, "methods": _methods, "accuracy": _accuracy,
+    "robustness": _robustness, "certificates": _certificates, "timings": _timings,
+    "meta": _environment, "bench": _bench,
+}
+
+
+# --------------------------------------------------------------------------- public
+
+def _environment_jinja() -> jinja2.Environment:
+    env = jinja2.Environment(loader=jinja2.PackageLoader("sosdyn.report", "templates"),
+                             autoescape=True, trim_blocks=True, lstrip_blocks=True)
+    env.filters["fmt"] = fmt
+    return env
+
+
+def load_results(path: str | Path) -> dict:
+    """Read a results JSON; a missing file raises FileNotFoundError, bad JSON InputError."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"results file not found: {path}")
+    try:
+        results = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path} is not valid JSON ({exc}); re-run the experiment that writes it.") from exc
+    if not isinstance(results, dict):
+        raise InputError(f"{path} holds a {type(results).__name__}, expected a JSON object.")
+    return results
+
+
+def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path | None = None) -> Path:
+    """Write ``out_dir/index.html`` for ``results`` (schema: module docstring).
+
+    Figure paths are resolved against ``base_dir`` (default ``out_dir``). Each section
+    is built on its own: a missing section renders as "not run", a malformed one as
+    "could not be rendered" with the reason, and neither stops the others.
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    context: dict = {"errors": {}}
+    for key, build in _SECTIONS.items():
+        value = results.get(key)
+        context[key] = None
+        if value in (None, {}, [], ""):
+            continue
+        try:
+            context[key] = build(value)
+        except (AttributeError, KeyError, TypeError, ValueError) as exc:
+            context["errors"][key] = f"{type(exc).__name__}: {exc}"
+    context["figures"] = _figures(results.get("figures") or {}, Path(base_dir or out_dir))
+    context["meta_raw"] = results.get("meta") or {}
+    html = _environment_jinja().get_template("report.html.j2").render(**context)
+    path = out_dir / "index.html"
+    path.write_text(html, encoding="utf-8")
+    return path
+
+
+def render_pdf(html_path: str | Path, pdf_path: str | Path) -> Path:
+    """Print the HTML report to PDF with WeasyPrint (print stylesheet of the template).
+
+    WeasyPrint's DeprecationWarning about a missing libharfbuzz-subset0 is silenced
+    (fonts are then embedded whole); missing system fonts only degrade the glyphs.
+    """
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="HarfBuzz-Subset", category=DeprecationWarning)
+        try:
+            import weasyprint
+        except (ImportError, OSError) as exc:   # OSError: pango/cairo libraries missing
+            raise SosdynError(f"PDF export needs WeasyPrint and pango ({exc}). "
+                              "Try: pip install 'sosdyn[report]'") from exc
+    pdf_path = Path(pdf_path)
+    pdf_path.parent.mkdir(parents=True, exist_ok=True)
+    weasyprint.HTML(filename=str(html_path)).write_pdf(str(pdf_path))
+    return pdf_path
+
+
+def build_report(results_json_path: str | Path, out_dir: str | Path) -> dict[str, Path]:
+    """``results.json`` -> ``out_dir/index.html`` and ``out_dir/report.pdf``.
+
+    Figure paths in the results are relative to the folder of ``results.json``.
+    Returns ``{"html": path, "pdf": path}``.
+    """
+    results_json_path = Path(results_json_path)
+    results = load_results(results_json_path)
+    html = render_html(results, out_dir, base_dir=results_json_path.parent)
+    return {"html": html, "pdf": render_pdf(html, Path(out_dir) / "report.pdf")}

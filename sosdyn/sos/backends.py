@@ -1,0 +1,145 @@
+"""Solver back ends: the boundary between sosdyn's conic data and a conic solver.
+
+* ``direct``: Clarabel's own API on :class:`~.conic.ConicData` (no canonicalisation, so a
+  re-solve with new numbers costs only the solve);
+* ``cvxpy``: the same data as a cvxpy problem (any installed cvxpy solver, plus user
+  cvxpy constraints and objectives).
+
+Both return a :class:`~.solution.Solution` with a normalised status:
+"optimal" | "optimal_inaccurate" | "infeasible" | "unbounded" | "solver_error".
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import InputError
+from .conic import cvxpy_block_vars
+from .gram import svec_pairs
+from .solution import Solution
+
+_CLARABEL_STATUS = {
+    "Solved": "optimal", "AlmostSolved": "optimal_inaccurate",
+    "PrimalInfeasible": "infeasible", "AlmostPrimalInfeasible": "infeasible",
+    "DualInfeasible": "unbounded", "AlmostDualInfeasible": "unbounded",
+}
+_CVXPY_STATUS = {
+    "optimal": "optimal", "optimal_inaccurate": "optimal_inaccurate",
+    "infeasible": "infeasible", "infeasible_inaccurate": "infeasible",
+    "unbounded": "unbounded", "unbounded_inaccurate": "unbounded",
+}
+
+
+def _clarabel(data, verbose, settings):
+    import clarabel
+
+    blocks = [sp.csc_matrix(data.A_eq), -sp.csc_matrix(data.A_ge)]
+    rhs = [data.b_eq, -data.b_ge]
+    cones = []
+    if data.A_eq.shape[0]:
+        cones.append(clarabel.ZeroConeT(data.A_eq.shape[0]))
+    if data.A_ge.shape[0]:
+        cones.append(clarabel.NonnegativeConeT(data.A_ge.shape[0]))
+    for pos, size in data.psd:
+        blocks.append(sp.csc_matrix((-np.ones(pos.size), (np.arange(pos.size), pos)), shape=(pos.size, data.n)))
+        rhs.append(np.zeros(pos.size))
+        cones.append(clarabel.PSDTriangleConeT(size))
+    A = sp.vstack(blocks).tocsc()
+    P = sp.triu(2.0 * data.P).tocsc() if data.P is not None else sp.csc_matrix((data.n, data.n))
+    opts = clarabel.DefaultSettings()
+    opts.verbose = verbose
+    for k, v in settings.items():
+        if not hasattr(opts, k):
+            raise InputError(f"unknown Clarabel setting {k!r}")
+        setattr(opts, k, v)
+    t0 = time.perf_counter()
+    result = clarabel.DefaultSolver(P, data.q, A, np.concatenate(rhs), cones, opts).solve()
+    seconds = time.perf_counter() - t0
+    status = _CLARABEL_STATUS.get(str(result.status), "solver_error")
+    x = np.asarray(result.x, dtype=float)
+    return status, x, str(result.status), seconds, {"iterations": int(result.iterations)}
+
+
+def _svec_to_vec_map(size):
+    """Sparse map from svec (scaled) to the column-major vec of the symmetric matrix."""
+    i, j = svec_pairs(size)
+    w = np.where(i == j, 1.0, 1.0 / np.sqrt(2.0))
+    rows = np.concatenate([i + size * j, j + size * i])
+    cols = np.concatenate([np.arange(i.size)] * 2)
+    vals = np.concatenate([w, np.where(i == j, 0.0, w)])
+    return sp.csr_matrix((vals, (rows, cols)), shape=(size * size, i.size))
+
+
+def _cvxpy(program, data, solver, verbose, settings):
+    import cvxpy as cp
+
+    x = cp.hstack(cvxpy_block_vars(program))
+    cons = []
+    if data.A_eq.shape[0]:
+        cons.append(data.A_eq @ x == data.b_eq)
+    if data.A_ge.shape[0]:
+        cons.append(data.A_ge @ x >= data.b_ge)
+    for pos, size in data.psd:
+        Q = cp.Variable((size, size), PSD=True)
+        cons.append(_svec_to_vec_map(size) @ x[pos] == cp.vec(Q, order="F"))
+    cons += program.cvxpy_constraints
+    expr = program.objective[1] if program.objective else None
+    if isinstance(expr, cp.Expression):
+        obj = cp.Minimize(expr) if program.objective[0] == "min" else cp.Maximize(expr)
+    else:
+        f = data.q @ x + data.c
+        if data.P is not None:
+            f = f + cp.quad_form(x, cp.psd_wrap(data.P))
+        obj = cp.Minimize(f)
+    problem = cp.Problem(obj, cons)
+    t0 = time.perf_counter()
+    try:
+        problem.solve(solver=solver, verbose=verbose, **settings)
+        raw = problem.status
+    except cp.error.SolverError as exc:
+        raw = f"solver_error: {exc}"
+    seconds = time.perf_counter() - t0
+    status = _CVXPY_STATUS.get(raw, "solver_error")
+    value = x.value if x.value is not None else np.full(data.n, np.nan)
+    stats = problem.solver_stats
+    info = {"compile_seconds": getattr(problem, "compilation_time", None) or 0.0,
+            "solver_seconds": getattr(stats, "solve_time", None) if stats else None,
+            "iterations": getattr(stats, "num_iters", None) if stats else None}
+    if program.objective and isinstance(program.objective[1], cp.Expression):
+        info["objective"] = problem.value
+    return status, np.asarray(value, dtype=float), raw, seconds, info
+
+
+def solve_program(program, solver, backend, scale, verbose, **settings) -> Solution:
+    """Assemble ``program`` (cached) and solve it with the chosen back end."""
+    import cvxpy as cp
+
+    needs_cvxpy = bool(program.cvxpy_constraints) or (
+        program.objective is not None and isinstance(program.objective[1], cp.Expression))
+    if backend == "auto":
+        backend = "direct" if solver == "CLARABEL" and not needs_cvxpy else "cvxpy"
+    if backend == "direct" and (solver != "CLARABEL" or needs_cvxpy):
+        raise InputError("backend='direct' supports Clarabel without cvxpy constraints or "
+                         "objectives; use backend='cvxpy'")
+    if backend not in ("direct", "cvxpy"):
+        raise InputError(f"unknown backend {backend!r}: use 'auto', 'direct' or 'cvxpy'")
+    t0 = time.perf_counter()
+    data = program.compile(scale=scale)
+    canon = time.perf_counter() - t0
+    if data.infeasible_reason:
+        return Solution(program, data, "infeasible", np.full(data.n, np.nan), solver, backend,
+                        {"build": program.build_seconds, "canonicalize": canon, "solve": 0.0},
+                        raw_status="detected before solving", reason=data.infeasible_reason)
+    if backend == "direct":
+        status, x, raw, seconds, info = _clarabel(data, verbose, settings)
+    else:
+        status, x, raw, seconds, info = _cvxpy(program, data, solver, verbose, settings)
+        canon += info.get("compile_seconds") or 0.0
+        if info.get("solver_seconds"):
+            seconds = info["solver_seconds"]
+    if status in ("optimal", "optimal_inaccurate") and not np.all(np.isfinite(x)):
+        status, raw = "solver_error", raw + " (non-finite solution)"
+    timings = {"build": program.build_seconds, "canonicalize": canon, "solve": seconds}
+    return Solution(program, data, status, x, solver, backend, timings, raw_status=raw, info=info)

@@ -1,0 +1,486 @@
+"""SOS programs: declare decision variables and constraints; solving is a separate step.
+
+An :class:`SOSProgram` holds data only. Every constraint becomes linear equalities (or
+inequalities) over decision ids plus PSD cones over Gram blocks; :mod:`.conic` assembles
+them into one standard-form problem and :mod:`.backends` hands it to a solver.
+
+    p is SOS   <=>   p = z(x)^T Q z(x),  Q >= 0   (coefficient matching: G svec(Q) = coef(p))
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import InputError, PolynomialError
+from ..poly import PolyMatrix, Polynomial, allocate, monomials_up_to, variable_names
+from ..poly.monomials import match_rows, unique_rows
+from .gram import gram_matching, svec_pairs, svec_size, svec_to_matrix
+from .newton import newton_basis
+from .objective import QuadraticForm
+
+SOLVERS = ("CLARABEL", "SCS")
+
+
+@dataclass
+class Basis:
+    """A monomial basis z(x) of a Gram matrix: exponent rows over ``vars``."""
+
+    vars: tuple
+    exps: np.ndarray
+
+    def __len__(self) -> int:
+        return self.exps.shape[0]
+
+    def monomials(self) -> list:
+        return [Polynomial(self.vars, e[None, :], [1.0]) for e in self.exps]
+
+    def to_sympy(self) -> list:
+        from ..poly import to_sympy
+        return [to_sympy(m) for m in self.monomials()]
+
+    def __repr__(self) -> str:
+        return "Basis([" + ", ".join(repr(m) for m in self.monomials()) + "])"
+
+
+@dataclass
+class LinearRows:
+    """Rows ``A d (= or >=) b`` over decision ids, as COO triplets."""
+
+    name: str
+    kind: str            # "eq" or "ge"
+    rows: np.ndarray
+    ids: np.ndarray
+    vals: np.ndarray
+    rhs: np.ndarray
+
+    @classmethod
+    def from_affine(cls, name, kind, coef, dec, offset_rows=None):
+        """Rows ``coef[:, 1:] d + coef[:, 0] (= or >=) 0`` of an affine coefficient array."""
+        r, c = np.nonzero(coef[:, 1:])
+        rows = r if offset_rows is None else offset_rows[r]
+        return cls(name, kind, rows, dec[c], coef[r, 1 + c], -coef[:, 0])
+
+
+@dataclass
+class PsdBlock:
+    """A Gram (or LMI) block: decision ids of svec(Q), Q of size ``size``."""
+
+    name: str
+    ids: np.ndarray
+    size: int
+
+
+@dataclass
+class Block:
+    """A declared group of decision ids (free, or an svec of a PSD matrix)."""
+
+    name: str
+    ids: np.ndarray
+    psd: PsdBlock | None = None
+
+
+class SOSConstraint:
+    """Handle of one SOS constraint "poly is SOS"; after a solve it holds the certificate."""
+
+    def __init__(self, program, name, kind, poly, basis, psd, matrix=None, multipliers=()):
+        self.program, self.name, self.kind = program, name, kind
+        self.poly: Polynomial = poly
+        self.basis: Basis = basis
+        self.psd: PsdBlock = psd
+        self.matrix: PolyMatrix | None = matrix
+        self.multipliers = list(multipliers)   # [(g, sigma, SOS psd block)] for add_nonneg_on
+        self._gram_exps, self._G = gram_matching(basis.exps)
+        self.rows: LinearRows | None = None
+        self.infeasible_reason: str | None = None
+        self._match()
+
+    def _match(self):
+        """Coefficient matching coef(poly) = G svec(Q) as one block of sparse rows."""
+        p = self.poly.with_vars(self.basis.vars)
+        U, _ = unique_rows(np.vstack([p.exps, self._gram_exps]))
+        idx_p = match_rows(U, p.exps)
+        idx_g = match_rows(U, self._gram_exps)
+        G = self._G.tocoo()
+        prows = LinearRows.from_affine(self.name, "eq", p.coef, p.dec, idx_p)
+        rhs = np.zeros(U.shape[0])
+        rhs[idx_p] = p.coef[:, 0]
+        self.rows = LinearRows(
+            self.name, "eq",
+            np.concatenate([prows.rows, idx_g[G.row]]),
+            np.concatenate([prows.ids, self.psd.ids[G.col]]),
+            np.concatenate([-prows.vals, G.data]),
+            rhs)
+        covered = np.zeros(U.shape[0], dtype=bool)
+        covered[idx_g] = True
+        covered[prows.rows] = True
+        bad = np.flatnonzero(~covered & (rhs != 0))
+        self.infeasible_reason = None if not bad.size else (
+            f"constraint {self.name!r}: monomial "
+            f"{Polynomial(self.basis.vars, U[bad[:1]], [1.0])!r} has a fixed non-zero coefficient "
+            f"but cannot be produced by the Gram basis {self.basis!r}")
+
+    def update(self, poly) -> "SOSConstraint":
+        """Replace the polynomial by one with new numbers, keeping the Gram basis.
+
+        This is the compile-once path: no Newton polytope, no Gram matching is recomputed.
+        """
+        poly = self.program._as_sos_polynomial(poly, self.kind, self.basis.vars)
+        self.poly = poly.with_vars(self.basis.vars) if isinstance(poly, Polynomial) else poly
+        self._match()
+        self.program._invalidate()
+        return self
+
+    def gram_matrix(self, solution=None) -> np.ndarray:
+        """The Gram matrix Q of the last (or given) solution: poly = z^T Q z."""
+        sol = solution if solution is not None else self.program.solution
+        if sol is None:
+            raise InputError(f"constraint {self.name!r} has no solution yet: call prog.solve() first")
+        return svec_to_matrix(sol.values_of(self.psd.ids), self.psd.size)
+
+    def __repr__(self) -> str:
+        return f"SOSConstraint({self.name!r}, kind={self.kind}, basis size {len(self.basis)})"
+
+
+class SOSProgram:
+    """A sum-of-squares program (see module docstring).
+
+    >>> x, y = variables("x y"); prog = SOSProgram(); g = prog.new_var()
+    >>> con = prog.add_sos(x**4 + y**4 - g); prog.maximize(g); sol = prog.solve()
+    """
+
+    def __init__(self, name: str = "sos"):
+        self.name = name
+        self.blocks: list[Block] = []
+        self.sos_constraints: list[SOSConstraint] = []
+        self.linear: list[LinearRows] = []
+        self.cvxpy_constraints: list = []
+        self.objective = None          # (sense, expression)
+        self.solution = None
+        self.build_seconds = 0.0
+        self._compiled = None
+        self._cvx_vars: dict = {}
+        self._counter = 0
+        self._depth = 0
+
+    # ------------------------------------------------------------------ naming / caching
+    def _name(self, prefix, name):
+        self._counter += 1
+        return name or f"{prefix}{self._counter}"
+
+    def _invalidate(self):
+        self._compiled = None
+
+    def _timed(fn):  # noqa: N805 -- decorator over methods
+        def wrapper(self, *args, **kwargs):
+            t0 = time.perf_counter()
+            self._depth += 1
+            try:
+                return fn(self, *args, **kwargs)
+            finally:
+                self._depth -= 1
+                if not self._depth:
+                    self.build_seconds += time.perf_counter() - t0
+                self._invalidate()
+        wrapper.__doc__, wrapper.__name__ = fn.__doc__, fn.__name__
+        return wrapper
+
+    # ------------------------------------------------------------------ decision variables
+    def _block(self, name, count, psd_size=None) -> Block:
+        ids = allocate(count)
+        psd = PsdBlock(name, ids, psd_size) if psd_size is not None else None
+        block = Block(name, ids, psd)
+        self.blocks.append(block)
+        return block
+
+    @_timed
+    def new_var(self, shape=(), name=None):
+        """Free scalar decision variable(s): a degree-0 Polynomial, or a PolyMatrix for a shape."""
+        name = self._name("v", name)
+        shape = (shape,) if isinstance(shape, int) else tuple(shape)
+        size = int(np.prod(shape)) if shape else 1
+        ids = self._block(name, size).ids
+        scalars = [Polynomial.affine([i], [1.0]) for i in ids]
+        if not shape:
+            return scalars[0]
+        return PolyMatrix(np.array(scalars, dtype=object).reshape(shape))
+
+    @_timed
+    def new_poly(self, vars, degree: int, min_degree: int = 0, name=None) -> Polynomial:
+        """A polynomial in ``vars`` with all monomials of degree in [min_degree, degree] free."""
+        names = variable_names(vars)
+        exps = monomials_up_to(len(names), degree, min_degree)
+        ids = self._block(self._name("poly", name), exps.shape[0]).ids
+        return Polynomial(names, exps, np.hstack([np.zeros((len(ids), 1)), np.eye(len(ids))]), ids)
+
+    def _gram_polynomial(self, basis: Basis, psd: PsdBlock) -> Polynomial:
+        i, j = svec_pairs(len(basis))
+        coef = np.zeros((i.size, 1 + i.size))
+        coef[np.arange(i.size), 1 + np.arange(i.size)] = np.where(i == j, 1.0, np.sqrt(2.0))
+        return Polynomial(basis.vars, basis.exps[i] + basis.exps[j], coef, psd.ids)
+
+    @_timed
+    def new_sos(self, vars, degree: int, name=None) -> Polynomial:
+        """An SOS polynomial z^T Q z, Q >= 0 a new Gram block, z all monomials up to degree/2."""
+        if degree < 0 or degree % 2:
+            raise PolynomialError(f"an SOS polynomial has even degree, got {degree}")
+        names = variable_names(vars)
+        basis = Basis(names, monomials_up_to(len(names), degree // 2))
+        name = self._name("sos", name)
+        psd = self._block(name, svec_size(len(basis)), len(basis)).psd
+        return self._gram_polynomial(basis, psd)
+
+    @_timed
+    def new_psd(self, n: int, name=None) -> PolyMatrix:
+        """A constant symmetric matrix variable P >= 0 (an LMI block), as a PolyMatrix."""
+        psd = self._block(self._name("psd", name), svec_size(n), n).psd
+        i, j = svec_pairs(n)
+        entries = np.empty((n, n), dtype=object)
+        for k, (a, b) in enumerate(zip(i, j)):
+            entries[a, b] = entries[b, a] = Polynomial.affine([psd.ids[k]], [1.0 if a == b else 1 / np.sqrt(2.0)])
+        return PolyMatrix(entries)
+
+    # ------------------------------------------------------------------ constraints
+    def _as_sos_polynomial(self, expr, kind, vars=None):
+        if kind == "sos_matrix":
+            return self._matrix_form(expr)[0]
+        if isinstance(expr, (int, float)):
+            expr = Polynomial.constant(float(expr))
+        if not isinstance(expr, Polynomial):
+            raise PolynomialError(f"add_sos takes a Polynomial, got {type(expr).__name__}; "
+                                  "use add_sos_matrix for a PolyMatrix")
+        return expr
+
+    def _register(self, name, kind, poly, basis_exps, matrix=None, multipliers=()):
+        psd = self._block(name, svec_size(basis_exps.shape[0]), basis_exps.shape[0]).psd
+        con = SOSConstraint(self, name, kind, poly, Basis(poly.vars, basis_exps), psd, matrix, multipliers)
+        self.sos_constraints.append(con)
+        return con
+
+    @_timed
+    def add_sos(self, expr, basis=None, name=None) -> SOSConstraint:
+        """Constrain the polynomial ``expr`` to be a sum of squares.
+
+        The Gram basis comes from the Newton polytope of ``expr``'s support unless ``basis``
+        (monomial Polynomials or an exponent array) is given, in which case it is honoured.
+        """
+        p = self._as_sos_polynomial(expr, "sos")
+        name = self._name("sos", name)
+        if basis is None:
+            exps = newton_basis(p.exps)
+        else:
+            exps = self._basis_exps(basis, p)
+            p = p.with_vars(p.vars + tuple(v for v in self._basis_vars(basis) if v not in p.vars))
+        return self._register(name, "sos", p, exps)
+
+    @staticmethod
+    def _basis_vars(basis):
+        if isinstance(basis, np.ndarray):
+            return ()
+        out: list = []
+        for m in basis:
+            out += [v for v in m.vars if v not in out]
+        return tuple(out)
+
+    def _basis_exps(self, basis, p):
+        if isinstance(basis, np.ndarray):
+            exps = np.asarray(basis, dtype=np.int64).reshape(-1, p.nvars)
+        else:
+            vars = p.vars + tuple(v for v in self._basis_vars(basis) if v not in p.vars)
+            mons = [m.with_vars(vars) for m in basis]
+            if any(m.nterms != 1 or not m.is_numeric for m in mons):
+                raise PolynomialError("a basis is a list of monomials such as [x**2, x*y, 1]")
+            exps = np.vstack([m.exps for m in mons])
+        if unique_rows(exps)[0].shape[0] != exps.shape[0]:
+            raise PolynomialError("the given basis has repeated monomials")
+        return exps
+
+    @staticmethod
+    def _matrix_form(P):
+        """y^T P(x) y as a scalar polynomial in (x, y), and the multipartite basis y (x) z(x)."""
+        if not isinstance(P, PolyMatrix):
+            P = PolyMatrix(P)
+        P.check_symmetric("matrix given to add_sos_matrix")
+        r = P.shape[0]
+        xvars = P.vars
+        yvars = tuple(f"_y{i}" for i in range(r))
+        allv = xvars + yvars
+        ys = [Polynomial(allv, [np.r_[np.zeros(len(xvars), dtype=int), np.eye(r, dtype=int)[i]]], [1.0])
+              for i in range(r)]
+        q = Polynomial.constant(0.0, allv)
+        rows = []
+        for i in range(r):
+            for j in range(i, r):
+                q = q + (1.0 if i == j else 2.0) * P.entries[i, j].with_vars(allv) * ys[i] * ys[j]
+            z = newton_basis(P.entries[i, i].with_vars(xvars).exps)
+            rows.append(np.hstack([z, np.tile(np.eye(r, dtype=np.int64)[i], (z.shape[0], 1))]))
+        return q, np.vstack(rows) if rows else np.zeros((0, len(allv)), dtype=np.int64)
+
+    @_timed
+    def add_sos_matrix(self, P, name=None) -> SOSConstraint:
+        """Constrain the symmetric polynomial matrix P(x) to be an SOS matrix.
+
+        Equivalent to y^T P(x) y being SOS in (x, y), with the multipartite Gram basis
+        y_i * z_i(x), z_i from the Newton polytope of P_ii (never a dense basis in (x, y)).
+        A constant P gives a plain LMI P >= 0.
+        """
+        name = self._name("sosmat", name)
+        q, exps = self._matrix_form(P)
+        return self._register(name, "sos_matrix", q, exps, matrix=P if isinstance(P, PolyMatrix) else PolyMatrix(P))
+
+    @_timed
+    def add_nonneg_on(self, expr, ineqs=(), eqs=(), degree=None, name=None) -> SOSConstraint:
+        """expr >= 0 on {g_i >= 0, h_j = 0} via Putinar/S-procedure multipliers.
+
+        expr - sum_i sigma_i g_i - sum_j lambda_j h_j is SOS, sigma_i SOS and lambda_j free,
+        each multiplier of the largest degree with deg(multiplier * constraint) <= degree.
+        """
+        p = self._as_sos_polynomial(expr, "sos")
+        ineqs, eqs = list(ineqs), list(eqs)
+        allv = p.vars
+        for g in ineqs + eqs:
+            allv = allv + tuple(v for v in g.vars if v not in allv)
+        degree = degree if degree is not None else max([p.degree] + [g.degree for g in ineqs + eqs])
+        name = self._name("nonneg", name)
+        rest, mults = p.with_vars(allv), []
+        for k, g in enumerate(ineqs):
+            d = degree - g.degree
+            d -= d % 2
+            if d < 0:
+                raise PolynomialError(f"degree {degree} is below the degree of constraint g{k} ({g.degree})")
+            sigma = self.new_sos(allv, d, name=f"{name}.sigma{k}")
+            mults.append((g, sigma, self.blocks[-1].psd))
+            rest = rest - sigma * g.with_vars(allv)
+        for k, h in enumerate(eqs):
+            d = degree - h.degree
+            if d < 0:
+                raise PolynomialError(f"degree {degree} is below the degree of equality h{k} ({h.degree})")
+            lam = self.new_poly(allv, d, name=f"{name}.lambda{k}")
+            rest = rest - lam * h.with_vars(allv)
+        return self._register(name, "nonneg_on", rest, newton_basis(rest.exps), multipliers=mults)
+
+    @staticmethod
+    def _affine_items(lhs, rhs):
+        diff = lhs - rhs
+        if isinstance(diff, PolyMatrix):
+            return list(diff.entries.flat)
+        if isinstance(diff, Polynomial):
+            return [diff]
+        raise PolynomialError(f"cannot constrain an expression of type {type(diff).__name__}")
+
+    @_timed
+    def add_eq(self, lhs, rhs=0.0, name=None) -> LinearRows:
+        """lhs == rhs, coefficient by coefficient (polynomials or polynomial matrices)."""
+        name = self._name("eq", name)
+        items = self._affine_items(lhs, rhs)
+        rows = []
+        offset = 0
+        for p in items:
+            rows.append(LinearRows.from_affine(name, "eq", p.coef, p.dec, offset + np.arange(p.nterms)))
+            offset += p.nterms
+        con = _concat_rows(name, "eq", rows)
+        self.linear.append(con)
+        return con
+
+    @_timed
+    def add_ge(self, lhs, rhs=0.0, name=None) -> LinearRows:
+        """lhs >= rhs for degree-0 affine expressions (element-wise for matrices)."""
+        name = self._name("ge", name)
+        items = self._affine_items(lhs, rhs)
+        if any(not p.is_constant for p in items):
+            raise PolynomialError("add_ge takes constant affine expressions; use add_sos or "
+                                  "add_nonneg_on for polynomial inequalities")
+        rows = [LinearRows.from_affine(name, "ge", p.coef, p.dec, np.full(p.nterms, k))
+                for k, p in enumerate(items)]
+        con = _concat_rows(name, "ge", rows, len(items))
+        self.linear.append(con)
+        return con
+
+    def add_constraint(self, constraint):
+        """Add a cvxpy constraint written with :meth:`expr`; solves then go through cvxpy."""
+        import cvxpy as cp
+        if not isinstance(constraint, cp.constraints.constraint.Constraint):
+            raise InputError(f"add_constraint takes a cvxpy constraint, got {type(constraint).__name__}")
+        self.cvxpy_constraints.append(constraint)
+        self._invalidate()
+        return constraint
+
+    # ------------------------------------------------------------------ objective
+    def _set_objective(self, sense, expr):
+        import cvxpy as cp
+        if isinstance(expr, (int, float)):
+            expr = Polynomial.constant(float(expr))
+        if isinstance(expr, Polynomial) and not expr.is_constant:
+            raise PolynomialError(f"the objective must not depend on x; got {expr!r}. Maximise a "
+                                  "coefficient (p.coeff(...)) or a new variable bounded by SOS constraints")
+        if isinstance(expr, QuadraticForm) and sense == "max":
+            raise InputError("maximising a convex quadratic is not a convex problem; minimise it instead")
+        if not isinstance(expr, (Polynomial, QuadraticForm, cp.Expression)):
+            raise InputError(f"unsupported objective type {type(expr).__name__}")
+        self.objective = (sense, expr)
+        self._invalidate()
+
+    def minimize(self, expr):
+        """Minimise an affine scalar, a QuadraticForm (sum_squares) or a cvxpy expression."""
+        self._set_objective("min", expr)
+
+    def maximize(self, expr):
+        """Maximise an affine scalar or a concave cvxpy expression."""
+        self._set_objective("max", expr)
+
+    # ------------------------------------------------------------------ cvxpy interop
+    def expr(self, item):
+        """The cvxpy expression of a degree-0 affine Polynomial (or PolyMatrix) of this program."""
+        from .conic import cvxpy_affine
+        return cvxpy_affine(self, item)
+
+    # ------------------------------------------------------------------ solving
+    @property
+    def ids(self) -> np.ndarray:
+        return np.concatenate([b.ids for b in self.blocks] + [np.zeros(0, dtype=np.int64)])
+
+    @property
+    def psd_blocks(self) -> list:
+        return [b.psd for b in self.blocks if b.psd is not None]
+
+    def compile(self, scale: bool = True):
+        """Assemble (and cache) the standard conic form; see :mod:`sosdyn.sos.conic`."""
+        from .conic import assemble
+        if self._compiled is None or self._compiled.scaled != scale:
+            self._compiled = assemble(self, scale=scale)
+        return self._compiled
+
+    def solve(self, solver: str = "CLARABEL", backend: str = "auto", scale: bool = True,
+              verbose: bool = False, raise_on_failure: bool = False, **settings):
+        """Solve and return a :class:`~sosdyn.sos.solution.Solution`.
+
+        ``backend``: "direct" hands the conic data straight to Clarabel (no canonicalisation;
+        the fast re-solve path); "cvxpy" goes through cvxpy (any cvxpy solver, and needed for
+        cvxpy constraints/objectives); "auto" picks direct when it can.
+        ``raise_on_failure``: raise SolverError/InfeasibleError instead of returning a
+        Solution whose status is not optimal.
+        """
+        from .backends import solve_program
+        solver = solver.upper()
+        if solver not in SOLVERS:
+            import cvxpy as cp
+            if solver not in cp.installed_solvers():
+                raise InputError(f"unknown solver {solver!r}; use one of {SOLVERS} "
+                                 f"(installed in cvxpy: {cp.installed_solvers()})")
+        sol = solve_program(self, solver=solver, backend=backend, scale=scale, verbose=verbose, **settings)
+        self.solution = sol
+        if raise_on_failure:
+            sol.raise_for_status()
+        return sol
+
+
+def _concat_rows(name, kind, parts, n_rows=None):
+    rows = np.concatenate([p.rows for p in parts] + [np.zeros(0, dtype=np.int64)])
+    rhs = np.concatenate([p.rhs for p in parts] + [np.zeros(0)])
+    if n_rows is not None:
+        rhs = np.array([p.rhs[0] if p.rhs.size else 0.0 for p in parts])
+    return LinearRows(name, kind, rows,
+                      np.concatenate([p.ids for p in parts] + [np.zeros(0, dtype=np.int64)]),
+                      np.concatenate([p.vals for p in parts] + [np.zeros(0)]), rhs)

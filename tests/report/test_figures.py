@@ -1,0 +1,172 @@
+"""Every figure function draws something real from synthetic data and saves SVG + PNG."""
+
+from __future__ import annotations
+
+import matplotlib.image as mpimg
+import numpy as np
+import pytest
+from matplotlib.patches import FancyArrowPatch, Rectangle
+
+from sosdyn.report import figures as F
+
+GOAL = np.zeros(2)
+
+
+def assert_saved_and_not_blank(fig, tmp_path, name="fig"):
+    """Save ``fig``; the PNG must have real content (pixel variance), the SVG be an SVG."""
+    paths = F.save_figure(fig, tmp_path / "sub" / name)
+    assert paths["svg"].read_text().lstrip().startswith("<?xml")
+    assert "<svg" in paths["svg"].read_text()
+    img = mpimg.imread(paths["png"])[..., :3]
+    assert img.shape[0] > 200 and img.shape[1] > 200
+    assert img.std() > 0.05, "PNG is (nearly) blank"
+    assert (img < 0.5).mean() > 0.002, "PNG has almost no dark ink"
+    return paths
+
+
+def bars(ax):
+    return [p for p in ax.patches if isinstance(p, Rectangle)]
+
+
+def test_streamlines_samples_field_on_padded_square_grid(tmp_path, field, demos_factory):
+    calls = []
+
+    def spy(X):
+        calls.append(X.copy())
+        return field(X)
+
+    demos = demos_factory(3)
+    fig = F.streamlines(None, spy, demos, [d * 1.01 for d in demos], GOAL, title="spiral", grid=30,
+                        density=0.7)
+    (X,) = calls
+    assert X.shape == (900, 2)
+    ax = fig.axes[0]
+    assert ax.get_aspect() == 1.0
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert x1 - x0 == pytest.approx(y1 - y0)
+    pts = np.vstack(demos)
+    assert x0 < pts[:, 0].min() and x1 > pts[:, 0].max()
+    assert y0 < pts[:, 1].min() and y1 > pts[:, 1].max()
+    assert ax.get_xlabel() == "$x_1$ (mm)"
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels == ["streamlines of the model", "demonstrations", "reproductions", "goal"]
+    assert_saved_and_not_blank(fig, tmp_path)
+
+
+def test_streamlines_without_field_and_with_given_bounds(tmp_path, demos_factory):
+    fig = F.streamlines(None, None, demos_factory(2), [], GOAL, bounds=(-60, 60, -60, 60))
+    assert fig.axes[0].get_xlim() == (-60, 60)
+    assert_saved_and_not_blank(fig, tmp_path)
+
+
+def test_streamline_panel_grid_hides_unused_axes(tmp_path, field, demos_factory):
+    panels = [dict(predict=field, demos_pos=demos_factory(2, seed=i), reproductions=[], goal=GOAL,
+                   title=f"shape {i}", grid=25, density=0.6) for i in range(5)]
+    fig = F.streamline_panel(panels)
+    visible = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(fig.axes) == 8 and len(visible) == 5
+    assert [ax.get_title() for ax in visible] == [f"shape {i}" for i in range(5)]
+    assert visible[0].get_ylabel() and not visible[1].get_ylabel()
+    assert len(fig.legends) == 1
+    assert_saved_and_not_blank(fig, tmp_path)
+
+
+def test_streamline_panel_needs_panels():
+    with pytest.raises(ValueError):
+        F.streamline_panel([])
+
+
+def test_accuracy_bars_one_bar_per_shape_and_method(tmp_path, results):
+    table = results["accuracy"]
+    del table["Leaf_2"]["DMP"]                          # not run: a gap, not a crash
+    fig = F.accuracy_bars(table, metrics=("sea", "dtwd_total", "vel_rmse"), log=False)
+    assert len(fig.axes) == 3
+    assert all(len(bars(ax)) == 3 * 4 - 1 for ax in fig.axes)
+    assert fig.axes[0].get_ylabel() == "SEA (mm²)"
+    assert fig.axes[2].get_ylabel() == "velocity RMSE (mm/s)"
+    cdsp_bar = bars(fig.axes[0])[0]
+    assert cdsp_bar.get_height() == pytest.approx(table["BendedLine"]["CDSP"]["sea"]["mean"])
+    assert_saved_and_not_blank(fig, tmp_path)
+
+
+def test_accuracy_bars_chooses_log_scale_for_wide_ranges(results):
+    table = results["accuracy"]
+    table["Leaf_1"]["DMP"]["sea"]["mean"] = 1e7
+    assert F.accuracy_bars(table, metrics=("sea",)).axes[0].get_yscale() == "log"
+    assert F.accuracy_bars(results["accuracy"], metrics=("dtwd_total",)).axes[0].get_yscale() == "linear"
+
+
+def test_robustness_bars_hatch_runs_that_did_not_converge(tmp_path, results):
+    fig = F.robustness_bars(results["robustness"])
+    push_ax, goal_ax = fig.axes
+    assert push_ax.get_title(loc="left") == "after pushes"
+    hatched = [b for b in bars(push_ax) if b.get_hatch()]
+    assert len(hatched) == 3                             # GMR (converged 0.57) on 3 shapes
+    assert "not all runs converged" in [t.get_text() for t in fig.legends[0].get_texts()]
+    assert_saved_and_not_blank(fig, tmp_path)
+
+
+def test_perturbation_trajectories_arrows_and_goal_markers(tmp_path, demos_factory):
+    demo = demos_factory(1)[0]
+    runs = {"CDSP": demo * 1.02, "DMP": demo * 0.9 + 2.0, "GMR": demo + 1.0}
+    events = {m: [{"kind": "goal_change", "time": 0.8, "before": GOAL, "after": [5.0, -3.0]},
+                  {"kind": "push", "time": 1.0, "before": run[60], "after": run[60] + [6.0, -4.0]}]
+              for m, run in runs.items()}
+    goals = np.zeros((len(demo), 2))
+    goals[80:] = [5.0, -3.0]
+    fig = F.perturbation_trajectories(None, demo, runs, events, goals, title="Leaf_1")
+    ax = fig.axes[0]
+    arrows = [p for p in ax.patches if isinstance(p, FancyArrowPatch)]
+    assert len(arrows) == 3
+    assert arrows[0].get_edgecolor()[:3] == pytest.approx(
+        tuple(int(F.method_color("CDSP")[i:i + 2], 16) / 255 for i in (1, 3, 5)))
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels == ["demonstration", "CDSP", "DMP", "GMR", "push", "old goal", "new goal"]
+    assert ax.get_aspect() == 1.0
+    assert_saved_and_not_blank(fig, tmp_path)
+
+
+def test_perturbation_trajectories_constant_goal_into_given_axes(demos_factory):
+    from matplotlib.figure import Figure
+
+    demo = demos_factory(1)[0]
+    ax = Figure().add_subplot()
+    push = {"kind": "push", "time": 1.0, "before": demo[50], "after": demo[50] + 3.0}
+    fig = F.perturbation_trajectories(ax, demo, {"CDSP": demo}, [push],
+                                      goal_history=np.zeros((len(demo), 2)))
+    assert fig is ax.figure and not fig.legends
+    (arrow,) = [p for p in ax.patches if isinstance(p, FancyArrowPatch)]
+    assert arrow.get_edgecolor()[:3] == (0.0, 0.0, 0.0)
+    assert [line.get_marker() for line in ax.lines][-1] == "*"
+
+
+def test_scaling_plot_reports_log_log_slope(tmp_path):
+    x = np.array([10.0, 20.0, 40.0, 80.0])
+    fig = F.scaling_plot({"CLARABEL": {"x": x, "y": 1e-3 * x**2},
+                          "SCS": {"x": x, "y": 1e-2 * x, "std": 1e-3 * x}}, xlabel="monomials")
+    ax = fig.axes[0]
+    assert ax.get_xscale() == ax.get_yscale() == "log"
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels == ["CLARABEL (slope 2.00)", "SCS (slope 1.00)"]
+    assert_saved_and_not_blank(fig, tmp_path)
+
+
+def test_trajectories_3d(tmp_path, demos_factory):
+    demos = demos_factory(3, dim=3)
+    fig = F.trajectories_3d(demos, [d * 1.02 for d in demos], np.zeros(3), title="3-D")
+    assert fig.axes[0].name == "3d"
+    assert fig.axes[0].get_zlabel() == "$x_3$ (mm)"
+    assert_saved_and_not_blank(fig, tmp_path)
+
+
+def test_method_colors_are_fixed_and_distinct():
+    assert F.method_color("CDSP") == F.method_color("cdsp") == F.method_color("CDSP", ["X", "Y"])
+    methods = ["CDSP", "DMP", "CLF-DM", "GMR", "SEDS", "LPV-DS", "NN"]
+    colors = [F.method_color(m, methods) for m in methods]
+    assert len(set(colors)) == len(methods)
+
+
+def test_saved_svg_is_reproducible(tmp_path, results):
+    a = F.save_figure(F.accuracy_bars(results["accuracy"]), tmp_path / "a")["svg"].read_bytes()
+    b = F.save_figure(F.accuracy_bars(results["accuracy"]), tmp_path / "b")["svg"].read_bytes()
+    assert a == b

@@ -1,0 +1,188 @@
+"""The HTML report: tables, findings, embedded figures, graceful gaps, and the PDF."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from html.parser import HTMLParser
+
+import matplotlib.image as mpimg
+import pytest
+
+from sosdyn.errors import InputError
+from sosdyn.report import figures as F
+from sosdyn.report import html as H
+
+SECTIONS = ("findings", "figures", "accuracy", "robustness", "certificates", "timings",
+            "methods", "bench", "meta")
+
+
+class Tables(HTMLParser):
+    """Counts the body rows of each ``<table id=...>`` and collects ``<img src>``."""
+
+    def __init__(self, text: str):
+        super().__init__()
+        self.rows: dict[str, int] = {}
+        self.images: list[str] = []
+        self._table: str | None = None
+        self._in_body = False
+        self.feed(text)
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag == "table":
+            self._table = attrs.get("id")
+            self.rows.setdefault(self._table, 0)
+        elif tag == "tbody":
+            self._in_body = True
+        elif tag == "tr" and self._in_body:
+            self.rows[self._table] += 1
+        elif tag == "img":
+            self.images.append(attrs["src"])
+
+    def handle_endtag(self, tag):
+        if tag == "tbody":
+            self._in_body = False
+
+
+@pytest.fixture
+def figure_files(tmp_path, results):
+    """Two real figures under tmp_path/figures, as the results' "figures" section."""
+    F.save_figure(F.accuracy_bars(results["accuracy"]), tmp_path / "figures" / "fig2")
+    F.save_figure(F.robustness_bars(results["robustness"]), tmp_path / "figures" / "fig3")
+    return {name: {"svg": f"figures/{name}.svg", "png": f"figures/{name}.png", "caption": cap}
+            for name, cap in (("fig2", "Accuracy per shape."), ("fig3", "Robustness per shape."))}
+
+
+def test_full_report_has_every_row(tmp_path, results_factory, figure_files):
+    results = results_factory(figures=figure_files)
+    path = H.render_html(results, tmp_path)
+    assert path == tmp_path / "index.html"
+    text = path.read_text()
+    tables = Tables(text)
+    assert tables.rows["accuracy"] == 3 * 4
+    assert tables.rows["robustness"] == 3 * 4
+    assert tables.rows["certificates"] == 3          # CDSP only carries a certificate
+    assert tables.rows["timings"] == 3 * 4
+    assert tables.rows["methods"] == 4
+    assert tables.rows["packages"] == 2
+    assert text.count('class="finding"') == 2
+    assert "Not run." not in text
+    # findings: text is trusted HTML, numbers formatted
+    assert "learned metric <i>M(x)</i> is constant" in text
+    assert "max relative non-constant part: <b>2.10e-07</b>" in text
+    # figures are embedded, not linked: the page is self-contained
+    assert len(tables.images) == 2
+    assert all(src.startswith("data:image/svg+xml;base64,") for src in tables.images)
+    assert 'src="figures/' not in text
+    # bench markdown became a table
+    assert "<table>" in text and "<td>0.90</td>" in text
+
+
+def test_accuracy_cells_show_mean_std_and_best(tmp_path, results):
+    results["accuracy"] = {"Leaf_1": {
+        "CDSP": {"sea": {"mean": 512.34, "std": 12.345}, "grid_convergence": 1.0, "certified": True},
+        "DMP": {"sea": {"mean": 900.0, "std": 50.0}, "grid_convergence": None, "certified": None},
+    }}
+    text = H.render_html(results, tmp_path).read_text()
+    assert '<td class="best">512 ± 12</td>' in text
+    assert "<td>900 ± 50</td>" in text
+    assert "<td>✓</td>" in text and "<td>n/a</td>" in text
+
+
+def test_titles_are_escaped_but_finding_text_is_html(tmp_path, results):
+    results["findings"] = [{"title": "<script>alert(1)</script>", "text": "<b>bold</b>", "numbers": {}}]
+    text = H.render_html(results, tmp_path).read_text()
+    assert "<script>alert(1)</script>" not in text
+    assert "&lt;script&gt;" in text and "<b>bold</b>" in text
+
+
+def test_empty_results_say_not_run(tmp_path):
+    text = H.render_html({}, tmp_path).read_text()
+    assert text.count("Not run.") == len(SECTIONS)
+    assert Tables(text).rows == {}
+
+
+@pytest.mark.parametrize("section", SECTIONS)
+def test_each_section_alone_can_be_missing(tmp_path, results, section):
+    results.pop(section, None)
+    text = H.render_html(results, tmp_path).read_text()
+    assert text.count("Not run.") == 1 + (section != "figures")   # results has no figures
+
+
+def test_malformed_section_is_reported_and_others_still_render(tmp_path, results):
+    results["accuracy"] = ["not", "a", "dict"]
+    results["timings"]["Leaf_1"]["CDSP"] = {}                     # partial entry: dashes
+    text = H.render_html(results, tmp_path).read_text()
+    assert "Could not be rendered: AttributeError" in text
+    assert Tables(text).rows["robustness"] == 12
+    assert Tables(text).rows["timings"] == 12 and "<td>—</td>" in text
+
+
+def test_missing_and_oversized_figures(tmp_path, figure_files, results_factory, monkeypatch):
+    figs = dict(figure_files, ghost={"svg": "figures/ghost.svg", "caption": "never drawn"})
+    monkeypatch.setattr(H, "_MAX_INLINE_SVG", 100)                # every SVG is "too big"
+    text = H.render_html(results_factory(figures=figs), tmp_path).read_text()
+    assert "Figure file missing: figures/ghost.svg" in text
+    images = Tables(text).images
+    assert len(images) == 2 and all(src.startswith("data:image/png;base64,") for src in images)
+
+
+def test_figures_resolve_against_base_dir(tmp_path, figure_files, results_factory):
+    out = tmp_path / "elsewhere"
+    text = H.render_html(results_factory(figures=figure_files), out, base_dir=tmp_path).read_text()
+    assert len(Tables(text).images) == 2
+
+
+@pytest.mark.parametrize("value, text", [
+    (None, "—"), (True, "yes"), (7000, "7000"), (0.0, "0"), (1234.5, "1234"), (3.14159, "3.14"),
+    (0.0123456, "0.0123"), (1.2e-6, "1.20e-06"), (-0.01, "-0.0100"), (2.5e7, "2.50e+07"),
+    (float("nan"), "nan"), (float("inf"), "∞"), ({"a": 1, "b": False}, "a: 1; b: no"),
+])
+def test_fmt(value, text):
+    assert H.fmt(value) == text
+
+
+def test_load_results_errors(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        H.load_results(tmp_path / "missing.json")
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(InputError, match="not valid JSON"):
+        H.load_results(bad)
+    bad.write_text("[1, 2]")
+    with pytest.raises(InputError, match="expected a JSON object"):
+        H.load_results(bad)
+
+
+def test_build_report_writes_html_and_a_pdf_with_ink(tmp_path, results_factory, figure_files):
+    (tmp_path / "results.json").write_text(json.dumps(results_factory(figures=figure_files)))
+    paths = H.build_report(tmp_path / "results.json", tmp_path / "out")
+    assert paths["html"].is_file()
+    pdf = paths["pdf"]
+    assert pdf == tmp_path / "out" / "report.pdf"
+    assert pdf.read_bytes().startswith(b"%PDF") and pdf.stat().st_size > 20_000
+    if shutil.which("pdftoppm") is None:
+        pytest.skip("pdftoppm (poppler-utils) is not installed: PDF not rasterised")
+    subprocess.run(["pdftoppm", "-r", "40", "-png", "-f", "1", "-l", "1", str(pdf),
+                    str(tmp_path / "page")], check=True)
+    (page,) = tmp_path.glob("page*.png")
+    img = mpimg.imread(page)[..., :3]
+    assert img.std() > 0.03 and (img < 0.5).mean() > 0.001
+    subprocess.run(["pdftoppm", "-r", "10", "-png", str(pdf), str(tmp_path / "all")], check=True)
+    assert len(list(tmp_path.glob("all*.png"))) >= 3
+
+
+def test_pdf_of_an_empty_report(tmp_path):
+    html = H.render_html({}, tmp_path)
+    pdf = H.render_pdf(html, tmp_path / "empty.pdf")
+    assert pdf.read_bytes().startswith(b"%PDF")
+
+
+def test_diverged_values_from_json_render_as_text(tmp_path, results):
+    """A diverged baseline (inf/NaN, written by json as Infinity/NaN) is shown, not a crash."""
+    results["accuracy"]["Leaf_1"]["DMP"]["sea"] = {"mean": float("inf"), "std": float("nan")}
+    (tmp_path / "r.json").write_text(json.dumps(results))
+    text = H.render_html(H.load_results(tmp_path / "r.json"), tmp_path).read_text()
+    assert "∞ ± nan" in text
