@@ -111,7 +111,7 @@ class PolyMatrix:
 
     def __mul__(self, other):
         if isinstance(other, (Polynomial, Number)):
-            return PolyMatrix(self.entries * other)
+            return self.map(lambda p: p * other)
         raise PolynomialError("use @ for matrix products; * takes a scalar or a Polynomial")
 
     __rmul__ = __mul__

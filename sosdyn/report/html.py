@@ -55,6 +55,7 @@ from ..errors import InputError, SosdynError
 __all__ = ["build_report", "load_results", "render_html", "render_pdf"]
 
 _MAX_INLINE_SVG = 2_000_000      # bytes; larger SVGs (dense streamplots) go in as PNG
+_MIME_TYPES = {"svg": "image/svg+xml", "png": "image/png"}      # in order of preference
 
 # (key, column header, better) for the accuracy table; better: "low", "high" or None.
 _ACCURACY_COLUMNS = (
@@ -229,24 +230,21 @@ def _bench(text: str) -> str:
 
 
 def _figures(section: Mapping, base_dir: Path) -> list[dict]:
+    """Each figure as a data URI: the SVG unless it is over the size limit and a PNG exists."""
     figures = []
     for name, spec in section.items():
         spec = spec or {}
-        src, missing = None, []
-        for kind, mime in (("svg", "image/svg+xml"), ("png", "image/png")):
-            if not spec.get(kind):
-                continue
-            path = base_dir / spec[kind]
-            if not path.is_file():
-                missing.append(str(spec[kind]))
-                continue
-            data = path.read_bytes()
-            if kind == "svg" and len(data) > _MAX_INLINE_SVG and spec.get("png"):
-                continue
-            src = f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
-            break
+        given = {kind: base_dir / spec[kind] for kind in _MIME_TYPES if spec.get(kind)}
+        found = {kind: path for kind, path in given.items() if path.is_file()}
+        if "svg" in found and "png" in found and found["svg"].stat().st_size > _MAX_INLINE_SVG:
+            del found["svg"]
+        src = None
+        if found:
+            kind, path = next(iter(found.items()))
+            src = f"data:{_MIME_TYPES[kind]};base64,{base64.b64encode(path.read_bytes()).decode('ascii')}"
+        missing = ", ".join(str(spec[kind]) for kind in given) or "no file given"
         figures.append({"name": name, "caption": spec.get("caption", name), "src": src,
-                        "missing": ", ".join(missing) or "no file given"})
+                        "missing": None if src else missing})
     return figures
 
 

@@ -127,8 +127,19 @@ class SOSConstraint:
 
         This is the compile-once path: no Newton polytope, no Gram matching is recomputed.
         """
-        poly = self.program._as_sos_polynomial(poly, self.kind, self.basis.vars)
-        self.poly = poly.with_vars(self.basis.vars) if isinstance(poly, Polynomial) else poly
+        if self.kind == "sos_matrix":
+            poly, exps = self.program._matrix_form(poly)
+        else:
+            poly, exps = self.program._as_sos_polynomial(poly, self.kind), None
+        vars = self.basis.vars + tuple(v for v in poly.vars if v not in self.basis.vars)
+        poly = poly.with_vars(vars)
+        if vars != self.basis.vars or (match_rows(self._gram_exps, poly.exps) < 0).any():
+            # the support outgrew the Gram basis: choose a new one (the only recompilation)
+            exps = newton_basis(poly.exps) if exps is None else exps
+            self.basis = Basis(poly.vars, exps if exps.shape[1] == len(poly.vars) else newton_basis(poly.exps))
+            self.psd = self.program._replace_psd(self.psd, len(self.basis))
+            self._gram_exps, self._G = gram_matching(self.basis.exps)
+        self.poly = poly
         self._match()
         self.program._invalidate()
         return self
@@ -195,6 +206,11 @@ class SOSProgram:
         self.blocks.append(block)
         return block
 
+    def _replace_psd(self, psd: PsdBlock, size: int) -> PsdBlock:
+        """Swap a Gram block for a new one of another size (blocks stay in id order)."""
+        self.blocks = [b for b in self.blocks if b.psd is not psd]
+        return self._block(psd.name, svec_size(size), size).psd
+
     @_timed
     def new_var(self, shape=(), name=None):
         """Free scalar decision variable(s): a degree-0 Polynomial, or a PolyMatrix for a shape."""
@@ -206,6 +222,14 @@ class SOSProgram:
         if not shape:
             return scalars[0]
         return PolyMatrix(np.array(scalars, dtype=object).reshape(shape))
+
+    @_timed
+    def new_ids(self, count: int, name=None) -> np.ndarray:
+        """Low level: ``count`` free scalar decision variables, returned as their ids.
+
+        Build polynomials on them directly, e.g. ``Polynomial(vars, exps, coef, ids)``.
+        """
+        return self._block(self._name("ids", name), int(count)).ids
 
     @_timed
     def new_poly(self, vars, degree: int, min_degree: int = 0, name=None) -> Polynomial:

@@ -72,6 +72,20 @@ class VerificationReport:
         return "\n".join(lines)
 
 
+def check_gram(name, kind, p, basis_exps, Q, eig_tol=1e-7, rel_tol=1e-6) -> CertificateCheck:
+    """Check p = z^T Q z, Q >= 0 for a numeric polynomial p and basis exponents (module doc)."""
+    min_eig = float(np.linalg.eigvalsh(Q).min()) if Q.size else 0.0
+    B = basis_exps
+    zQz = Polynomial(p.vars, (B[:, None, :] + B[None, :, :]).reshape(-1, B.shape[1]), Q.ravel())
+    e = p - zQz
+    scale = max(1.0, float(np.abs(p.coef).max(initial=0.0)))
+    res = float(np.abs(e.coef).max(initial=0.0))
+    representable = bool((match_rows(zQz.exps, e.exps) >= 0).all()) if e.nterms else True
+    strict = representable and min_eig >= np.sqrt(2.0) * float(np.linalg.norm(e.coef))
+    passed = min_eig >= -eig_tol * max(1.0, float(np.abs(Q).max(initial=0.0))) and res <= rel_tol * scale
+    return CertificateCheck(name, kind, B.shape[0], min_eig, res, res / scale, bool(strict), bool(passed))
+
+
 class Solution:
     """The outcome of ``SOSProgram.solve``: status, values, certificates, timings."""
 
@@ -160,19 +174,8 @@ class Solution:
             return self._report
         for con in self.program.sos_constraints:
             Q = svec_to_matrix(self.values_of(con.psd.ids), con.psd.size)
-            min_eig = float(np.linalg.eigvalsh(Q).min()) if Q.size else 0.0
             p = self._assign(con.poly.with_vars(con.basis.vars))
-            B = con.basis.exps
-            zQz = Polynomial(con.basis.vars, (B[:, None, :] + B[None, :, :]).reshape(-1, B.shape[1]),
-                             Q.ravel())
-            e = p - zQz
-            scale = max(1.0, float(np.abs(p.coef).max(initial=0.0)))
-            res = float(np.abs(e.coef).max(initial=0.0))
-            representable = bool((match_rows(zQz.exps, e.exps) >= 0).all()) if e.nterms else True
-            strict = representable and min_eig >= np.sqrt(2.0) * float(np.linalg.norm(e.coef))
-            passed = min_eig >= -eig_tol * max(1.0, float(np.abs(Q).max(initial=0.0))) and res <= rel_tol * scale
-            checks.append(CertificateCheck(con.name, con.kind, len(con.basis), min_eig, res,
-                                           res / scale, bool(strict), bool(passed)))
+            checks.append(check_gram(con.name, con.kind, p, con.basis.exps, Q, eig_tol, rel_tol))
         lin = 0.0
         d = self.data
         if d.A_eq.shape[0]:

@@ -1,0 +1,66 @@
+"""The GMM of the motion model (paper eq. 2): joint mixture on [x, xdot] and its position marginal.
+
+    xdot = sum_k h_k(x) (A_k x + b_k),   A_k = S_k,xdot x S_k,xx^-1,  b_k = mu_k,xdot - A_k mu_k,x
+    h_k(x) = pi_k N(x; mu_k,x, S_k,xx) / sum_i pi_i N(x; mu_i,x, S_i,xx)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import solve_triangular
+from scipy.special import logsumexp
+
+from ..errors import InputError
+
+
+def check_joint_gmm(gmm, n: int) -> None:
+    """A fitted full-covariance sklearn GaussianMixture on [x, xdot] with x of dimension n."""
+    if getattr(gmm, "covariance_type", None) != "full" or not hasattr(gmm, "means_"):
+        raise InputError("expected a fitted sklearn GaussianMixture with covariance_type='full'.")
+    if gmm.means_.shape[1] != 2 * n:
+        raise InputError(f"the mixture is {gmm.means_.shape[1]}-D, expected 2*n = {2 * n} for "
+                         f"[x, xdot] with n = {n}; pass the position dimension n.")
+
+
+def gmm_linear_maps(gmm, n: int):
+    """Per-component linear maps of eq. (2): A (K, n, n) and b (K, n)."""
+    check_joint_gmm(gmm, n)
+    cov, mean = gmm.covariances_, gmm.means_
+    A = np.linalg.solve(cov[:, :n, :n], cov[:, :n, n:]).transpose(0, 2, 1)   # S_xx^-1 S_x,xdot = A^T
+    b = mean[:, n:] - np.einsum("kij,kj->ki", A, mean[:, :n])
+    return A, b
+
+
+@dataclass
+class PositionMixture:
+    """pi_k, mu_k,x, S_k,xx of the position marginal: all h_k(x) needs."""
+
+    weights: np.ndarray       # (K,)
+    means: np.ndarray         # (K, n)
+    covariances: np.ndarray   # (K, n, n)
+
+    @classmethod
+    def from_joint(cls, gmm, n: int) -> "PositionMixture":
+        check_joint_gmm(gmm, n)
+        return cls(gmm.weights_.copy(), gmm.means_[:, :n].copy(), gmm.covariances_[:, :n, :n].copy())
+
+    @property
+    def n_components(self) -> int:
+        return self.weights.size
+
+    def log_joint(self, X: np.ndarray) -> np.ndarray:
+        """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K)."""
+        n = self.means.shape[1]
+        out = np.empty((X.shape[0], self.n_components))
+        for k in range(self.n_components):
+            chol = np.linalg.cholesky(self.covariances[k])
+            z = solve_triangular(chol, (X - self.means[k]).T, lower=True)
+            out[:, k] = (np.log(self.weights[k]) - 0.5 * np.sum(z * z, axis=0)
+                         - np.sum(np.log(np.diag(chol))) - 0.5 * n * np.log(2 * np.pi))
+        return out
+
+    def responsibilities(self, X: np.ndarray) -> np.ndarray:
+        """h_k(x), shape (m, K), rows sum to one (log-space, finite far from the data)."""
+        lj = self.log_joint(X)
+        return np.exp(lj - logsumexp(lj, axis=1, keepdims=True))
