@@ -8,5 +8,7 @@ from .errors import (DemonstrationError, InfeasibleError, InputError, ModelFileE
                      SolverError, SosdynError)
 from .poly import PolyMatrix, Polynomial, from_sympy, jacobian, to_sympy, variables
 from .sos import SOSProgram, Solution, sum_squares
+from .lfd import (CDSP, Demonstration, Demonstrations, Trajectory, check_demonstrations, lasa_names,
+                  load_demos, load_lasa, load_model)
 
 __version__ = "0.1.0"

@@ -1,1 +1,8 @@
-"""Learning from demonstration: demonstration data and rollouts of learned vector fields."""
+"""Learning from demonstrations: data, the CDSP estimator, its convex steps, rollouts, model files."""
+from .cdsp import CDSP
+from .data import Demonstration, Demonstrations, check_demonstrations, lasa_names, load_demos, load_lasa
+from .model_io import load_model, save_model
+from .rollout import Trajectory, rollout
+
+__all__ = ["CDSP", "Demonstration", "Demonstrations", "check_demonstrations", "lasa_names",
+           "load_demos", "load_lasa", "load_model", "save_model", "Trajectory", "rollout"]
