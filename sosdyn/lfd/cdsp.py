@@ -256,10 +256,10 @@ class CDSP:
         """Plain alternation: metric step (max margin) then dynamics step, until no progress."""
         used = np.abs(W).max(axis=(0, 1)) > 0
         grow = int(mexps[used].sum(axis=1).max() + fexps.sum(axis=1).max() - 1)
-        met = MetricStep(self.dim_, int(self.n_components), mexps, eps=self.eps, grow_degree=grow,
+        met = MetricStep(self.dim_, int(self.n_components), mexps, fexps, eps=self.eps, grow_degree=grow,
                          **self._step_args)
         for _ in range(self.max_iter):
-            W_new, t, sol = met.solve(C, fexps)
+            W_new, t, sol = met.solve(C)
             self._record("metric", data.cost(C), sol, margin=t)
             if t <= 1e-9:               # no room at all: a fixed point of the alternation
                 break

@@ -124,3 +124,24 @@ def contraction_polymatrix(f, M, vars, gamma):
     J = jacobian(f, vars)
     JtM = J.T @ M
     return JtM + JtM.T + M.directional_derivative(f, vars) + gamma * M
+
+
+def unit_metrics(mexps, n, vars):
+    """[((a, b, j), E)]: E has z^g_j at (a, b) and (b, a), so M = sum W[a, b, j] E."""
+    out = []
+    for a, b in symmetric_pairs(n):
+        for j in range(mexps.shape[0]):
+            entries = np.zeros((n, n), dtype=object)
+            mono = Polynomial(vars, mexps[j:j + 1], [1.0])
+            for idx in np.ndindex(n, n):
+                entries[idx] = Polynomial.constant(0.0, vars)
+            entries[a, b] = entries[b, a] = mono
+            out.append(((a, b, j), PolyMatrix(entries)))
+    return out
+
+
+def unit_fields(fexps, n, vars):
+    """[((i, j), f)]: the field with z^e_j in component i and zeros elsewhere."""
+    zero = Polynomial.constant(0.0, vars)
+    return [((i, j), [Polynomial(vars, fexps[j:j + 1], [1.0]) if r == i else zero for r in range(n)])
+            for i in range(n) for j in range(fexps.shape[0])]

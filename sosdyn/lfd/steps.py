@@ -1,22 +1,25 @@
 """The convex steps of the CDSP learner (design card: alternating convex steps).
 
 The learning problem (18)-(20) is bilinear in the fields f_k and the metric M. Each step
-fixes enough to make it convex, and each is compiled once and re-solved with new numbers
-(``SOSConstraint.update``):
+fixes enough to make it convex, and each is compiled once: its SOS constraints are linear
+families sum_t w_t T_t whose terms T_t are expanded and matched at construction, so a
+re-solve with new numbers only recomputes the weights (``add_sos_matrix_family``).
 
 * :class:`DynamicsStep` -- M fixed: least squares for the field coefficients subject to
-  -G_k(z) - delta I being SOS matrices (k = 1..K);
-* :class:`MetricStep`   -- fields fixed: maximise the margin t with -G_k - t I SOS,
+  -G_k(z) - delta g(z) I being SOS matrices (k = 1..K);
+* :class:`MetricStep`   -- fields fixed: maximise the margin t with -G_k - t g(z) I SOS,
   M - eps I SOS, trace M(0) = n;
-* :class:`ICAStep`      -- constant metric P and fields together: an inner convex
-  approximation of the BMI (Dinh, Gumussoy, Michiels & Diehl 2012). With
+* :class:`ICAStep`      -- constant metric P and the fields' linear part together: an inner
+  convex approximation of the BMI (Dinh, Gumussoy, Michiels & Diehl 2012). With
   dJ = J - J0, dP = P - P0 the exact identity
       J^T P + P J = J^T P0 + P0 J + J0^T P + P J0 - J0^T P0 - P0 J0 + dJ^T dP + dP dJ
   and Young's inequality dJ^T dP + dP dJ <= a dJ^T dJ + dP^2 / a give the sufficient
   condition, by a Schur complement,
-      [[-(L + gamma P) - delta I, dJ^T, dP], [dJ, I/a, 0], [dP, 0, a I]]  SOS matrix,
-  convex in (J, P), satisfied at (J0, P0), so each iterate stays certified and the cost
+      [[-(L + gamma P) - delta g I, dJ^T, dP], [dJ, I/a, 0], [dP, 0, a I]]  SOS matrix,
+  convex in (J, P) and satisfied at (J0, P0): every iterate stays certified and the cost
   cannot increase.
+
+g(z) = (1 + |z|^2)^(d/2) is the margin's growth (:func:`margin_matrix`).
 """
 from __future__ import annotations
 
@@ -25,8 +28,8 @@ import numpy as np
 from ..poly import PolyMatrix, Polynomial, jacobian
 from ..sos import SOSProgram
 from ..sos.objective import QuadraticForm
-from .fields import (contraction_polymatrix, decision_fields, decision_metric, numeric_fields,
-                     numeric_metric, symmetric_pairs)
+from .fields import (contraction_polymatrix, decision_fields, decision_metric, symmetric_pairs,
+                     unit_fields, unit_metrics)
 
 
 class LeastSquaresData:
@@ -67,11 +70,6 @@ class LeastSquaresData:
         return QuadraticForm(Hff, 2 * Hfx @ th[x] - 2 * self.g[f], c, ids)
 
 
-def _proximal(ids, center, weight) -> QuadraticForm:
-    k = ids.size
-    return QuadraticForm(weight * np.eye(k), -2 * weight * center, weight * center @ center, ids)
-
-
 def margin_matrix(vars, n, degree):
     """(1 + |z|^2)^(degree/2) I: a margin that also holds at infinity.
 
@@ -82,80 +80,102 @@ def margin_matrix(vars, n, degree):
     return PolyMatrix.identity(n) * growth.with_vars(vars)
 
 
-def _update_or_add(prog, cons, k, expr, name):
-    if cons[k] is None:
-        cons[k] = prog.add_sos_matrix(expr, name=name)
-    else:
-        cons[k].update(expr)
+def _proximal(ids, center, weight) -> QuadraticForm:
+    k = ids.size
+    return QuadraticForm(weight * np.eye(k), -2 * weight * center, weight * center @ center, ids)
+
+
+def _degree(exps) -> int:
+    return int(exps.sum(axis=1).max())
 
 
 class DynamicsStep:
-    """Metric fixed: fit the fields by least squares under the SOS contraction constraints."""
+    """Metric fixed: fit the fields by least squares under the SOS contraction constraints.
+
+    Family terms of component k: -G_k(E_j) for each unit metric E_j (weight W_j), and the
+    margin -g_d(z) I for each possible growth degree d (weight delta or 0).
+    """
 
     def __init__(self, data: LeastSquaresData, fexps, mexps, vars, gamma, margin, solver="CLARABEL"):
         K, n, m = data.shape
-        self.vars, self.gamma, self.margin, self.solver, self.mexps = vars, gamma, margin, solver, mexps
-        self.field_degree = int(fexps.sum(axis=1).max())
+        self.solver, self.margin, self.data = solver, margin, data
+        self.field_degree = _degree(fexps)
+        self.mexps = mexps
+        self.grow_degrees = sorted({self.field_degree - 1, _degree(mexps) + self.field_degree - 1})
         self.prog = SOSProgram("dynamics step")
         self.ids = self.prog.new_ids(K * n * m, name="fields")
-        self.fields = decision_fields(self.ids.reshape(K, n, m), fexps, vars)
-        self.data = data
-        self.cons = [None] * K
+        units = unit_metrics(mexps, n, vars)
+        self.unit_index = [key for key, _ in units]
+        grows = [margin_matrix(vars, n, d) for d in self.grow_degrees]
+        self.cons = []
+        for k, f in enumerate(decision_fields(self.ids.reshape(K, n, m), fexps, vars)):
+            terms = [-contraction_polymatrix(f, E, vars, gamma) for _, E in units] + [-g for g in grows]
+            self.cons.append(self.prog.add_sos_matrix_family(terms, np.zeros(len(terms)), name=f"contraction[{k}]"))
         self.prog.minimize(data.form(self.ids))
 
-    def solve(self, W, center=None, prox=0.0, margin=None, grow_degree=None):
+    def solve(self, W, margin=None, grow_degree=None):
         """Fields C (K, n, m) for the numeric metric W; returns (C, Solution).
 
         The margin grows like |z|^grow_degree (default: the degree of G for this W).
         """
-        M = numeric_metric(W, self.mexps, self.vars)
-        n = W.shape[0]
         margin = self.margin if margin is None else min(margin, self.margin)
         if grow_degree is None:
             used = np.abs(W).max(axis=(0, 1)) > 0
-            grow_degree = int(self.mexps[used].sum(axis=1).max()) + self.field_degree - 1
-        grow = margin_matrix(self.vars, n, grow_degree)
-        for k, f in enumerate(self.fields):
-            G = contraction_polymatrix(f, M, self.vars, self.gamma)
-            _update_or_add(self.prog, self.cons, k, -G - grow * margin, f"contraction[{k}]")
-        obj = self.data.form(self.ids)
-        if prox and center is not None:
-            obj = obj + _proximal(self.ids, center.ravel(), prox)
-        self.prog.minimize(obj)
+            grow_degree = _degree(self.mexps[used]) + self.field_degree - 1
+        w = np.array([W[a, b, j] for a, b, j in self.unit_index]
+                     + [margin if d == grow_degree else 0.0 for d in self.grow_degrees])
+        for con in self.cons:
+            con.set_weights(w)
         sol = self.prog.solve(solver=self.solver, raise_on_failure=True)
         return sol.values_of(self.ids).reshape(self.data.shape), sol
 
 
 class MetricStep:
-    """Fields fixed: find M(z) with the largest contraction margin t (SOS feasibility)."""
+    """Fields fixed: find M(z) with the largest contraction margin t (SOS feasibility).
 
-    def __init__(self, n, K, mexps, vars, gamma, eps, grow_degree, t_max=10.0, solver="CLARABEL"):
-        self.vars, self.gamma, self.solver, self.mexps, self.n = vars, gamma, solver, mexps, n
-        self.grow = margin_matrix(vars, n, grow_degree)
+    Family terms of component k: -(J_u^T M + M J_u + dM[u]) for each unit field u (weight C_k,u)
+    and the fixed term -gamma M - t g(z) I (weight 1).
+    """
+
+    def __init__(self, n, K, mexps, fexps, vars, gamma, eps, grow_degree, t_max=10.0, solver="CLARABEL"):
+        self.solver, self.mexps, self.n = solver, mexps, n
         self.prog = SOSProgram("metric step")
         p = mexps.shape[0]
         self.pair_ids = {pair: self.prog.new_ids(p, name=f"M{pair}") for pair in symmetric_pairs(n)}
-        self.M = decision_metric(self.pair_ids, mexps, vars, n)
+        M = decision_metric(self.pair_ids, mexps, vars, n)
         self.t = self.prog.new_var(name="margin")
-        self.prog.add_sos_matrix(self.M - eps * PolyMatrix.identity(n), name="metric positive")
+        self.prog.add_sos_matrix(M - eps * PolyMatrix.identity(n), name="metric positive")
         const = int(np.flatnonzero(mexps.sum(axis=1) == 0)[0])
         trace0 = sum(Polynomial.affine([self.pair_ids[(a, a)][const]], [1.0]) for a in range(n))
         self.prog.add_eq(trace0, float(n), name="trace M(0) = n")
         self.prog.add_ge(t_max - self.t, 0.0, name="margin bound")
         self.prog.maximize(self.t)
-        self.cons = [None] * K
+        units = unit_fields(fexps, n, vars)
+        fixed = -gamma * M - margin_matrix(vars, n, grow_degree) * self.t
+        terms = [-contraction_polymatrix(u, M, vars, 0.0) for _, u in units] + [fixed]
+        self.cons = [self.prog.add_sos_matrix_family(terms, np.zeros(len(terms)), name=f"contraction[{k}]")
+                     for k in range(K)]
 
-    def solve(self, C, fexps):
+    def solve(self, C):
         """Metric coefficients W (n, n, p) for the numeric fields C; returns (W, margin, Solution)."""
-        n = self.n
-        for k, f in enumerate(numeric_fields(C, fexps, self.vars)):
-            G = contraction_polymatrix(f, self.M, self.vars, self.gamma)
-            _update_or_add(self.prog, self.cons, k, -G - self.grow * self.t, f"contraction[{k}]")
+        for k, con in enumerate(self.cons):
+            con.set_weights(np.r_[C[k].ravel(), 1.0])
         sol = self.prog.solve(solver=self.solver, raise_on_failure=True)
-        W = np.zeros((n, n, self.mexps.shape[0]))
+        W = np.zeros((self.n, self.n, self.mexps.shape[0]))
         for (a, b), ids in self.pair_ids.items():
             W[a, b] = W[b, a] = sol.values_of(ids)
         return W, sol.value(self.t), sol
+
+
+def _blocks(n, parts):
+    """A symmetric 3n x 3n PolyMatrix with the given (row, col) blocks and their transposes."""
+    out = np.empty((3 * n, 3 * n), dtype=object)
+    zero = PolyMatrix(np.zeros((n, n)))
+    for r in range(3):
+        for c in range(3):
+            block = parts.get((r, c)) or (parts[(c, r)].T if (c, r) in parts else zero)
+            out[r * n:(r + 1) * n, c * n:(c + 1) * n] = block.entries
+    return PolyMatrix(out)
 
 
 class ICAStep:
@@ -169,42 +189,52 @@ class ICAStep:
 
     def __init__(self, data: LeastSquaresData, fexps, vars, gamma, margin, eps, solver="CLARABEL"):
         K, n, m = data.shape
-        self.vars, self.gamma, self.margin, self.solver, self.fexps = vars, gamma, margin, solver, fexps
-        self.data, self.n = data, n
+        self.solver, self.data, self.n = solver, data, n
         self.linear = fexps.sum(axis=1) == 1
         self.free = np.broadcast_to(self.linear, (K, n, m))
-        self.grow = margin_matrix(vars, n, int(fexps.sum(axis=1).max() - 1))
         self.prog = SOSProgram("ICA step")
         self.ids = self.prog.new_ids(int(self.free.sum()), name="linear fields")
-        self.P = self.prog.new_psd(n, name="P")
-        self.P_ids = self.P.dec
-        self.prog.add_sos_matrix(self.P - eps * PolyMatrix.identity(n), name="metric positive")
-        self.prog.add_eq(sum(self.P[a, a] for a in range(n)), float(n), name="trace P = n")
-        self.cons = [None] * K
+        P = self.prog.new_psd(n, name="P")
+        self.P, self.P_ids = P, P.dec
+        self.prog.add_sos_matrix(P - eps * PolyMatrix.identity(n), name="metric positive")
+        self.prog.add_eq(sum(P[a, a] for a in range(n)), float(n), name="trace P = n")
+        E = [E for _, E in unit_metrics(np.zeros((1, n), dtype=np.int64), n, vars)]
+        self.pairs = symmetric_pairs(n)
+        units = unit_fields(fexps, n, vars)
+        Ju = [jacobian(u, vars) for _, u in units]                      # unit Jacobians (numeric)
+        self.lin_units = [c for c, ((_, j), _) in enumerate(units) if self.linear[j]]
+        I = PolyMatrix.identity(n)
+        grow = margin_matrix(vars, n, _degree(fexps) - 1)
+        self.cons = []
+        lin_ids = self.ids.reshape(K, n, -1)
+        for k in range(K):
+            f_lin = [Polynomial(vars, fexps[self.linear], np.hstack([np.zeros((n, 1)), np.eye(n)]), lin_ids[k, i])
+                     for i in range(n)]
+            J = jacobian(f_lin, vars)
+            terms = [_blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P})]               # weight 1
+            terms += [_blocks(n, {(0, 0): -grow})]                                            # margin
+            terms += [_blocks(n, {(0, 0): -(J.T @ Eab + Eab @ J)}) for Eab in E]              # P0_ab
+            terms += [_blocks(n, {(0, 0): -(Jc.T @ P + P @ Jc)}) for Jc in Ju]                # C0_c
+            terms += [_blocks(n, {(0, 0): Ju[c].T @ Eab + Eab @ Ju[c]})                       # C0_c P0_ab
+                      for c in self.lin_units for Eab in E]
+            terms += [_blocks(n, {(1, 0): -Ju[c]}) for c in self.lin_units]                    # C0_c
+            terms += [_blocks(n, {(2, 0): -Eab}) for Eab in E]                                 # P0_ab
+            terms += [_blocks(n, {(1, 1): I}), _blocks(n, {(2, 2): I})]                        # 1/a, a
+            self.cons.append(self.prog.add_sos_matrix_family(terms, np.zeros(len(terms)), name=f"ica[{k}]"))
+        self.margin = margin
 
     def solve(self, C0, P0, alpha=1.0, prox=1e-4):
         """One ICA iterate from the certified (C0, P0); returns (C, P, Solution)."""
-        n, K = self.n, C0.shape[0]
-        P0m = PolyMatrix(P0)
-        I = PolyMatrix.identity(n)
-        Z = PolyMatrix(np.zeros((n, n)))
-        lin_ids = self.ids.reshape(K, n, -1)
-        fixed = C0 * ~self.free
-        for k, f0 in enumerate(numeric_fields(C0, self.fexps, self.vars)):
-            f_fixed = numeric_fields(fixed[k:k + 1], self.fexps, self.vars)[0]
-            f = [Polynomial(self.vars, self.fexps[self.linear],
-                            np.hstack([np.zeros((n, 1)), np.eye(n)]), lin_ids[k, i]) + f_fixed[i]
-                 for i in range(n)]
-            J, J0 = jacobian(f, self.vars), jacobian(f0, self.vars)
-            L = J.T @ P0m + P0m @ J + J0.T @ self.P + self.P @ J0 - J0.T @ P0m - P0m @ J0 + self.gamma * self.P
-            dJ, dP = J - J0, self.P - P0m
-            S = np.block([[(-L - self.grow * self.margin).entries, dJ.T.entries, dP.entries],
-                          [dJ.entries, (I * (1.0 / alpha)).entries, Z.entries],
-                          [dP.entries, Z.entries, (I * alpha).entries]])
-            _update_or_add(self.prog, self.cons, k, PolyMatrix(S), f"ica[{k}]")
-        p0 = np.array([P0[a, b] * (1.0 if a == b else np.sqrt(2.0)) for b in range(n) for a in range(b + 1)])
+        p0 = np.array([P0[a, b] for a, b in self.pairs])
+        for k, con in enumerate(self.cons):
+            c0 = C0[k].ravel()
+            w = np.concatenate([[1.0, self.margin], p0, c0,
+                                [c0[c] * pab for c in self.lin_units for pab in p0],
+                                c0[self.lin_units], p0, [1.0 / alpha, alpha]])
+            con.set_weights(w)
+        sv = np.array([P0[a, b] * (1.0 if a == b else np.sqrt(2.0)) for b in range(self.n) for a in range(b + 1)])
         obj = self.data.partial_form(self.ids, self.free, C0) + _proximal(self.ids, C0[self.free], prox) \
-            + _proximal(np.sort(self.P_ids), _svec_order(p0, self.P_ids), prox)
+            + _proximal(np.sort(self.P_ids), sv[np.argsort(self.P_ids)], prox)
         self.prog.minimize(obj)
         sol = self.prog.solve(solver=self.solver, raise_on_failure=True)
         C = C0.copy()
@@ -212,16 +242,12 @@ class ICAStep:
         return C, sol.value(self.P), sol
 
 
-def _svec_order(values, ids):
-    """Reorder svec values (given in ids' order) to sorted-id order."""
-    return np.asarray(values)[np.argsort(ids)]
-
-
 def certify(C, fexps, W, mexps, vars, gamma, eps, solver="CLARABEL"):
     """Final certificate for numeric (C, W): -G_k SOS matrices and M - eps I SOS matrix.
 
     Returns the Solution (its constraints carry the Gram matrices).
     """
+    from .fields import numeric_fields, numeric_metric
     prog = SOSProgram("certificate")
     n = W.shape[0]
     M = numeric_metric(W, mexps, vars)

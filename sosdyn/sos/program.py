@@ -155,6 +155,43 @@ class SOSConstraint:
         return f"SOSConstraint({self.name!r}, kind={self.kind}, basis size {len(self.basis)})"
 
 
+class FamilySOSConstraint(SOSConstraint):
+    """sum_t w_t T_t is an SOS matrix for fixed terms T_t (see SOSProgram.add_sos_matrix_family)."""
+
+    def __init__(self, program, name, term_polys, basis, psd, weights):
+        U, _ = unique_rows(np.vstack([q.exps for q in term_polys]))
+        self._dec = np.unique(np.concatenate([q.dec for q in term_polys] + [np.zeros(0, dtype=np.int64)]))
+        self._tensor = np.zeros((len(term_polys), U.shape[0], 1 + self._dec.size))
+        for t, q in enumerate(term_polys):
+            q = q.with_dec(self._dec)
+            self._tensor[t, match_rows(U, q.exps)] = q.coef
+        self._U, self._vars = U, term_polys[0].vars
+        self.weights = self._check_weights(weights)
+        super().__init__(program, name, "sos_matrix", self._weighted(), basis, psd)
+
+    def _check_weights(self, weights):
+        w = np.asarray(weights, dtype=float)
+        if w.shape != (self._tensor.shape[0],) or not np.isfinite(w).all():
+            raise InputError(f"family {self.name if hasattr(self, 'name') else ''!r}: expected "
+                             f"{self._tensor.shape[0]} finite weights, got shape {w.shape}")
+        return w
+
+    def _weighted(self) -> Polynomial:
+        return Polynomial(self._vars, self._U, np.tensordot(self.weights, self._tensor, axes=1),
+                          self._dec, canonical=True)
+
+    def set_weights(self, weights) -> "FamilySOSConstraint":
+        """New numbers, same structure: re-match without any polynomial algebra."""
+        self.weights = self._check_weights(weights)
+        self.poly = self._weighted()
+        self._match()
+        self.program._invalidate()
+        return self
+
+    def update(self, poly):
+        raise InputError("a family constraint changes through set_weights(), not update()")
+
+
 class SOSProgram:
     """A sum-of-squares program (see module docstring).
 
@@ -170,7 +207,8 @@ class SOSProgram:
         self.cvxpy_constraints: list = []
         self.objective = None          # (sense, expression)
         self.solution = None
-        self.build_seconds = 0.0
+        self.build_seconds = 0.0      # total time spent declaring (all add_* calls)
+        self.build_reported = 0.0     # part of it already charged to an earlier Solution
         self._compiled = None
         self._cvx_vars: dict = {}
         self._counter = 0
@@ -322,25 +360,59 @@ class SOSProgram:
         return exps
 
     @staticmethod
-    def _matrix_form(P):
-        """y^T P(x) y as a scalar polynomial in (x, y), and the multipartite basis y (x) z(x)."""
+    def _matrix_form(P, basis_from=None, with_basis=True):
+        """y^T P(x) y as a scalar polynomial in (x, y), and the multipartite basis y (x) z(x).
+
+        z_i comes from the Newton polytope of P_ii, or of the union of the P_ii of the
+        matrices ``basis_from`` (a list sharing P's shape) when given.
+        """
         if not isinstance(P, PolyMatrix):
             P = PolyMatrix(P)
         P.check_symmetric("matrix given to add_sos_matrix")
         r = P.shape[0]
-        xvars = P.vars
+        sources = [P] if basis_from is None else basis_from
+        xvars: tuple = ()
+        for S in sources + [P]:
+            xvars = xvars + tuple(v for v in S.vars if v not in xvars)
         yvars = tuple(f"_y{i}" for i in range(r))
         allv = xvars + yvars
-        ys = [Polynomial(allv, [np.r_[np.zeros(len(xvars), dtype=int), np.eye(r, dtype=int)[i]]], [1.0])
-              for i in range(r)]
-        q = Polynomial.constant(0.0, allv)
+        entries = [(i, j, P.entries[i, j].with_vars(xvars)) for i in range(r) for j in range(i, r)]
+        dec = np.unique(np.concatenate([e.dec for _, _, e in entries] + [np.zeros(0, dtype=np.int64)]))
+        exps, coef = [], []
+        for i, j, e in entries:            # y^T P y = sum_i P_ii y_i^2 + 2 sum_{i<j} P_ij y_i y_j
+            y = np.zeros((e.nterms, r), dtype=np.int64)
+            y[:, i] += 1
+            y[:, j] += 1
+            exps.append(np.hstack([e.exps, y]))
+            coef.append(e.with_dec(dec).coef * (1.0 if i == j else 2.0))
+        q = Polynomial(allv, np.vstack(exps), np.vstack(coef), dec)
         rows = []
         for i in range(r):
-            for j in range(i, r):
-                q = q + (1.0 if i == j else 2.0) * P.entries[i, j].with_vars(allv) * ys[i] * ys[j]
-            z = newton_basis(P.entries[i, i].with_vars(xvars).exps)
-            rows.append(np.hstack([z, np.tile(np.eye(r, dtype=np.int64)[i], (z.shape[0], 1))]))
+            if with_basis:
+                support = np.vstack([S.entries[i, i].with_vars(xvars).exps for S in sources])
+                z = newton_basis(unique_rows(support)[0])
+                rows.append(np.hstack([z, np.tile(np.eye(r, dtype=np.int64)[i], (z.shape[0], 1))]))
         return q, np.vstack(rows) if rows else np.zeros((0, len(allv)), dtype=np.int64)
+
+    @_timed
+    def add_sos_matrix_family(self, terms, weights, name=None) -> "FamilySOSConstraint":
+        """sum_t weights[t] * terms[t] is an SOS matrix; the weights can change between solves.
+
+        This is the compile-once path for parametrised problems (cvxpy's Parameters): each
+        term is expanded and matched once; ``con.set_weights(w)`` re-solves with new numbers
+        at the cost of one dense contraction. The Gram basis covers every term's support.
+        """
+        terms = [t if isinstance(t, PolyMatrix) else PolyMatrix(t) for t in terms]
+        if not terms or len({t.shape for t in terms}) != 1:
+            raise PolynomialError("add_sos_matrix_family needs a non-empty list of equal-shape matrices")
+        name = self._name("family", name)
+        q0, exps = self._matrix_form(terms[0], basis_from=terms)
+        qs = [q0] + [self._matrix_form(t, with_basis=False)[0] for t in terms[1:]]
+        psd = self._block(name, svec_size(exps.shape[0]), exps.shape[0]).psd
+        vars = qs[0].vars
+        con = FamilySOSConstraint(self, name, [q.with_vars(vars) for q in qs], Basis(vars, exps), psd, weights)
+        self.sos_constraints.append(con)
+        return con
 
     @_timed
     def add_sos_matrix(self, P, name=None) -> SOSConstraint:
