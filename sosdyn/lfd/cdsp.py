@@ -189,7 +189,7 @@ class CDSP:
                 raise NotCertifiedError(msg, "solver_error", "a smaller gamma, a larger margin, or "
                                         "solver='SCS'; or pass allow_uncertified=True to inspect it")
             warnings.warn(msg, stacklevel=2)
-        del self._Z, self._Zdot
+        del self._Z, self._Zdot, self._dyn
         return self
 
     def _data(self, exps=None):
@@ -211,13 +211,14 @@ class CDSP:
         n = self.dim_
         lin_exps, const_exps = field_exponents(n, 1), metric_exponents(n, 0)
         lin_data = self._data(lin_exps)
-        C, P = self._stage_a(lin_data, lin_exps, const_exps)
+        C, P, self._dyn = self._stage_a(lin_data, lin_exps, const_exps)
         if self.field_degree == 1 and (self.metric_degree == 0 or self.metric == "identity"):
             self.C_, self.W_ = C, P[:, :, None]
             return
         C = self._embed(C, lin_exps, self.field_exps_, axis_size=(n,))
         W = self._embed(P[:, :, None], const_exps, self.metric_exps_, axis_size=(n, n))
-        dyn = DynamicsStep(data, self.field_exps_, self.metric_exps_, margin=self.margin, **self._step_args)
+        dyn = self._dyn = DynamicsStep(data, self.field_exps_, self.metric_exps_, margin=self.margin,
+                                       **self._step_args)
         C, sol = dyn.solve(W)
         self._record("dynamics (degree %d)" % self.field_degree, data.cost(C), sol)
         if self.metric == "learned" and self.metric_degree > 0:
@@ -235,10 +236,10 @@ class CDSP:
         C, sol = dyn.solve(W)
         self._record("dynamics (M = I)", data.cost(C), sol)
         if self.metric == "identity":
-            return C, np.eye(n)
+            return C, np.eye(n), dyn
         if self.solver_method == "alternating":
             C, W = self._alternate(data, dyn, C, W, fexps, mexps)
-            return C, W[:, :, 0]
+            return C, W[:, :, 0], dyn
         ica = ICAStep(data, fexps, eps=self.eps, margin=self.margin, **self._step_args)
         P = np.eye(n)
         for _ in range(self.max_iter):
@@ -250,7 +251,7 @@ class CDSP:
             self._record("dynamics", cost, sol)
             if old - cost <= self.tol * max(old, 1e-12):
                 break
-        return C, P
+        return C, P, dyn
 
     def _alternate(self, data, dyn, C, W, fexps, mexps):
         """Plain alternation: metric step (max margin) then dynamics step, until no progress."""
@@ -281,7 +282,7 @@ class CDSP:
 
     def _refine(self, data):
         from .refine import refine_mixture
-        refine_mixture(self, data)
+        refine_mixture(self, self._dyn)
 
     def _collapse_diagnostic(self):
         """Does the constant metric M(0) certify the same fields? (module docstring)."""

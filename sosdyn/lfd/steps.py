@@ -126,8 +126,16 @@ class DynamicsStep:
                      + [margin if d == grow_degree else 0.0 for d in self.grow_degrees])
         for con in self.cons:
             con.set_weights(w)
+        self.last = (W, margin, grow_degree)
         sol = self.prog.solve(solver=self.solver, raise_on_failure=True)
         return sol.values_of(self.ids).reshape(self.data.shape), sol
+
+    def refit(self, data: LeastSquaresData):
+        """Same metric and margins as the last solve, new data term (e.g. new GMM weights)."""
+        self.data = data
+        self.prog.minimize(data.form(self.ids))
+        W, margin, grow = self.last
+        return self.solve(W, margin=margin, grow_degree=grow)
 
 
 class MetricStep:
