@@ -39,6 +39,7 @@ class SolverError(SosdynError):
     def __init__(self, message, status="solver_error", hint=None):
         self.status = status
         self.hint = hint
+        self.detail = message
         text = message if hint is None else f"{message} Try: {hint}"
         super().__init__(text)
 

@@ -123,6 +123,8 @@ class CDSP:
         if sol is not None:
             row.update(status=sol.status, solve_s=sol.timings["solve"],
                        build_s=sol.timings["build"] + sol.timings["canonicalize"])
+            if "fallback" in sol.info:
+                row["fallback"] = sol.info["fallback"]
         row.update(extra)
         self.history_.append(row)
         if self.progress is not None:
@@ -167,9 +169,9 @@ class CDSP:
             if self.refine_gmm:
                 self._refine(data)
         except SolverError as exc:
-            raise SolverError(f"CDSP fit failed: {exc}", exc.status,
-                              exc.hint or "a smaller gamma, solver_method='alternating', or fewer "
-                              "components") from exc
+            raise type(exc)(f"CDSP fit failed: {exc.detail}", exc.status,
+                            exc.hint or "a smaller gamma, solver_method='alternating', or fewer "
+                            "components") from exc
         self.timings_["learn_s"] = time.perf_counter() - t0
 
         t0 = time.perf_counter()

@@ -85,6 +85,20 @@ def _proximal(ids, center, weight) -> QuadraticForm:
     return QuadraticForm(weight * np.eye(k), -2 * weight * center, weight * center @ center, ids)
 
 
+def solve_with_fallback(prog, solver):
+    """Solve; if the solver fails numerically (not: proves infeasibility), retry once with SCS.
+
+    The fallback is stated in ``sol.info["fallback"]`` (and so in the learner's history_).
+    """
+    sol = prog.solve(solver=solver)
+    if sol.usable or sol.status in ("infeasible", "unbounded") or solver == "SCS":
+        return sol.raise_for_status()
+    first = f"{solver}: {sol.status} ({sol.raw_status})"
+    retry = prog.solve(solver="SCS", backend="cvxpy", eps=1e-9, max_iters=200_000)
+    retry.info["fallback"] = f"SCS after {first}"
+    return retry.raise_for_status()
+
+
 def _degree(exps) -> int:
     return int(exps.sum(axis=1).max())
 
@@ -127,7 +141,7 @@ class DynamicsStep:
         for con in self.cons:
             con.set_weights(w)
         self.last = (W, margin, grow_degree)
-        sol = self.prog.solve(solver=self.solver, raise_on_failure=True)
+        sol = solve_with_fallback(self.prog, self.solver)
         return sol.values_of(self.ids).reshape(self.data.shape), sol
 
     def refit(self, data: LeastSquaresData):
@@ -168,7 +182,7 @@ class MetricStep:
         """Metric coefficients W (n, n, p) for the numeric fields C; returns (W, margin, Solution)."""
         for k, con in enumerate(self.cons):
             con.set_weights(np.r_[C[k].ravel(), 1.0])
-        sol = self.prog.solve(solver=self.solver, raise_on_failure=True)
+        sol = solve_with_fallback(self.prog, self.solver)
         W = np.zeros((self.n, self.n, self.mexps.shape[0]))
         for (a, b), ids in self.pair_ids.items():
             W[a, b] = W[b, a] = sol.values_of(ids)
@@ -244,7 +258,7 @@ class ICAStep:
         obj = self.data.partial_form(self.ids, self.free, C0) + _proximal(self.ids, C0[self.free], prox) \
             + _proximal(np.sort(self.P_ids), sv[np.argsort(self.P_ids)], prox)
         self.prog.minimize(obj)
-        sol = self.prog.solve(solver=self.solver, raise_on_failure=True)
+        sol = solve_with_fallback(self.prog, self.solver)
         C = C0.copy()
         C[self.free] = sol.values_of(self.ids)
         return C, sol.value(self.P), sol

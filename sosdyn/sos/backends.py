@@ -134,10 +134,16 @@ def solve_program(program, solver, backend, scale, verbose, **settings) -> Solut
         return Solution(program, data, "infeasible", np.full(data.n, np.nan), solver, backend,
                         {"build": build, "canonicalize": canon, "solve": 0.0},
                         raw_status="detected before solving", reason=data.infeasible_reason)
-    if backend == "direct":
-        status, x, raw, seconds, info = _clarabel(data, verbose, settings)
-    else:
-        status, x, raw, seconds, info = _cvxpy(program, data, solver, verbose, settings)
+    try:
+        if backend == "direct":
+            status, x, raw, seconds, info = _clarabel(data, verbose, settings)
+        else:
+            status, x, raw, seconds, info = _cvxpy(program, data, solver, verbose, settings)
+    except InputError:
+        raise
+    except Exception as exc:   # a solver crash becomes a status, never a bare traceback
+        status, x, raw, seconds, info = ("solver_error", np.full(data.n, np.nan),
+                                         f"{type(exc).__name__}: {exc}", 0.0, {})
         canon += info.get("compile_seconds") or 0.0
         if info.get("solver_seconds"):
             seconds = info["solver_seconds"]

@@ -1,0 +1,1 @@
+"""Helpers of ``python -m problems bench`` / ``bench-sos``: problem definitions, timing, reports."""

@@ -1,0 +1,132 @@
+"""The bad-input catalogue (docs/errors.md): every case must raise a typed SosdynError whose
+message says what was wrong; none may end in a bare traceback, a NaN or a silent answer."""
+import json
+
+import numpy as np
+import pytest
+
+import sosdyn as sd
+from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.poly import PolyMatrix
+
+
+def _demos(goals=((0.0, 0.0), (0.0, 0.0)), T=50, nan=False, dims=None):
+    out = []
+    for i, g in enumerate(goals):
+        t = np.linspace(0, 1, T)
+        pos = np.column_stack([np.linspace(5 + i, g[0], T), np.linspace(-3 - i, g[1], T)])
+        if dims:
+            pos = np.column_stack([pos] + [np.linspace(1, 0, T)] * (dims[i] - 2))
+        if nan and i == 1:
+            pos[10, 0] = np.nan
+        out.append(Demonstration(t, pos, np.gradient(pos, t, axis=0), source=f"d{i}"))
+    return Demonstrations(out, name="synthetic")
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    return sd.CDSP(n_components=1, gamma=0.5).fit(_demos())
+
+
+x, y = sd.variables("x y")
+
+
+def _prog_without_objective_value():
+    prog = sd.SOSProgram()
+    prog.add_sos(x**2 + 1)
+    return prog.solve().objective
+
+
+def _tampered(fitted, tmp_path, edit):
+    path = tmp_path / "m.json"
+    fitted.save(path)
+    data = json.loads(path.read_text())
+    edit(data)
+    path.write_text(json.dumps(data))
+    return sd.load_model(path)
+
+
+CATALOGUE = [
+    # polynomial layer
+    ("negative power", lambda: x ** -2, sd.PolynomialError, "non-negative integer"),
+    ("bilinear product of decisions", lambda: (lambda p: p.new_var() * p.new_var())(sd.SOSProgram()),
+     sd.PolynomialError, "bilinear"),
+    ("evaluate with too many columns", lambda: (x + y)(np.ones((2, 3)), ["x", "y"]), sd.PolynomialError, "columns"),
+    ("evaluate without a value for a variable", lambda: (x * y)(np.ones((2, 1)), ["x"]), sd.PolynomialError, "no value"),
+    ("evaluate a decision polynomial numerically", lambda: sd.SOSProgram().new_poly([x], 2)(np.ones((1, 1)), ["x"]),
+     sd.PolynomialError, "decision"),
+    ("matrix product of mismatched shapes", lambda: PolyMatrix([[x, y]]) @ np.ones((3, 1)), sd.PolynomialError, "cannot multiply"),
+    ("matrix entry that is not a polynomial", lambda: PolyMatrix([["a", x]]), sd.PolynomialError, "neither"),
+    ("non-polynomial sympy expression", lambda: sd.from_sympy("sin(x)", ["x"]), sd.PolynomialError, "not a polynomial"),
+    ("duplicate variable names", lambda: sd.variables("x y x"), sd.PolynomialError, "duplicate"),
+    ("substitute an unknown variable", lambda: (x + 1).subs({"q": 1.0}), sd.PolynomialError, "cannot substitute"),
+    # SOS layer
+    ("non-symmetric matrix to add_sos_matrix", lambda: sd.SOSProgram().add_sos_matrix(PolyMatrix([[x, y], [0, x]])),
+     sd.NotSymmetricError, "not symmetric"),
+    ("non-square matrix to add_sos_matrix", lambda: sd.SOSProgram().add_sos_matrix(PolyMatrix([[x, y]])),
+     sd.NotSymmetricError, "square"),
+    ("SOS polynomial of odd degree", lambda: sd.SOSProgram().new_sos([x], 3), sd.PolynomialError, "even degree"),
+    ("objective that depends on x", lambda: sd.SOSProgram().minimize(x), sd.PolynomialError, "must not depend on x"),
+    ("maximise a convex quadratic", lambda: sd.SOSProgram().maximize(sd.sum_squares([x - x + 1])), sd.InputError, "not a convex"),
+    ("unknown solver", lambda: sd.SOSProgram().solve(solver="GUROBI_MAYBE"), sd.InputError, "unknown solver"),
+    ("unknown backend", lambda: sd.SOSProgram().solve(backend="magic"), sd.InputError, "unknown backend"),
+    ("add_sos of a PolyMatrix", lambda: sd.SOSProgram().add_sos(PolyMatrix([[x]])), sd.PolynomialError, "add_sos_matrix"),
+    ("repeated monomials in a basis", lambda: sd.SOSProgram().add_sos(x**2, basis=[x, x]), sd.PolynomialError, "repeated"),
+    ("objective value of an infeasible program", lambda: (lambda p: (p.add_sos(-x**2 - 1), p.minimize(0.0), p.solve().objective))(sd.SOSProgram()),
+     sd.InfeasibleError, "infeasible"),
+    ("multiplier degree below the constraint's", lambda: sd.SOSProgram().add_nonneg_on(x, ineqs=[1 - x**4], degree=2),
+     sd.PolynomialError, "below the degree"),
+    # demonstrations
+    ("NaN in a demonstration", lambda: sd.CDSP().fit(_demos(nan=True)), sd.DemonstrationError, "NaN"),
+    ("demonstrations that do not share a goal", lambda: sd.CDSP().fit(_demos(goals=((0, 0), (4, 4)))),
+     sd.DemonstrationError, "goal|end"),
+    ("a demonstration with too few samples", lambda: sd.CDSP().fit(_demos(T=3)), sd.DemonstrationError, "samples"),
+    ("demonstrations of different dimensions", lambda: sd.CDSP().fit(_demos(dims=(2, 3))), sd.DemonstrationError, "dimension"),
+    ("no demonstrations at all", lambda: sd.CDSP().fit(Demonstrations([])), sd.DemonstrationError, ""),
+    ("unknown LASA shape", lambda: sd.load_lasa("Leaf3"), sd.InputError, "Did you mean"),
+    ("demo file that does not exist", lambda: sd.load_demos(["/nonexistent/demo.csv"]), sd.SosdynError, "demo.csv"),
+    # learner hyper-parameters
+    ("odd metric degree", lambda: sd.CDSP(metric_degree=3).fit(_demos()), sd.InputError, "odd"),
+    ("even field degree (no certificate can exist)", lambda: sd.CDSP(field_degree=2).fit(_demos()), sd.InputError, "even"),
+    ("negative contraction rate", lambda: sd.CDSP(gamma=-0.1).fit(_demos()), sd.InputError, "gamma"),
+    ("more components than the data supports", lambda: sd.CDSP(n_components=40).fit(_demos()), sd.InputError, "too few"),
+]
+
+
+@pytest.mark.parametrize("what, call, exc, match", CATALOGUE, ids=[c[0] for c in CATALOGUE])
+def test_catalogue(what, call, exc, match):
+    with pytest.raises(exc, match=match) as info:
+        call()
+    assert isinstance(info.value, sd.SosdynError)
+    assert len(str(info.value)) > 20          # a sentence, not a bare token
+
+
+@pytest.mark.parametrize("what, call, match", [
+    ("predict with wrong dimension", lambda m: m.predict(np.zeros((4, 3))), "shape"),
+    ("predict with NaN", lambda m: m.predict([[np.nan, 1.0]]), "NaN"),
+    ("rollout from a wrong-sized start", lambda m: m.rollout([1.0, 2.0, 3.0], duration=1.0), "shape"),
+    ("rollout with a non-positive duration", lambda m: m.rollout([1.0, 2.0], duration=0.0), "duration"),
+    ("rollout with a push after the end", lambda m: m.rollout([1.0, 2.0], duration=1.0, perturbations=[(5.0, [1, 1])]), ""),
+])
+def test_model_boundary(fitted, what, call, match):
+    with pytest.raises(sd.SosdynError, match=match):
+        call(fitted)
+
+
+@pytest.mark.parametrize("what, edit, match", [
+    ("edited array", lambda d: d["state"]["C_"][0][0].__setitem__(0, 3.0), "checksum"),
+    ("wrong format", lambda d: d.__setitem__("format", "other"), "not a sosdyn-cdsp"),
+    ("future version", lambda d: d.__setitem__("version", 99), "version"),
+    ("missing state", lambda d: (d.__setitem__("state", {}), d.__setitem__("sha256", __import__("sosdyn.lfd.model_io", fromlist=["_digest"])._digest({k: v for k, v in d.items() if k != "sha256"}))), "malformed"),
+])
+def test_tampered_model_files(fitted, tmp_path, what, edit, match):
+    with pytest.raises(sd.ModelFileError, match=match):
+        _tampered(fitted, tmp_path, edit)
+
+
+def test_catalogue_is_large_and_documented():
+    from pathlib import Path
+    doc = (Path(__file__).parents[1] / "docs" / "errors.md").read_text()
+    assert len(CATALOGUE) + 9 >= 30
+    missing = [c[0] for c in CATALOGUE if c[0] not in doc]
+    assert not missing, f"cases missing from docs/errors.md: {missing}"
