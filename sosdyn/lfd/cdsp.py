@@ -18,7 +18,6 @@ import time
 import warnings
 
 import numpy as np
-from sklearn.mixture import GaussianMixture
 
 from ..errors import InputError, NotCertifiedError, NotFittedError, SolverError
 from .certificate import CertificateReport, check_model, extract_certificate
@@ -150,6 +149,8 @@ class CDSP:
         self.units_ = demos.units
         Z, Zdot = self._to_z(X), Xdot / self.scale_
         self.history_, self.timings_ = [], {}
+
+        from sklearn.mixture import GaussianMixture    # heavy import, only when fitting
 
         t0 = time.perf_counter()
         gmm = GaussianMixture(K, covariance_type="full", random_state=self.random_state,

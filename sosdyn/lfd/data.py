@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 import scipy.io
-from scipy.signal import savgol_filter
 
 from sosdyn.errors import DemonstrationError, InputError, SosdynError
 
@@ -153,6 +152,7 @@ def estimate_velocity(t, pos) -> np.ndarray:
     grid or with fewer than 5 samples: second-order finite differences
     ``np.gradient(pos, t, edge_order=2)`` (exact for quadratic motions).
     """
+    from scipy.signal import savgol_filter   # scipy.signal is slow to import; only here
     t, pos = np.asarray(t, dtype=float), np.asarray(pos, dtype=float)
     if t.ndim != 1 or pos.ndim != 2 or len(t) != len(pos) or len(t) < 3:
         raise DemonstrationError(

@@ -17,6 +17,7 @@ import scipy.sparse as sp
 
 from ..errors import InputError
 from .conic import cvxpy_block_vars
+from .objective import is_cvxpy
 from .gram import svec_pairs
 from .solution import Solution
 
@@ -114,10 +115,8 @@ def _cvxpy(program, data, solver, verbose, settings):
 
 def solve_program(program, solver, backend, scale, verbose, **settings) -> Solution:
     """Assemble ``program`` (cached) and solve it with the chosen back end."""
-    import cvxpy as cp
-
     needs_cvxpy = bool(program.cvxpy_constraints) or (
-        program.objective is not None and isinstance(program.objective[1], cp.Expression))
+        program.objective is not None and is_cvxpy(program.objective[1]))
     if backend == "auto":
         backend = "direct" if solver == "CLARABEL" and not needs_cvxpy else "cvxpy"
     if backend == "direct" and (solver != "CLARABEL" or needs_cvxpy):

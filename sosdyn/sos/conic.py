@@ -17,7 +17,7 @@ import scipy.sparse as sp
 
 from ..errors import InputError, PolynomialError
 from ..poly import PolyMatrix, Polynomial
-from .objective import QuadraticForm, affine_rows
+from .objective import QuadraticForm, affine_rows, is_cvxpy
 
 
 @dataclass
@@ -81,11 +81,10 @@ def _stack(ids, parts, kind, scale):
 
 
 def _objective(program, ids):
-    import cvxpy as cp
     if program.objective is None:
         return None, np.zeros(ids.size), 0.0, "min"
     sense, expr = program.objective
-    if isinstance(expr, cp.Expression):
+    if is_cvxpy(expr):
         return None, np.zeros(ids.size), 0.0, sense
     sign = -1.0 if sense == "max" else 1.0
     q = np.zeros(ids.size)

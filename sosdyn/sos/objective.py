@@ -14,6 +14,11 @@ from ..errors import PolynomialError
 from ..poly import Polynomial
 
 
+def is_cvxpy(obj) -> bool:
+    """True for a cvxpy expression or constraint (checked without importing cvxpy)."""
+    return type(obj).__module__.split(".")[0] == "cvxpy"
+
+
 def affine_rows(exprs, dec=None):
     """Stack degree-0 affine polynomials as (c0, C, dec) with value = c0 + C @ d[dec]."""
     exprs = [e if isinstance(e, Polynomial) else Polynomial.constant(float(e)) for e in exprs]

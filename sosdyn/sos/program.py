@@ -19,7 +19,7 @@ from ..poly import PolyMatrix, Polynomial, allocate, monomials_up_to, variable_n
 from ..poly.monomials import match_rows, unique_rows
 from .gram import gram_matching, svec_pairs, svec_size, svec_to_matrix
 from .newton import newton_basis
-from .objective import QuadraticForm
+from .objective import QuadraticForm, is_cvxpy
 
 SOLVERS = ("CLARABEL", "SCS")
 
@@ -505,7 +505,6 @@ class SOSProgram:
 
     # ------------------------------------------------------------------ objective
     def _set_objective(self, sense, expr):
-        import cvxpy as cp
         if isinstance(expr, (int, float)):
             expr = Polynomial.constant(float(expr))
         if isinstance(expr, Polynomial) and not expr.is_constant:
@@ -513,7 +512,7 @@ class SOSProgram:
                                   "coefficient (p.coeff(...)) or a new variable bounded by SOS constraints")
         if isinstance(expr, QuadraticForm) and sense == "max":
             raise InputError("maximising a convex quadratic is not a convex problem; minimise it instead")
-        if not isinstance(expr, (Polynomial, QuadraticForm, cp.Expression)):
+        if not (isinstance(expr, (Polynomial, QuadraticForm)) or is_cvxpy(expr)):
             raise InputError(f"unsupported objective type {type(expr).__name__}")
         self.objective = (sense, expr)
         self._invalidate()

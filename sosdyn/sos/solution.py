@@ -16,7 +16,7 @@ from ..errors import InfeasibleError, SolverError
 from ..poly import PolyMatrix, Polynomial
 from ..poly.monomials import match_rows
 from .gram import svec_to_matrix
-from .objective import QuadraticForm
+from .objective import QuadraticForm, is_cvxpy
 
 _HINTS = {
     "infeasible": "a higher degree (richer Gram basis / multipliers), a smaller decay rate gamma, "
@@ -135,7 +135,6 @@ class Solution:
 
         Raises InfeasibleError / SolverError when the solution is not usable.
         """
-        import cvxpy as cp
         self.raise_for_status()
         if isinstance(item, Polynomial):
             p = self._assign(item)
@@ -147,17 +146,16 @@ class Solution:
             return m
         if isinstance(item, QuadraticForm):
             return item.value(self.values_of(item.dec))
-        if isinstance(item, cp.Expression):
+        if is_cvxpy(item):
             return item.value
         raise TypeError(f"cannot take the value of {type(item).__name__}")
 
     @property
     def objective(self) -> float:
         """Objective value in the user's sense (maximise -> the maximum)."""
-        import cvxpy as cp
         self.raise_for_status()
         sense, expr = self.program.objective or ("min", None)
-        if isinstance(expr, cp.Expression):
+        if is_cvxpy(expr):
             return float(self.info.get("objective"))
         d = self.data
         val = self.x @ d.q + d.c + (self.x @ (d.P @ self.x) if d.P is not None else 0.0)
