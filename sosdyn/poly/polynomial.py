@@ -174,7 +174,7 @@ class Polynomial:
             raise PolynomialError(
                 "product of two polynomials that both depend on decision variables is not "
                 "affine in them (a bilinear term); fix one factor to numbers first")
-        a, b = (other, self) if self.is_numeric else (self, other)   # b is numeric
+        a, b = (other, self) if self.is_numeric and not other.is_numeric else (self, other)  # b numeric
         if a.vars != b.vars:
             vars = a.vars + tuple(v for v in b.vars if v not in a.vars)
             a, b = a.with_vars(vars), b.with_vars(vars)
