@@ -4,6 +4,8 @@ VENV    := .venv
 BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed
 PYTEST  := $(BIN)/python -m pytest
+# Small-matrix workloads: a multi-threaded OpenBLAS spin-waits (10-100x slower on 2 cores).
+export OPENBLAS_NUM_THREADS ?= 1
 
 .PHONY: venv run test test-slow bench bench-sos fig1 fig2 fig3 fig4 lasa-all demo3d report clean
 

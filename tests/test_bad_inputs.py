@@ -82,7 +82,7 @@ CATALOGUE = [
      sd.DemonstrationError, "goal|end"),
     ("a demonstration with too few samples", lambda: sd.CDSP().fit(_demos(T=3)), sd.DemonstrationError, "samples"),
     ("demonstrations of different dimensions", lambda: sd.CDSP().fit(_demos(dims=(2, 3))), sd.DemonstrationError, "dimension"),
-    ("no demonstrations at all", lambda: sd.CDSP().fit(Demonstrations([])), sd.DemonstrationError, ""),
+    ("no demonstrations at all", lambda: sd.CDSP().fit(Demonstrations([])), sd.DemonstrationError, "demonstration"),
     ("unknown LASA shape", lambda: sd.load_lasa("Leaf3"), sd.InputError, "Did you mean"),
     ("demo file that does not exist", lambda: sd.load_demos(["/nonexistent/demo.csv"]), sd.SosdynError, "demo.csv"),
     # learner hyper-parameters
@@ -106,7 +106,7 @@ def test_catalogue(what, call, exc, match):
     ("predict with NaN", lambda m: m.predict([[np.nan, 1.0]]), "NaN"),
     ("rollout from a wrong-sized start", lambda m: m.rollout([1.0, 2.0, 3.0], duration=1.0), "shape"),
     ("rollout with a non-positive duration", lambda m: m.rollout([1.0, 2.0], duration=0.0), "duration"),
-    ("rollout with a push after the end", lambda m: m.rollout([1.0, 2.0], duration=1.0, perturbations=[(5.0, [1, 1])]), ""),
+    ("rollout with a push after the end", lambda m: m.rollout([1.0, 2.0], duration=1.0, perturbations=[(5.0, [1, 1])]), "5"),
 ])
 def test_model_boundary(fitted, what, call, match):
     with pytest.raises(sd.SosdynError, match=match):

@@ -131,7 +131,16 @@ class CDSP:
 
     # ------------------------------------------------------------------ fitting
     def fit(self, demos):
-        """Learn from Demonstrations (validated first); returns self."""
+        """Learn from Demonstrations (validated first); returns self.
+
+        BLAS runs single-threaded inside: every matrix here is small, and a multi-threaded
+        OpenBLAS spin-waits on small problems (measured 10-100x slower on 2 loaded cores).
+        """
+        from threadpoolctl import threadpool_limits
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._fit(demos)
+
+    def _fit(self, demos):
         t_start = time.perf_counter()
         self._check_params()
         demos = check_demonstrations(demos)

@@ -319,6 +319,9 @@ class Polynomial:
 
     def allclose(self, other, atol: float = 1e-9) -> bool:
         """Coefficient-wise comparison (numeric and decision parts)."""
+        if (isinstance(other, Polynomial) and self.vars == other.vars and self.exps.shape == other.exps.shape
+                and np.array_equal(self.dec, other.dec) and np.array_equal(self.exps, other.exps)):
+            return bool(np.abs(self.coef - other.coef).max(initial=0.0) <= atol)
         diff = self - other
         return diff.nterms == 0 or bool(np.abs(diff.coef).max() <= atol)
 
