@@ -227,21 +227,22 @@ class ICAStep:
         self.lin_units = [c for c, ((_, j), _) in enumerate(units) if self.linear[j]]
         I = PolyMatrix.identity(n)
         grow = margin_matrix(vars, n, _degree(fexps) - 1)
+        shared = [_blocks(n, {(0, 0): -grow})]                                               # margin
+        shared_p0 = [_blocks(n, {(0, 0): -(Jc.T @ P + P @ Jc)}) for Jc in Ju]                # C0_c
+        shared_p0 += [_blocks(n, {(0, 0): Ju[c].T @ Eab + Eab @ Ju[c]})                      # C0_c P0_ab
+                      for c in self.lin_units for Eab in E]
+        shared_p0 += [_blocks(n, {(1, 0): -Ju[c]}) for c in self.lin_units]                   # C0_c
+        shared_p0 += [_blocks(n, {(2, 0): -Eab}) for Eab in E]                                # P0_ab
+        shared_p0 += [_blocks(n, {(1, 1): I}), _blocks(n, {(2, 2): I})]                       # 1/a, a
         self.cons = []
         lin_ids = self.ids.reshape(K, n, -1)
         for k in range(K):
             f_lin = [Polynomial(vars, fexps[self.linear], np.hstack([np.zeros((n, 1)), np.eye(n)]), lin_ids[k, i])
                      for i in range(n)]
             J = jacobian(f_lin, vars)
-            terms = [_blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P})]               # weight 1
-            terms += [_blocks(n, {(0, 0): -grow})]                                            # margin
-            terms += [_blocks(n, {(0, 0): -(J.T @ Eab + Eab @ J)}) for Eab in E]              # P0_ab
-            terms += [_blocks(n, {(0, 0): -(Jc.T @ P + P @ Jc)}) for Jc in Ju]                # C0_c
-            terms += [_blocks(n, {(0, 0): Ju[c].T @ Eab + Eab @ Ju[c]})                       # C0_c P0_ab
-                      for c in self.lin_units for Eab in E]
-            terms += [_blocks(n, {(1, 0): -Ju[c]}) for c in self.lin_units]                    # C0_c
-            terms += [_blocks(n, {(2, 0): -Eab}) for Eab in E]                                 # P0_ab
-            terms += [_blocks(n, {(1, 1): I}), _blocks(n, {(2, 2): I})]                        # 1/a, a
+            own = [_blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P})]                  # weight 1
+            own_p0 = [_blocks(n, {(0, 0): -(J.T @ Eab + Eab @ J)}) for Eab in E]            # P0_ab
+            terms = own + shared + own_p0 + shared_p0
             self.cons.append(self.prog.add_sos_matrix_family(terms, np.zeros(len(terms)), name=f"ica[{k}]"))
         self.margin = margin
 

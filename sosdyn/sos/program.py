@@ -213,6 +213,7 @@ class SOSProgram:
         self._cvx_vars: dict = {}
         self._counter = 0
         self._depth = 0
+        self._forms: dict = {}
 
     # ------------------------------------------------------------------ naming / caching
     def _name(self, prefix, name):
@@ -394,6 +395,13 @@ class SOSProgram:
                 rows.append(np.hstack([z, np.tile(np.eye(r, dtype=np.int64)[i], (z.shape[0], 1))]))
         return q, np.vstack(rows) if rows else np.zeros((0, len(allv)), dtype=np.int64)
 
+    def _cached_form(self, P: PolyMatrix) -> Polynomial:
+        """y^T P y, expanded once per matrix object (families often share terms)."""
+        key = id(P)
+        if key not in self._forms or self._forms[key][0] is not P:
+            self._forms[key] = (P, self._matrix_form(P, with_basis=False)[0])
+        return self._forms[key][1]
+
     @_timed
     def add_sos_matrix_family(self, terms, weights, name=None) -> "FamilySOSConstraint":
         """sum_t weights[t] * terms[t] is an SOS matrix; the weights can change between solves.
@@ -407,7 +415,7 @@ class SOSProgram:
             raise PolynomialError("add_sos_matrix_family needs a non-empty list of equal-shape matrices")
         name = self._name("family", name)
         q0, exps = self._matrix_form(terms[0], basis_from=terms)
-        qs = [q0] + [self._matrix_form(t, with_basis=False)[0] for t in terms[1:]]
+        qs = [q0] + [self._cached_form(t) for t in terms[1:]]
         psd = self._block(name, svec_size(exps.shape[0]), exps.shape[0]).psd
         vars = qs[0].vars
         con = FamilySOSConstraint(self, name, [q.with_vars(vars) for q in qs], Basis(vars, exps), psd, weights)
