@@ -125,11 +125,20 @@ def fit(
                "random_state": seed}
     model = sd.CDSP(**{k: v for k, v in options.items() if v is not None})
     start = time.perf_counter()
-    with _status(f"fitting CDSP to {len(data)} demonstrations of {data.name} ..."):
+    message = f"fitting CDSP to {len(data)} demonstrations of {data.name}"
+    with _status(message + " ...") as status:
+        if status is not None:
+            model.progress = lambda row: status.update(
+                f"{message}: step {row['iteration'] + 1} ({row['step']}), cost {row['cost']:.4g}")
         model.fit(data)
+    model.progress = None
     model.save(out_path)
+    report = model.verification_
     _info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} demonstrations, "
-          f"fit in {time.perf_counter() - start:.1f} s)")
+          f"fit in {time.perf_counter() - start:.1f} s, {len(model.history_)} convex steps)")
+    _info(f"certificate: {'[green]passed[/]' if report.passed else '[red]FAILED[/]'} — min Gram eigenvalue "
+          f"{report.min_gram_eig:.2e}, max sampled generalised eigenvalue {report.max_sampled_eig:.2e} "
+          f"over {report.n_samples} states")
 
 
 @app.command()

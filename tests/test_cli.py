@@ -132,6 +132,10 @@ def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
         def __init__(self, **kwargs):
             made["kwargs"] = kwargs
 
+        history_ = [{"step": "dynamics", "cost": 1.0}]
+        verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3,
+                                            "max_sampled_eig": -1e-3, "n_samples": 10})()
+
         def fit(self, demos):
             made["demos"] = demos
             return self
