@@ -7,7 +7,7 @@ PYTEST  := $(BIN)/python -m pytest
 # Small-matrix workloads: a multi-threaded OpenBLAS spin-waits (10-100x slower on 2 cores).
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: venv run test test-slow bench bench-sos fig1 fig2 fig3 fig4 lasa-all demo3d report clean
+.PHONY: venv run test test-slow bench bench-sos fig1 fig2 fig3 fig4 lasa-all demo3d report learner-table clean
 
 venv: $(STAMP)
 $(STAMP): pyproject.toml
@@ -33,7 +33,7 @@ bench-sos: venv
 	$(BIN)/python -m pip install -q -e '.[bench]'
 	$(BIN)/python -m problems bench-sos
 
-fig1 fig2 fig3 fig4 lasa-all demo3d report: venv
+fig1 fig2 fig3 fig4 lasa-all demo3d report learner-table: venv
 	$(BIN)/python -m problems $@
 
 clean:

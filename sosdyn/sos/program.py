@@ -66,11 +66,16 @@ class LinearRows:
 
 @dataclass
 class PsdBlock:
-    """A Gram (or LMI) block: decision ids of svec(Q), Q of size ``size``."""
+    """A Gram (or LMI) block: decision ids of svec(Q), Q of size ``size``.
+
+    ``cone`` "psd" (Q >= 0, an SDP block) or "dsos" (Q diagonally dominant with a
+    nonnegative diagonal: linear inequalities only, an LP inner approximation of "psd").
+    """
 
     name: str
     ids: np.ndarray
     size: int
+    cone: str = "psd"
 
 
 @dataclass
@@ -316,18 +321,47 @@ class SOSProgram:
                                   "use add_sos_matrix for a PolyMatrix")
         return expr
 
-    def _register(self, name, kind, poly, basis_exps, matrix=None, multipliers=()):
+    def _register(self, name, kind, poly, basis_exps, matrix=None, multipliers=(), cone="psd"):
         psd = self._block(name, svec_size(basis_exps.shape[0]), basis_exps.shape[0]).psd
+        if cone == "dsos":
+            psd.cone = "dsos"
+            self._diagonally_dominant(psd)
+        elif cone != "psd":
+            raise InputError(f"unknown cone {cone!r}: use 'psd' (SOS) or 'dsos' (diagonally dominant SOS)")
         con = SOSConstraint(self, name, kind, poly, Basis(poly.vars, basis_exps), psd, matrix, multipliers)
         self.sos_constraints.append(con)
         return con
 
+    def _diagonally_dominant(self, psd: PsdBlock):
+        """Q_ii >= sum_{j != i} t_ij, t_ij >= +-Q_ij (Ahmadi & Majumdar's DSOS, an LP)."""
+        i, j = svec_pairs(psd.size)
+        off = np.flatnonzero(i != j)
+        t = self._block(f"{psd.name}.t", off.size).ids
+        w = 1.0 / np.sqrt(2.0)                      # svec stores sqrt2 Q_ij off the diagonal
+        rows, ids, vals = [], [], []
+        for r, k in enumerate(off):                 # t_k - w s_k >= 0 and t_k + w s_k >= 0
+            rows += [2 * r, 2 * r, 2 * r + 1, 2 * r + 1]
+            ids += [t[r], psd.ids[k], t[r], psd.ids[k]]
+            vals += [1.0, -w, 1.0, w]
+        base = 2 * off.size
+        for d in range(psd.size):                   # Q_dd - sum_k t_k >= 0 over pairs touching d
+            k_diag = np.flatnonzero((i == d) & (j == d))[0]
+            touching = [r for r, k in enumerate(off) if i[k] == d or j[k] == d]
+            rows += [base + d] * (1 + len(touching))
+            ids += [psd.ids[k_diag]] + [t[r] for r in touching]
+            vals += [1.0] + [-1.0] * len(touching)
+        self.linear.append(LinearRows(f"{psd.name} (dsos)", "ge", np.array(rows, dtype=np.int64),
+                                      np.array(ids, dtype=np.int64), np.array(vals),
+                                      np.zeros(base + psd.size)))
+
     @_timed
-    def add_sos(self, expr, basis=None, name=None) -> SOSConstraint:
+    def add_sos(self, expr, basis=None, name=None, cone="psd") -> SOSConstraint:
         """Constrain the polynomial ``expr`` to be a sum of squares.
 
         The Gram basis comes from the Newton polytope of ``expr``'s support unless ``basis``
         (monomial Polynomials or an exponent array) is given, in which case it is honoured.
+        ``cone="dsos"`` asks for a diagonally dominant Gram matrix instead (an LP; a
+        stronger condition, so a smaller feasible set, that scales to large bases).
         """
         p = self._as_sos_polynomial(expr, "sos")
         name = self._name("sos", name)
@@ -336,7 +370,7 @@ class SOSProgram:
         else:
             exps = self._basis_exps(basis, p)
             p = p.with_vars(p.vars + tuple(v for v in self._basis_vars(basis) if v not in p.vars))
-        return self._register(name, "sos", p, exps)
+        return self._register(name, "sos", p, exps, cone=cone)
 
     @staticmethod
     def _basis_vars(basis):
@@ -546,7 +580,7 @@ class SOSProgram:
 
     @property
     def psd_blocks(self) -> list:
-        return [b.psd for b in self.blocks if b.psd is not None]
+        return [b.psd for b in self.blocks if b.psd is not None and b.psd.cone == "psd"]
 
     def compile(self, scale: bool = True):
         """Assemble (and cache) the standard conic form; see :mod:`sosdyn.sos.conic`."""

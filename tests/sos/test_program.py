@@ -154,3 +154,26 @@ def test_newton_basis_of_a_homogeneous_form():
     p = x**6 + y**6
     b = newton_basis(p.exps)
     assert {tuple(r) for r in b} == {(3, 0), (2, 1), (1, 2), (0, 3)}
+
+
+def test_dsos_is_an_lp_inner_approximation():
+    x, y = sd.variables("x y")
+    # (x + y)^2 has the diagonally dominant Gram [[1, 1], [1, 1]]; (x + 2y)^2 has [[1, 2], [2, 4]],
+    # its only Gram matrix on the basis {x, y}, which is PSD but not diagonally dominant.
+    for p, dsos_ok in [((x + y) ** 2, True), ((x + 2 * y) ** 2, False)]:
+        prog = sd.SOSProgram()
+        prog.add_sos(p, cone="dsos")
+        sol = prog.solve()
+        assert (sol.status == "optimal") is dsos_ok
+        assert not prog.compile().psd                          # no SDP block at all
+    # as a lower bound it is weaker than SOS, never stronger
+    p = x**4 + y**4 + x**2 * y**2 - 2 * x * y + 1
+    bounds = {}
+    for cone in ("psd", "dsos"):
+        prog = sd.SOSProgram()
+        g = prog.new_var()
+        prog.add_sos(p - g, cone=cone)
+        prog.maximize(g)
+        bounds[cone] = prog.solve().value(g)
+    assert bounds["dsos"] <= bounds["psd"] + 1e-7
+    assert bounds["psd"] - bounds["dsos"] > 1e-3
