@@ -35,7 +35,8 @@ class CDSP:
 
     Parameters
     ----------
-    n_components : int           K, Gaussians of the GMM (paper: 6/7/6/6).
+    n_components : int or "bic"  K, Gaussians of the GMM (paper: 6/7/6/6); "bic" picks K in 1..10
+                                 by the Bayesian information criterion of EM fits.
     metric_degree : int          degree of M(z) (0 = constant metric; even).
     field_degree : int           degree of the sub-systems f_k (1 = the paper's A_k x + b_k; odd).
     gamma : float                contraction rate (1/s, in the data's time units).
@@ -89,7 +90,8 @@ class CDSP:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
                 raise InputError(f"{name} must be an integer >= {lo}, got {v!r}")
-        integer("n_components", 1)
+        if self.n_components != "bic":
+            integer("n_components", 1)
         integer("metric_degree", 0)
         integer("field_degree", 1)
         integer("max_iter", 0)
@@ -145,7 +147,8 @@ class CDSP:
         self._check_params()
         demos = check_demonstrations(demos)
         X, Xdot = demos.stacked()
-        K, n = int(self.n_components), demos.dim
+        n = demos.dim
+        K = 1 if self.n_components == "bic" else int(self.n_components)
         if X.shape[0] < 5 * K:
             raise InputError(f"{X.shape[0]} samples are too few for {K} Gaussians; "
                              "use fewer components or more demonstrations")
@@ -162,8 +165,18 @@ class CDSP:
         from sklearn.mixture import GaussianMixture    # heavy import, only when fitting
 
         t0 = time.perf_counter()
-        gmm = GaussianMixture(K, covariance_type="full", random_state=self.random_state,
-                              reg_covar=1e-6, max_iter=500).fit(np.hstack([Z, Zdot]))
+        data_xv = np.hstack([Z, Zdot])
+
+        def em(k):
+            return GaussianMixture(k, covariance_type="full", random_state=self.random_state,
+                                   reg_covar=1e-6, max_iter=500).fit(data_xv)
+        if self.n_components == "bic":
+            fits = [em(k) for k in range(1, min(10, X.shape[0] // 5) + 1)]
+            self.bic_ = [float(g.bic(data_xv)) for g in fits]
+            gmm = fits[int(np.argmin(self.bic_))]
+        else:
+            gmm = em(K)
+        self.n_components_ = gmm.n_components
         self.mixture_ = PositionMixture.from_joint(gmm, n)
         self.timings_["em_s"] = time.perf_counter() - t0
 
@@ -269,7 +282,7 @@ class CDSP:
         """Plain alternation: metric step (max margin) then dynamics step, until no progress."""
         used = np.abs(W).max(axis=(0, 1)) > 0
         grow = int(mexps[used].sum(axis=1).max() + fexps.sum(axis=1).max() - 1)
-        met = MetricStep(self.dim_, int(self.n_components), mexps, fexps, eps=self.eps, grow_degree=grow,
+        met = MetricStep(self.dim_, self.n_components_, mexps, fexps, eps=self.eps, grow_degree=grow,
                          **self._step_args)
         for _ in range(self.max_iter):
             W_new, t, sol = met.solve(C)

@@ -26,6 +26,7 @@ def _payload(model) -> dict:
         "format": FORMAT, "version": VERSION, "params": model.get_params(),
         "state": {
             "dim_": model.dim_, "scale_": model.scale_, "dt_": model.dt_, "units_": model.units_,
+            "n_components_": model.n_components_,
             "gmr_cost_": model.gmr_cost_,
             **{k: np.asarray(getattr(model, k)).tolist() for k in _ARRAYS},
             "mixture_": {"weights": m.weights.tolist(), "means": m.means.tolist(),
@@ -71,7 +72,7 @@ def load_model(path):
     try:
         model = CDSP(**payload["params"])
         st = payload["state"]
-        for k in ("dim_", "scale_", "dt_", "units_", "gmr_cost_", "certificate_", "history_",
+        for k in ("dim_", "scale_", "dt_", "units_", "n_components_", "gmr_cost_", "certificate_", "history_",
                   "metric_collapse_", "timings_"):
             setattr(model, k, st[k])
         model.goal_ = np.asarray(st["goal_"], dtype=float)

@@ -171,3 +171,10 @@ def test_an_impossible_metric_bound_gives_a_typed_error_with_advice():
     # M >= eps I with eps = 5 contradicts the normalisation trace M(0) = 2
     with pytest.raises(sd.SolverError, match="infeasible.*Try"):
         sd.CDSP(n_components=1, gamma=1.0, eps=5.0, solver_method="ica").fit(linear_demos())
+
+
+def test_number_of_components_by_bic():
+    demos = sd.load_lasa("Angle").subsample(10)
+    model = sd.CDSP(n_components="bic", solver_method="ica", max_iter=3).fit(demos)
+    assert model.n_components_ == 1 + int(np.argmin(model.bic_))
+    assert len(model.bic_) == 10 and model.certified_
