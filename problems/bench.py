@@ -113,12 +113,12 @@ def run_sweeps(quick):
     Ks = (2, 3) if quick else (2, 3, 4, 6, 8, 11, 15)
     sweep("K", "number of Gaussians K", [(K, f"K={K}", leaf, dict(n_components=K)) for K in Ks],
           "Leaf_1, linear fields, constant metric, alternating (the default CDSP)")
-    ns = (2, 3) if quick else (2, 3, 4, 5, 6, 7)
+    ns = (2,) if quick else (2, 3, 4, 5, 6, 7)
     sweep("n", "state dimension n", [(n, f"n={n}", synth(n, samples_per_demo=200 if quick else 1000),
                                       dict(n_components=2 if quick else 6)) for n in ns],
           "synthetic stable nonlinear n-D system (7 demos x 1000 samples), K = 6, linear fields, "
           "constant metric, alternating")
-    mds = (0, 2) if quick else (0, 2, 4)
+    mds = (0,) if quick else (0, 2, 4)
     from sosdyn.poly import monomials_up_to
     sweep("metric", "metric monomials per entry (metric degree 0 / 2 / 4)",
           [(monomials_up_to(2, d).shape[0], f"metric degree {d}", leaf,
@@ -140,8 +140,8 @@ def run_sweeps(quick):
 def plot_sweeps(sweeps, out_dir):
     from sosdyn.report.figures import save_figure, scaling_plot
     paths = {}
-    labels = {"total": "total fit", "em": "EM (GMM)", "build": "SOS build", "canonicalize": "canonicalise",
-              "solve": "solver", "verify": "verify"}
+    labels = {"total": "total", "em": "EM", "build": "build", "canonicalize": "canon",
+              "solve": "solver", "verify": "verify", "data": "data"}
     for name, sw in sweeps.items():
         rows = sw["rows"]
         series = {}
@@ -258,7 +258,7 @@ def run_profiles(fits, targets, backends, quick):
     jobs = []
     for key, vname in (("linear_fit", "linear+ICA"), ("paper_fit", "paper (metric deg 2, alternating)"),
                        ("cubic_fit", "cubic + metric deg 2")):
-        if key in targets and targets[key]["met"] is False or (quick and key == "linear_fit"):
+        if key in targets and targets[key]["met"] is False and not quick:
             sel = [f for f in fits if f["variant"] == vname]
             worst = max(sel, key=lambda f: f["total"])
             jobs.append((f"{vname} fit on {worst['shape']} (K={worst['K']}, {fmt_s(worst['total'])})",
@@ -321,8 +321,8 @@ def summary_markdown(res, out_dir) -> str:
                  f"per step, {fmt_ratio(b['ratios']['cvxpy_over_direct_overhead'])} on the non-solver overhead.")
     if "samples" in sweeps:
         s = sweeps["samples"].get("slopes", {})
-        L.append(f"- Samples sweep log-log slopes: EM {_f(s.get('EM (GMM)'))}, SOS build {_f(s.get('SOS build'))}, "
-                 f"solver {_f(s.get('solver'))}, total {_f(s.get('total fit'))}.")
+        L.append(f"- Samples sweep log-log slopes: EM {_f(s.get('EM'))}, SOS build {_f(s.get('build'))}, "
+                 f"solver {_f(s.get('solver'))}, data compression {_f(s.get('data'))}, total {_f(s.get('total'))}.")
     sos = res.get("sos_summary")
     if sos:
         sp = sos["build_speedup"]
@@ -358,12 +358,12 @@ def summary_markdown(res, out_dir) -> str:
     L += ["## Scaling", ""]
     for name, sw in sweeps.items():
         rows = [[r["label"], fmt_s(r["total"]), fmt_s(r["em"]), fmt_s(r["build"]), fmt_s(r["canonicalize"]),
-                 fmt_s(r["solve"]), fmt_s(r["verify"]), r["sdp_solves"]] for r in sw["rows"]]
+                 fmt_s(r["solve"]), fmt_s(r["verify"]), fmt_s(r["data"]), r["sdp_solves"]] for r in sw["rows"]]
         slopes = sw.get("slopes", {})
         L += [f"### {sw['xlabel']}", "", sw["note"] + ".", "",
               f"![{name}]({sw.get('plot', '')})", "",
               "log-log slopes: " + ", ".join(f"{k} {_f(v)}" for k, v in slopes.items()) + ".", "",
-              md_table(["point", "total", "EM", "build", "canon", "solve", "verify", "SDPs"], rows), ""]
+              md_table(["point", "total", "EM", "build", "canon", "solve", "verify", "data", "SDPs"], rows), ""]
     L += ["## Back ends on the learner's dynamics step (re-solve path)", "",
           "The same DynamicsStep (built once) re-solved for metrics near the learned one; median over "
           "repetitions. overhead = update + conic assembly + solver set-up (+ cvxpy compilation); whole "

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .benchmarks.common import (OUT_DIR, environment, fmt_ratio, fmt_s, md_table, median, now, verdict,
-                                write_json)
+from .benchmarks.common import (OUT_DIR, environment, fmt_ratio, fmt_s, md_table, median, now,
+                                profile_call, profile_markdown, verdict, write_json)
 from .benchmarks.sos_problems import cdsp_fields, problems
 
 BACKENDS = ("direct", "cvxpy")
@@ -181,11 +181,47 @@ def main(argv=None):
     result = {"benchmark": "bench-sos", "quick": args.quick, "environment": environment(),
               "targets": TARGETS, "problems": rows}
     result["summary"] = summarize(rows)
+    result["profiles"] = profiles(probs, result["summary"], args.quick)
     result["elapsed_s"] = now() - t_start
     write_json(out_dir / "sos.json", result)
     (out_dir / "sos.md").write_text(markdown(result))
     print(f"[bench-sos] wrote {out_dir / 'sos.json'} and {out_dir / 'sos.md'} in {result['elapsed_s']:.0f} s")
     return 0
+
+
+def profiles(probs, summary, quick):
+    """Where the time goes for the missed targets: the build of the problem with the smallest
+    speed-up over SumOfSquares.py, and the re-solve of the problem with the largest overhead."""
+    out = []
+    by_name = {p.name: p for p in probs}
+    sp = summary["build_speedup"]
+    if sp.get("met") is False or quick:
+        p = by_name[sp["min_problem"]]
+        reps = 20 if quick else 200
+
+        def builds():
+            for _ in range(reps):
+                p.ours()
+        _, prof = profile_call(builds)
+        prof["title"] = f"build of '{p.name}' ×{reps} (smallest speed-up over SumOfSquares.py)"
+        out.append(prof)
+    rs = summary["resolve"]
+    if rs["problems"] and (rs.get("met") is False or quick):
+        worst = max(rs["problems"], key=lambda x: x["overhead"])
+        p = by_name[worst["name"]]
+        prog, ctx = p.ours()
+        prog.solve()
+        rng = np.random.default_rng(1)
+        runs = [p.resolve(prog, ctx, rng) for _ in range(3 if quick else 20)]
+
+        def resolves():
+            for run in runs:
+                run()
+                prog.solve()
+        _, prof = profile_call(resolves)
+        prof["title"] = f"re-solve of '{p.name}' ×{len(runs)} (update + solve, direct; largest overhead)"
+        out.append(prof)
+    return out
 
 
 def _gmean(xs):
@@ -282,7 +318,12 @@ def markdown(res) -> str:
                    fmt_s(r["resolve"]["direct"].get("solver")) if r["resolve"]["direct"] else "–",
                    r["resolve"]["direct"].get("repetitions", "–") if r["resolve"]["direct"] else "–"]
                   for r in rows if r["resolve"]["direct"]]), "",
-        f"_Elapsed: {res.get('elapsed_s', 0):.0f} s._", ""]
+        ]
+    if res.get("profiles"):
+        L += ["## Profiles of the missed targets", ""]
+        for p in res["profiles"]:
+            L += [f"### {p['title']}", "", profile_markdown(p), ""]
+    L += [f"_Elapsed: {res.get('elapsed_s', 0):.0f} s._", ""]
     return "\n".join(L)
 
 

@@ -103,7 +103,8 @@ class Meter:
     * ``solver``     -- seconds inside Clarabel's solve (as the back end reports it);
     * ``clarabel_setup`` -- the rest of the direct back end's call (matrix stacking, solver setup);
     * ``assemble``   -- ``sosdyn.sos.conic.assemble`` (the conic form of a program);
-    * ``update``     -- ``SOSConstraint.update`` (compile-once re-solve path);
+    * ``update``     -- ``SOSConstraint.update`` / ``FamilySOSConstraint.set_weights`` (the
+      compile-once re-solve path);
     * ``cvxpy``      -- cvxpy back end call minus its solver time;
     * ``solves``     -- number of solver calls.
     """
@@ -116,6 +117,8 @@ class Meter:
     def active(self):
         from sosdyn.sos import backends, conic, program
         orig = (backends._clarabel, backends._cvxpy, conic.assemble, program.SOSConstraint.update)
+        family = getattr(program, "FamilySOSConstraint", None)
+        orig_weights = getattr(family, "set_weights", None) if family is not None else None
         meter = self
 
         def clarabel_(*a, **k):
@@ -151,12 +154,23 @@ class Meter:
             finally:
                 meter.t["update"] += now() - t0
 
+        def weights_(*a, **k):
+            t0 = now()
+            try:
+                return orig_weights(*a, **k)
+            finally:
+                meter.t["update"] += now() - t0
+
         backends._clarabel, backends._cvxpy, conic.assemble = clarabel_, cvxpy_, assemble_
         program.SOSConstraint.update = update_
+        if orig_weights is not None:
+            family.set_weights = weights_
         try:
             yield self
         finally:
             backends._clarabel, backends._cvxpy, conic.assemble, program.SOSConstraint.update = orig
+            if orig_weights is not None:
+                family.set_weights = orig_weights
 
 
 # ---------------------------------------------------------------------- profiling

@@ -341,37 +341,57 @@ def cdsp_fields(shape="Leaf_1", K=6):
     return _CDSP_CACHE[key]
 
 
-def _metric_exprs(met, C, fexps):
-    from sosdyn.lfd.fields import contraction_polymatrix, numeric_fields
-    return [-contraction_polymatrix(f, met.M, met.vars, met.gamma) - met.grow * met.t
-            for f in numeric_fields(C, fexps, met.vars)]
+def _metric_step(n, K, mexps, fexps, vars, gamma, eps, grow):
+    """A MetricStep with the fields C set, as ``MetricStep.solve`` does before it solves.
+
+    Returns (step, set_fields) with ``set_fields(C)`` the re-solve path's update (works with the
+    compile-once families, ``set_weights``, and with the older per-constraint ``update``).
+    """
+    import inspect
+
+    from sosdyn.lfd.steps import MetricStep
+    if "fexps" in inspect.signature(MetricStep.__init__).parameters:
+        met = MetricStep(n, K, mexps, fexps, vars, gamma, eps, grow_degree=grow)
+
+        def set_fields(C):
+            for k, con in enumerate(met.cons):
+                con.set_weights(np.r_[C[k].ravel(), 1.0])
+        return met, set_fields
+    from sosdyn.lfd.fields import contraction_polymatrix, numeric_fields  # pragma: no cover -- old API
+    met = MetricStep(n, K, mexps, vars, gamma, eps, grow_degree=grow)
+
+    def set_fields(C, exprs=None):
+        exprs = exprs or [-contraction_polymatrix(f, met.M, met.vars, met.gamma) - met.grow * met.t
+                          for f in numeric_fields(C, fexps, met.vars)]
+        for k, e in enumerate(exprs):
+            if met.cons[k] is None:
+                met.cons[k] = met.prog.add_sos_matrix(e, name=f"contraction[{k}]")
+            else:
+                met.cons[k].update(e)
+    return met, set_fields
 
 
 def cdsp_metric_step(shape="Leaf_1", K=6, metric_degree=2):
     """MetricStep (sosdyn.lfd.steps) on the fitted model's fields, built as the learner builds it."""
     def build():
         from sosdyn.lfd.fields import metric_exponents
-        from sosdyn.lfd.steps import MetricStep
         d = cdsp_fields(shape, K)
         n, C, fexps = d["n"], d["C"], d["fexps"]
         mexps = metric_exponents(n, metric_degree)
         vars = tuple(f"z{i + 1}" for i in range(n))
         grow = int(metric_degree + fexps.sum(axis=1).max() - 1)
-        met = MetricStep(n, K, mexps, vars, d["gamma"], d["eps"], grow_degree=grow)
-        for k, expr in enumerate(_metric_exprs(met, C, fexps)):
-            met.cons[k] = met.prog.add_sos_matrix(expr, name=f"contraction[{k}]")
-        return met.prog, {"met": met, "C": C, "fexps": fexps}
+        met, set_fields = _metric_step(n, K, mexps, fexps, vars, d["gamma"], d["eps"], grow)
+        set_fields(C)
+        return met.prog, {"met": met, "C": C, "set_fields": set_fields}
     return build
 
 
 def cdsp_metric_resolve(prog, ctx, rng):
-    met, C, fexps = ctx["met"], ctx["C"], ctx["fexps"]
-    C2 = C * (1 + 0.02 * rng.standard_normal(C.shape))
-    exprs = _metric_exprs(met, C2, fexps)
+    C2 = ctx["C"] * (1 + 0.02 * rng.standard_normal(ctx["C"].shape))
+    set_fields = ctx["set_fields"]
 
     def run():
-        for con, e in zip(met.cons, exprs):
-            con.update(e)
+        set_fields(C2)
     return run
 
 

@@ -39,6 +39,14 @@ def unique_rows(exps: np.ndarray):
 
 def sum_rows(exps: np.ndarray, coef: np.ndarray):
     """Combine like monomials: unique exponent rows and the summed coefficient rows."""
+    if exps.shape[0] == 0:
+        return exps, coef
+    keys = monomial_keys(exps)
+    if keys is not None:                       # fast path: one sort of int64 keys
+        order = np.argsort(keys, kind="stable")
+        sk = keys[order]
+        starts = np.flatnonzero(np.concatenate(([True], sk[1:] != sk[:-1])))
+        return exps[order[starts]], np.add.reduceat(coef[order], starts, axis=0)
     uniq, inv = unique_rows(exps)
     order = np.argsort(inv, kind="stable")
     sorted_inv = inv[order]

@@ -47,12 +47,15 @@ class Polynomial:
         if (exps < 0).any():
             raise PolynomialError("negative exponents: only polynomials are supported")
         if not canonical:
-            exps, coef = sum_rows(exps, coef)
-            keep = np.any(coef != 0.0, axis=1)
-            exps, coef = exps[keep], coef[keep]
-            used = np.r_[True, np.any(coef[:, 1:] != 0.0, axis=0)]
-            if not used.all():
-                coef, dec = coef[:, used], dec[used[1:]]
+            if exps.shape[0] > 1:
+                exps, coef = sum_rows(exps, coef)
+            keep = (coef != 0.0).any(axis=1)
+            if not keep.all():
+                exps, coef = exps[keep], coef[keep]
+            if dec.size:
+                used = (coef[:, 1:] != 0.0).any(axis=0)
+                if not used.all():
+                    coef, dec = coef[:, np.concatenate(([True], used))], dec[used]
         self.exps, self.coef, self.dec = exps, coef, dec
 
     # ------------------------------------------------------------------ construction
