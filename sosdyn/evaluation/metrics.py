@@ -316,14 +316,16 @@ _BATCH_METHODS = ("LSODA", "BDF", "Radau")
 
 
 def _integrate_batch(field, X0: np.ndarray, horizon: float, goal: np.ndarray, *, method: str,
-                     rtol: float, atol: float) -> np.ndarray:
+                     rtol: float, atol: float, escape: float = np.inf) -> np.ndarray:
     """Final states (m, n) of ``xdot = field(x, goal)`` from all rows of ``X0`` at once.
 
     The starts are stacked into one ODE ``y = X.ravel()`` (start-major, so its Jacobian is
     block diagonal with n x n blocks). LSODA is told the band (``lband = uband = n - 1``), so
     a finite-difference Jacobian costs 2n - 1 field calls, not m n; BDF/Radau get the block
     sparsity pattern. LSODA's error test uses the weighted max-norm, so every start is held
-    to ``rtol``/``atol`` as in a rollout of its own. Raises SolverError on failure.
+    to ``rtol``/``atol`` as in a rollout of its own. Starts farther than ``escape`` from the
+    goal are frozen there (their derivative set to 0): they have diverged, and integrating
+    their exponential growth would only shrink everybody's steps. Raises SolverError on failure.
     """
     from scipy.integrate import solve_ivp
 
@@ -336,6 +338,8 @@ def _integrate_batch(field, X0: np.ndarray, horizon: float, goal: np.ndarray, *,
             raise InputError(f"The field returned shape {V.shape} for X of shape {X.shape}.")
         if not np.all(np.isfinite(V)):
             raise SolverError("The field returned NaN/inf.", status="solver_error")
+        if np.isfinite(escape):
+            V[np.linalg.norm(X - goal, axis=1) > escape] = 0.0
         return V.ravel()
 
     options = {}
@@ -353,13 +357,14 @@ def _integrate_batch(field, X0: np.ndarray, horizon: float, goal: np.ndarray, *,
 
 
 def final_states(field, starts, horizon: float, goal, *, method: str = "LSODA", rtol: float = 1e-6,
-                 atol: float = 1e-8) -> tuple[np.ndarray, list[str | None]]:
+                 atol: float = 1e-8, escape: float = np.inf) -> tuple[np.ndarray, list[str | None]]:
     """``x(horizon)`` of ``xdot = field(x, goal)`` from every row of ``starts`` (m, n), batched.
 
     All starts are integrated as one ODE (:func:`_integrate_batch`); if that fails (a start
     diverges, the field returns NaN), the batch is split in halves recursively, so only the
     failing starts are lost. Returns the final states (inf rows for failures) and, per
-    start, None or the failure reason.
+    start, None or the failure reason. ``escape``: see :func:`_integrate_batch`; a start
+    frozen there is reported with reason "diverged".
     """
     X0 = np.atleast_2d(np.asarray(starts, dtype=float))
     goal = np.asarray(goal, dtype=float)
@@ -371,7 +376,10 @@ def final_states(field, starts, horizon: float, goal, *, method: str = "LSODA", 
     def solve(idx):
         try:
             out[idx] = _integrate_batch(field, X0[idx], float(horizon), goal, method=method,
-                                        rtol=rtol, atol=atol)
+                                        rtol=rtol, atol=atol, escape=escape)
+            for i in idx:
+                if np.linalg.norm(out[i] - goal) > escape:
+                    reasons[i] = f"diverged: left the ball of radius {escape:.3g} about the goal"
         except SolverError as exc:
             if len(idx) == 1:
                 reasons[idx[0]] = str(exc)
@@ -387,7 +395,8 @@ def final_states(field, starts, horizon: float, goal, *, method: str = "LSODA", 
 
 def grid_convergence_batched(model, demos, n_grid: int = 10, horizon: float | None = None,
                              tol_mm: float = 1.0, *, goal=None, seed: int = 0, method: str = "LSODA",
-                             rtol: float = 1e-6, atol: float = 1e-8) -> GridConvergence:
+                             rtol: float = 1e-6, atol: float = 1e-8,
+                             escape_factor: float = 100.0) -> GridConvergence:
     """:func:`grid_convergence` for an autonomous model, all starts integrated at once.
 
     ``model`` has ``field(X (m, n), goal) -> Xdot (m, n)`` (the field functions of CDSP, GMR
@@ -396,7 +405,9 @@ def grid_convergence_batched(model, demos, n_grid: int = 10, horizon: float | No
     criterion ``||x(horizon) - goal|| <= tol_mm`` as :func:`grid_convergence`, with the
     integrator's tolerances of a single rollout; about one rollout's cost instead of
     ``n_grid**2`` (see :func:`final_states`). A start whose integration fails counts as a
-    failure with ``final_error`` inf.
+    failure with ``final_error`` inf; one that gets farther than ``escape_factor`` x the
+    diagonal of the data's bounding box from the goal is stopped there and counts as a
+    failure (diverged) with its distance at that moment.
     """
     demos = as_demonstrations(demos)
     field = getattr(model, "field", model)
@@ -411,11 +422,16 @@ def grid_convergence_batched(model, demos, n_grid: int = 10, horizon: float | No
     if not horizon > 0:
         raise InputError(f"horizon must be > 0, got {horizon!r}.")
     starts = grid_starts(demos, n_grid, seed)
-    final, reasons = final_states(field, starts, horizon, goal, method=method, rtol=rtol, atol=atol)
+    X, _ = demos.stacked()
+    escape = escape_factor * max(float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))), tol_mm)
+    final, reasons = final_states(field, starts, horizon, goal, method=method, rtol=rtol, atol=atol,
+                                  escape=escape)
     errors = np.linalg.norm(final - goal, axis=1)
     failures = []
     for x0, error, reason in zip(starts, errors, reasons):
-        if reason is not None:
+        if reason is not None and reason.startswith("diverged"):
+            failures.append({"x0": x0, "final_error": float(error), "reason": reason})
+        elif reason is not None:
             failures.append({"x0": x0, "final_error": np.inf, "reason": reason})
         elif not error <= tol_mm:
             failures.append({"x0": x0, "final_error": float(error),

@@ -56,7 +56,7 @@ class CDSP:
 
     name = "CDSP"
 
-    def __init__(self, n_components=6, metric_degree=0, field_degree=1, gamma=0.5, metric="learned",
+    def __init__(self, n_components=6, metric_degree=0, field_degree=1, gamma=0.1, metric="learned",
                  solver="CLARABEL", solver_method="alternating", max_iter=20, tol=1e-4, eps=1e-3,
                  margin=1e-4, refine_gmm=False, max_samples=3000, random_state=0,
                  verify_samples=10_000, allow_uncertified=False, progress=None):

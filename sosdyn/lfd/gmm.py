@@ -8,7 +8,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import solve_triangular
 from scipy.special import logsumexp
 
 from ..errors import InputError
@@ -34,7 +33,10 @@ def gmm_linear_maps(gmm, n: int):
 
 @dataclass
 class PositionMixture:
-    """pi_k, mu_k,x, S_k,xx of the position marginal: all h_k(x) needs."""
+    """pi_k, mu_k,x, S_k,xx of the position marginal: all h_k(x) needs.
+
+    Treat it as immutable: the Cholesky factors are computed once, on first use.
+    """
 
     weights: np.ndarray       # (K,)
     means: np.ndarray         # (K, n)
@@ -49,16 +51,22 @@ class PositionMixture:
     def n_components(self) -> int:
         return self.weights.size
 
+    def _factors(self):
+        """Inverse Cholesky factors and log normalisers, computed once per mixture."""
+        if getattr(self, "_cache", None) is None:
+            n = self.means.shape[1]
+            chol = np.linalg.cholesky(self.covariances)
+            inv = np.linalg.inv(chol)
+            lognorm = (np.log(self.weights) - np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
+                       - 0.5 * n * np.log(2 * np.pi))
+            self._cache = (inv, lognorm)
+        return self._cache
+
     def log_joint(self, X: np.ndarray) -> np.ndarray:
         """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K)."""
-        n = self.means.shape[1]
-        out = np.empty((X.shape[0], self.n_components))
-        for k in range(self.n_components):
-            chol = np.linalg.cholesky(self.covariances[k])
-            z = solve_triangular(chol, (X - self.means[k]).T, lower=True)
-            out[:, k] = (np.log(self.weights[k]) - 0.5 * np.sum(z * z, axis=0)
-                         - np.sum(np.log(np.diag(chol))) - 0.5 * n * np.log(2 * np.pi))
-        return out
+        inv, lognorm = self._factors()
+        z = np.einsum("kij,mkj->mki", inv, X[:, None, :] - self.means[None])
+        return lognorm[None, :] - 0.5 * np.einsum("mki,mki->mk", z, z)
 
     def responsibilities(self, X: np.ndarray) -> np.ndarray:
         """h_k(x), shape (m, K), rows sum to one (log-space, finite far from the data)."""

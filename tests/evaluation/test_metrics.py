@@ -12,7 +12,9 @@ from sosdyn.evaluation.metrics import (
     edot,
     evaluate_reproductions,
     goal_error,
+    final_states,
     grid_convergence,
+    grid_convergence_batched,
     grid_starts,
     quadrilateral_areas,
     sea,
@@ -195,6 +197,47 @@ def test_grid_counts_solver_failures(exp_demos):
     result = grid_convergence(broken, exp_demos, n_grid=3)
     assert result.fraction == 0 and result.failures[0]["final_error"] == np.inf
     assert "diverged" in result.failures[0]["reason"]
+
+
+def test_batched_grid_agrees_with_the_per_start_loop(exp_model, exp_demos, exp_goal):
+    batched = grid_convergence_batched(exp_model, exp_demos, n_grid=10)
+    assert batched.fraction == 1.0 and batched.n_starts == 100 and batched.failures == []
+    centre = 2.0
+    field = lambda X, g: -(X - g) * (X[:, :1] < centre)  # noqa: E731
+
+    def roll(x0, duration, dt):
+        return rollout(field, x0, duration=duration, dt=dt, goal=exp_goal)
+
+    loop = grid_convergence(roll, exp_demos, n_grid=6, horizon=20.0)
+    half = grid_convergence_batched(field, exp_demos, n_grid=6, horizon=20.0, goal=exp_goal)
+    assert half.fraction == loop.fraction == 0.5
+    for a, b in zip(loop.failures, half.failures):
+        np.testing.assert_array_equal(a["x0"], b["x0"])
+        assert b["final_error"] == pytest.approx(a["final_error"], rel=1e-5)
+
+
+def test_batched_final_states_match_the_exact_solution(exp_goal):
+    starts = np.array([[9.0, 3.0], [-5.0, 4.0], [100.0, -50.0]])
+    final, reasons = final_states(lambda X, g: -(X - g), starts, 3.0, exp_goal)
+    np.testing.assert_allclose(final, exp_goal + (starts - exp_goal) * np.exp(-3.0), rtol=1e-5)
+    assert reasons == [None, None, None]
+    for method in ("BDF", "Radau"):
+        other, _ = final_states(lambda X, g: -(X - g), starts, 3.0, exp_goal, method=method)
+        np.testing.assert_allclose(other, final, rtol=1e-4)
+
+
+def test_batched_grid_isolates_failing_starts(exp_demos, exp_goal):
+    def field(X, g):  # NaN for starts left of x = 0: only those fail, found by bisection
+        V = -(X - g)
+        V[X[:, 0] < 0] = np.nan
+        return V
+
+    result = grid_convergence_batched(field, exp_demos, n_grid=4, goal=exp_goal, horizon=20.0)
+    bad = [f for f in result.failures]
+    assert len(bad) == 8 and all(f["x0"][0] < 0 and f["final_error"] == np.inf for f in bad)
+    assert all("NaN" in f["reason"] for f in bad) and result.fraction == 0.5
+    with pytest.raises(InputError, match="method"):
+        final_states(field, np.zeros((1, 2)), 1.0, exp_goal, method="RK45")
 
 
 def test_grid_starts_cover_twice_the_bounding_box(exp_demos, make_exp_demo):

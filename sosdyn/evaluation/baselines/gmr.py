@@ -62,15 +62,16 @@ class GMR(AutonomousModel):
             reg_covar=check_positive(self.reg_covar, "reg_covar"),
             max_iter=check_int(self.max_iter, "max_iter")).fit(np.hstack([X, Xdot]))
         self.A_, self.b_ = gmm_linear_maps(self.gmm_, self.dim_)
+        self.mixture_ = PositionMixture.from_joint(self.gmm_, self.dim_)   # factors cached once
         return self
 
     def responsibilities(self, X):
         """h_k(x) at the rows of ``X`` (m, n), shape (m, K)."""
         self._check_fitted()
-        return position_responsibilities(self.gmm_, X, self.dim_)
+        return self.mixture_.responsibilities(check_points(X, self.dim_))
 
     def field(self, X, goal):
         """Eq. (2) translated to ``goal``: Σ_k h_k(x̄)(A_k x̄ + b_k), x̄ = x − goal + goal_."""
         Xs = X - goal + self.goal_
-        h = position_responsibilities(self.gmm_, Xs, self.dim_)
+        h = self.mixture_.responsibilities(Xs)
         return np.einsum("mk,kij,mj->mi", h, self.A_, Xs) + h @ self.b_

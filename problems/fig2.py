@@ -1,0 +1,33 @@
+"""Fig. 2: reproduction accuracy (SEA and DTWD, mean ± std over the demonstrations), all methods."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from problems import common as C
+
+
+def figure(entries: dict, ctx: C.Context) -> dict:
+    from sosdyn.report.figures import accuracy_bars, save_figure
+    table = C.results_sections(entries)["accuracy"]
+    table = {s: {m: e for m, e in per.items() if "sea" in e} for s, per in table.items()}
+    table = {s: per for s, per in table.items() if per}
+    if not table:
+        return {}
+    fig = accuracy_bars(table, metrics=("sea", "dtwd_total"))
+    paths = save_figure(fig, Path(ctx.fig_dir) / "fig2_accuracy")
+    n = max(len(e["sea"]["per_demo"]) for per in table.values() for e in per.values())
+    caption = (f"Fig. 2 — swept error area (SEA) and dynamic time warping distance (DTWD) between "
+               f"the {n} demonstrations and their reproductions, mean ± one standard deviation, "
+               "per shape and method (log axis where the values span more than two decades).")
+    return {"fig2": {"svg": C.relpath(paths["svg"], ctx.out_dir),
+                     "png": C.relpath(paths["png"], ctx.out_dir), "caption": caption}}
+
+
+def main(argv=None):
+    args = C.parse_args(argv, "Fig. 2: accuracy bars (SEA, DTWD) for all methods")
+    ctx = C.context_from_args(args)
+    entries = C.evaluate_all(ctx.shapes, ctx.methods, config=ctx.config, n_jobs=ctx.n_jobs,
+                             cache_dir=ctx.cache_dir, force=args.force)
+    for name, s in figure(entries, ctx).items():
+        print(f"{name}: {ctx.out_dir / s['png']}")
+    return 0

@@ -1,0 +1,71 @@
+"""All 30 LASA shapes x all methods (K = 6 everywhere): a table and a grid of streamline plots.
+
+Slow (about 30 x the per-shape cost of ``make run``): ``make lasa-all``. Results are cached
+per (shape, method) in ``reports/cache`` like the main run; the report goes to
+``reports/lasa_all/`` (index.html, report.pdf) and the grid figure to
+``reports/figures/lasa_all.png``, which the main report includes when present.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from problems import common as C
+
+FIELD_METHOD = "CDSP-cubic"
+
+
+def run(names, methods, config: C.EvalConfig, out_dir=C.REPORTS, *, n_jobs=2, K=6,
+        field_method=FIELD_METHOD, cache_dir=None, force=False, render_pdf=True) -> dict:
+    from sosdyn.report.figures import save_figure, streamline_panel
+    from sosdyn.report.html import build_report, render_html
+    from problems import report
+    out_dir = Path(out_dir)
+    shapes = tuple(C.shape(n, K=K) for n in names)
+    entries = C.evaluate_all(shapes, methods, config=config, n_jobs=n_jobs,
+                             cache_dir=cache_dir or out_dir / "cache", force=force)
+    field_method = field_method if field_method in methods else next(
+        (m for m in methods if C.METHODS[m].plot_field), None)
+    panels = []
+    for s in shapes:
+        e = entries[s.name].get(field_method)
+        if e and e.get("status") == "ok" and "field" in e["plot"]:
+            demos = C.load_shape(s, config)
+            f = e["plot"]["field"]
+            panels.append({"predict": C.CachedField(f), "demos_pos": [d.pos for d in demos],
+                           "reproductions": e["plot"]["reproductions"], "goal": demos.goal,
+                           "bounds": f["bounds"], "grid": f["grid"], "title": s.name})
+    figures = {}
+    sub = out_dir / "lasa_all"
+    if panels:
+        fig = streamline_panel(panels, ncols=6 if len(panels) > 8 else min(len(panels), 4),
+                               panel_size=2.3)
+        paths = save_figure(fig, out_dir / "figures" / "lasa_all", dpi=110)
+        caption = (f"All {len(panels)} LASA shapes, {field_method} (K = {K}): streamlines, "
+                   "demonstrations (red) and reproductions (dashed blue). Full table: "
+                   "reports/lasa_all/index.html.")
+        (out_dir / "figures" / "lasa_all.caption.txt").write_text(caption)
+        figures["lasa_all"] = {"svg": C.relpath(paths["svg"], sub), "png": C.relpath(paths["png"], sub),
+                               "caption": caption}
+    ctx = C.Context(shapes=shapes, config=config, out_dir=sub, methods=methods)
+    from problems.fig2 import figure as fig2
+    figures.update(fig2(entries, C.Context(shapes=shapes, config=config, out_dir=sub, methods=methods)))
+    results = {"meta": C.meta(grid_convergence=report.grid_note(ctx), n_shapes=len(shapes), K=K),
+               "findings": report.findings(entries),
+               "methods": C.methods_section(shapes, methods, quick=config.quick),
+               **C.results_sections(entries), "figures": figures}
+    path = C.write_json(sub / "results.json", results)
+    if render_pdf:
+        return build_report(path, sub)
+    return {"html": render_html(results, sub)}
+
+
+def main(argv=None):
+    import sosdyn as sd
+    args = C.parse_args(argv, "All 30 LASA shapes x methods (slow)")
+    names = args.shapes or sd.lasa_names()
+    config = C.EvalConfig(quick=args.quick, n_grid=5, field_grid=50)
+    t0 = time.perf_counter()
+    paths = run(names, C.METHOD_ORDER, config, args.out, n_jobs=args.jobs, force=args.force)
+    print(f"lasa-all: {paths['html']} ({time.perf_counter() - t0:.1f} s)")
+    return 0
