@@ -27,7 +27,8 @@ def _pack(mix: PositionMixture) -> np.ndarray:
     return np.concatenate([mix.means.ravel(), chols[:, tril[0], tril[1]].ravel(), np.log(mix.weights)])
 
 
-def _unpack(theta: np.ndarray, K: int, n: int) -> PositionMixture:
+def _unpack_factors(theta: np.ndarray, K: int, n: int):
+    """(weights, means, Cholesky factors L_k) of the parameter vector (see _pack)."""
     tril = np.tril_indices(n)
     t = len(tril[0])
     means = theta[:K * n].reshape(K, n)
@@ -37,7 +38,12 @@ def _unpack(theta: np.ndarray, K: int, n: int) -> PositionMixture:
     L[:, diag, diag] = np.exp(np.clip(L[:, diag, diag], -20, 20))
     logw = theta[K * n + K * t:]
     w = np.exp(logw - logw.max())
-    return PositionMixture(w / w.sum(), means, L @ np.swapaxes(L, 1, 2))
+    return w / w.sum(), means, L
+
+
+def _unpack(theta: np.ndarray, K: int, n: int) -> PositionMixture:
+    w, means, L = _unpack_factors(theta, K, n)
+    return PositionMixture(w, means, L @ np.swapaxes(L, 1, 2))
 
 
 def cost_and_gradient(theta, Z, Zdot, F):
@@ -50,15 +56,14 @@ def cost_and_gradient(theta, Z, Zdot, F):
       dcost/da_k  = sum_t g_tk  (a: prior logits; sum_k g_tk = 0).
     """
     T, K, n = F.shape
-    mix = _unpack(theta, K, n)
+    weights, means, Ls = _unpack_factors(theta, K, n)      # the factors themselves: no re-factoring
     tril = np.tril_indices(n)
     s = np.empty((T, K))
-    Ls, Us = [], []
+    Us = []
     for k in range(K):
-        L = np.linalg.cholesky(mix.covariances[k])
-        U = solve_triangular(L, (Z - mix.means[k]).T, lower=True)
-        s[:, k] = np.log(mix.weights[k]) - 0.5 * (U * U).sum(0) - np.log(np.diag(L)).sum()
-        Ls.append(L)
+        L = Ls[k]
+        U = solve_triangular(L, (Z - means[k]).T, lower=True)
+        s[:, k] = np.log(weights[k]) - 0.5 * (U * U).sum(0) - np.log(np.diag(L)).sum()
         Us.append(U)
     h = np.exp(s - logsumexp(s, axis=1, keepdims=True))
     f = np.einsum("tk,tki->ti", h, F)
@@ -76,6 +81,15 @@ def cost_and_gradient(theta, Z, Zdot, F):
     return cost, np.concatenate([g_mu.ravel(), g_L.ravel(), g.sum(axis=0)])
 
 
+def _well_posed(mix: PositionMixture, max_condition: float = 1e10) -> bool:
+    """Covariances that factor and are not numerically singular (else refinement stops)."""
+    try:
+        np.linalg.cholesky(mix.covariances)
+    except np.linalg.LinAlgError:
+        return False
+    return bool(np.linalg.cond(mix.covariances).max() < max_condition)
+
+
 def refine_mixture(model, dyn, rounds: int = 3, maxiter: int = 40) -> None:
     """Alternate (mixture | fields fixed) and (fields | mixture, metric fixed); updates model."""
     Z, Zdot = model._Z, model._Zdot
@@ -88,9 +102,10 @@ def refine_mixture(model, dyn, rounds: int = 3, maxiter: int = 40) -> None:
         before = cost_and_gradient(theta0, Z, Zdot, F)[0]
         res = minimize(cost_and_gradient, theta0, args=(Z, Zdot, F), jac=True, method="L-BFGS-B",
                        options={"maxiter": maxiter})
-        if not np.isfinite(res.fun) or res.fun >= before:
+        candidate = _unpack(res.x, K, n)
+        if not np.isfinite(res.fun) or res.fun >= before or not _well_posed(candidate):
             break
-        model.mixture_ = _unpack(res.x, K, n)
+        model.mixture_ = candidate
         model._record("gmm refinement", res.fun)
         data = LeastSquaresData(model.mixture_.responsibilities(Z), Phi, Zdot)
         C, sol = dyn.refit(data)
