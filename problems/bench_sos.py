@@ -12,7 +12,6 @@ Options: ``--quick`` (small problems, few repetitions: the smoke test), ``--no-t
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 import traceback

@@ -8,11 +8,9 @@ its caption and ``demo3d.json``; the main report picks the figure up.
 """
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
-import numpy as np
 
 from problems import common as C
 

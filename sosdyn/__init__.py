@@ -12,3 +12,12 @@ from .lfd import (CDSP, Demonstration, Demonstrations, Trajectory, check_demonst
                   load_demos, load_lasa, load_model)
 
 __version__ = "0.1.0"
+
+__all__ = [
+    "SosdynError", "InputError", "PolynomialError", "NotSymmetricError", "DemonstrationError",
+    "ModelFileError", "SolverError", "InfeasibleError", "NotCertifiedError", "NotFittedError",
+    "Polynomial", "PolyMatrix", "variables", "jacobian", "from_sympy", "to_sympy",
+    "SOSProgram", "Solution", "sum_squares",
+    "CDSP", "Demonstration", "Demonstrations", "Trajectory", "check_demonstrations",
+    "lasa_names", "load_demos", "load_lasa", "load_model",
+]

@@ -9,10 +9,9 @@ them into one standard-form problem and :mod:`.backends` hands it to a solver.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import InputError, PolynomialError
 from ..poly import PolyMatrix, Polynomial, allocate, monomials_up_to, variable_names
@@ -135,7 +134,7 @@ class SOSConstraint:
         if self.kind == "sos_matrix":
             poly, exps = self.program._matrix_form(poly)
         else:
-            poly, exps = self.program._as_sos_polynomial(poly, self.kind), None
+            poly, exps = self.program._as_sos_polynomial(poly), None
         vars = self.basis.vars + tuple(v for v in poly.vars if v not in self.basis.vars)
         poly = poly.with_vars(vars)
         if vars != self.basis.vars or (match_rows(self._gram_exps, poly.exps) < 0).any():
@@ -311,9 +310,8 @@ class SOSProgram:
         return PolyMatrix(entries)
 
     # ------------------------------------------------------------------ constraints
-    def _as_sos_polynomial(self, expr, kind, vars=None):
-        if kind == "sos_matrix":
-            return self._matrix_form(expr)[0]
+    @staticmethod
+    def _as_sos_polynomial(expr):
         if isinstance(expr, (int, float)):
             expr = Polynomial.constant(float(expr))
         if not isinstance(expr, Polynomial):
@@ -363,7 +361,7 @@ class SOSProgram:
         ``cone="dsos"`` asks for a diagonally dominant Gram matrix instead (an LP; a
         stronger condition, so a smaller feasible set, that scales to large bases).
         """
-        p = self._as_sos_polynomial(expr, "sos")
+        p = self._as_sos_polynomial(expr)
         name = self._name("sos", name)
         if basis is None:
             exps = newton_basis(p.exps)
@@ -475,7 +473,7 @@ class SOSProgram:
         expr - sum_i sigma_i g_i - sum_j lambda_j h_j is SOS, sigma_i SOS and lambda_j free,
         each multiplier of the largest degree with deg(multiplier * constraint) <= degree.
         """
-        p = self._as_sos_polynomial(expr, "sos")
+        p = self._as_sos_polynomial(expr)
         ineqs, eqs = list(ineqs), list(eqs)
         allv = p.vars
         for g in ineqs + eqs:

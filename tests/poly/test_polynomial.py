@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import sosdyn as sd
-from sosdyn.poly import PolyMatrix, Polynomial, jacobian
+from sosdyn.poly import PolyMatrix, jacobian
 
 X, Y, Z = sympy.symbols("x y z")
 NAMES = ["x", "y", "z"]
