@@ -67,7 +67,8 @@ _KNOWN_METHOD_COLORS = {
     "gmr": "#009E73",
     "seds": "#CC79A7",
 }
-_SPARE_COLORS = ("#56B4E9", "#882255", "#117733", "#999933", "#332288", "#666666")
+_SPARE_COLORS = ("#56B4E9", "#882255", "#117733", "#999933", "#332288", "#666666", "#CC6677",
+                 "#44AA99", "#AA4499", "#DDCC77")
 
 DEMO_COLOR = "#C0282D"        # paper Fig. 1: demonstrations solid red
 REPRO_COLOR = "#1F5FBF"       # paper Fig. 1: reproductions dashed blue
