@@ -1,7 +1,8 @@
 """All 30 LASA shapes x all methods (K = 6 everywhere): a table and a grid of streamline plots.
 
 Slow (about 30 x the per-shape cost of ``make run``): ``make lasa-all``. Results are cached
-per (shape, method) in ``reports/cache`` like the main run; the report goes to
+per (shape, method) in ``reports/cache/lasa_all`` (apart from the main run's cache: the
+entries differ, e.g. no Fig. 4 exemplars); the report goes to
 ``reports/lasa_all/`` (index.html, report.pdf) and the grid figure to
 ``reports/figures/lasa_all.png``, which the main report includes when present.
 """
@@ -23,7 +24,7 @@ def run(names, methods, config: C.EvalConfig, out_dir=C.REPORTS, *, n_jobs=2, K=
     out_dir = Path(out_dir)
     shapes = tuple(C.shape(n, K=K) for n in names)
     entries = C.evaluate_all(shapes, methods, config=config, n_jobs=n_jobs,
-                             cache_dir=cache_dir or out_dir / "cache", force=force)
+                             cache_dir=cache_dir or out_dir / "cache" / "lasa_all", force=force)
     field_method = field_method if field_method in methods else next(
         (m for m in methods if C.METHODS[m].plot_field), None)
     panels = []
