@@ -716,3 +716,24 @@ def context_from_args(args) -> Context:
     config = EvalConfig(quick=args.quick, n_grid=5)
     out = Path(args.out)
     return Context(shapes=shapes, config=config, out_dir=out, cache_dir=out / "cache", n_jobs=args.jobs)
+
+
+# ------------------------------------------------------------------ figure experiments
+
+def figure_spec(name: str, paths: dict, out_dir, caption: str) -> dict:
+    """``{name: {svg, png, caption}}`` with paths relative to the report folder."""
+    return {name: {"svg": relpath(paths["svg"], out_dir), "png": relpath(paths["png"], out_dir),
+                   "caption": caption}}
+
+
+def figure_main(argv, description: str, figure: Callable, methods=None, shapes=None) -> int:
+    """The ``main`` of a figure experiment: fit/evaluate (cached), draw, print the paths."""
+    args = parse_args(argv, description)
+    ctx = context_from_args(args)
+    if shapes:
+        ctx.shapes = tuple(s for s in ctx.shapes if s.name in shapes) or ctx.shapes
+    entries = evaluate_all(ctx.shapes, methods or ctx.methods, config=ctx.config, n_jobs=ctx.n_jobs,
+                           cache_dir=ctx.cache_dir, force=args.force)
+    for name, spec in figure(entries, ctx).items():
+        print(f"{name}: {ctx.out_dir / spec['png']}")
+    return 0

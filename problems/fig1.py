@@ -35,16 +35,9 @@ def figure(entries: dict, ctx: C.Context, methods=METHODS) -> dict:
     caption = ("Fig. 1 — learned models of the LASA shapes, one row per method ("
                + ", ".join(shown) + "): streamlines of the field (gray), the demonstrations (solid "
                "red), and the reproductions from the demonstrations' starts (dashed blue).")
-    return {"fig1": {"svg": C.relpath(paths["svg"], ctx.out_dir),
-                     "png": C.relpath(paths["png"], ctx.out_dir), "caption": caption}}
+    return C.figure_spec("fig1", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    args = C.parse_args(argv, "Fig. 1: streamlines of CDSP-cubic and CDSP-ICA on the paper's shapes")
-    ctx = C.context_from_args(args)
-    entries = C.evaluate_all(ctx.shapes, METHODS, config=ctx.config, n_jobs=ctx.n_jobs,
-                             cache_dir=ctx.cache_dir, force=args.force)
-    spec = figure(entries, ctx)
-    for name, s in spec.items():
-        print(f"{name}: {ctx.out_dir / s['png']}")
-    return 0
+    return C.figure_main(argv, "Fig. 1: streamlines of CDSP-cubic and CDSP-ICA on the paper's shapes",
+                         figure, methods=METHODS)

@@ -19,15 +19,8 @@ def figure(entries: dict, ctx: C.Context) -> dict:
     caption = (f"Fig. 2 — swept error area (SEA) and dynamic time warping distance (DTWD) between "
                f"the {n} demonstrations and their reproductions, mean ± one standard deviation, "
                "per shape and method (log axis where the values span more than two decades).")
-    return {"fig2": {"svg": C.relpath(paths["svg"], ctx.out_dir),
-                     "png": C.relpath(paths["png"], ctx.out_dir), "caption": caption}}
+    return C.figure_spec("fig2", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    args = C.parse_args(argv, "Fig. 2: accuracy bars (SEA, DTWD) for all methods")
-    ctx = C.context_from_args(args)
-    entries = C.evaluate_all(ctx.shapes, ctx.methods, config=ctx.config, n_jobs=ctx.n_jobs,
-                             cache_dir=ctx.cache_dir, force=args.force)
-    for name, s in figure(entries, ctx).items():
-        print(f"{name}: {ctx.out_dir / s['png']}")
-    return 0
+    return C.figure_main(argv, "Fig. 2: accuracy bars (SEA, DTWD) for all methods", figure)

@@ -26,15 +26,8 @@ def figure(entries: dict, ctx: C.Context) -> dict:
                f"{100 * cfg.at_frac:.0f} % of each demonstration, same seeded events for every method; "
                f"rollouts last {cfg.duration_factor:g}x the demonstration. Mean ± one std over the "
                "demonstrations; hatched: not every run ended within 1 mm of its goal.")
-    return {"fig3": {"svg": C.relpath(paths["svg"], ctx.out_dir),
-                     "png": C.relpath(paths["png"], ctx.out_dir), "caption": caption}}
+    return C.figure_spec("fig3", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    args = C.parse_args(argv, "Fig. 3: robustness bars after pushes and goal changes")
-    ctx = C.context_from_args(args)
-    entries = C.evaluate_all(ctx.shapes, ctx.methods, config=ctx.config, n_jobs=ctx.n_jobs,
-                             cache_dir=ctx.cache_dir, force=args.force)
-    for name, s in figure(entries, ctx).items():
-        print(f"{name}: {ctx.out_dir / s['png']}")
-    return 0
+    return C.figure_main(argv, "Fig. 3: robustness bars after pushes and goal changes", figure)

@@ -61,17 +61,9 @@ def figure(entries: dict, ctx: C.Context, shapes=SHAPES) -> dict:
     if all(m in methods for m in ("CDSP (paper)", "SEDS-like")) and coincide(entries, "CDSP (paper)",
                                                                              "SEDS-like"):
         caption += " CDSP (paper) and SEDS-like coincide (same reproductions)."
-    return {"fig4": {"svg": C.relpath(paths["svg"], ctx.out_dir),
-                     "png": C.relpath(paths["png"], ctx.out_dir), "caption": caption}}
+    return C.figure_spec("fig4", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    args = C.parse_args(argv, "Fig. 4: exemplar perturbed and goal-changed trajectories")
-    ctx = C.context_from_args(args)
-    shapes = [s for s in ctx.shapes if s.name in SHAPES] or list(ctx.shapes)
-    ctx.shapes = tuple(shapes)
-    entries = C.evaluate_all(ctx.shapes, ctx.methods, config=ctx.config, n_jobs=ctx.n_jobs,
-                             cache_dir=ctx.cache_dir, force=args.force)
-    for name, s in figure(entries, ctx).items():
-        print(f"{name}: {ctx.out_dir / s['png']}")
-    return 0
+    return C.figure_main(argv, "Fig. 4: exemplar perturbed and goal-changed trajectories", figure,
+                         shapes=SHAPES)

@@ -16,7 +16,8 @@ from typing import Callable
 import numpy as np
 
 import sosdyn as sd
-from sosdyn.poly import PolyMatrix, Polynomial, jacobian, monomials_up_to
+from problems import sos_examples as examples
+from sosdyn.poly import PolyMatrix, Polynomial, monomials_up_to
 
 
 #: Newton-polytope reduction in SumOfSquares.py (``sparse=``); the runner retries with False when
@@ -118,14 +119,7 @@ def motzkin_max_gamma_theirs():
 
 # ---------------------------------------------------------------------- constrained problems
 def chebyshev():
-    (x,) = sd.variables("x")
-    prog = sd.SOSProgram()
-    p = prog.new_poly([x], 8)
-    box = [1 - x**2]
-    prog.add_nonneg_on(1 - p, ineqs=box, degree=8)
-    prog.add_nonneg_on(1 + p, ineqs=box, degree=8)
-    prog.maximize(p.coeff(x**8))
-    return prog, {}
+    return examples.chebyshev()[0], {}
 
 
 def chebyshev_theirs():
@@ -144,14 +138,7 @@ def chebyshev_theirs():
 
 
 def probability():
-    (x,) = sd.variables("x")
-    prog = sd.SOSProgram()
-    a, b, c = (prog.new_var() for _ in range(3))
-    q = a + b * x + c * x**2
-    prog.add_nonneg_on(q, ineqs=[x * (5 - x)], degree=2)
-    prog.add_nonneg_on(q - 1, ineqs=[(x - 4) * (5 - x)], degree=2)
-    prog.minimize(a + b + 1.25 * c)
-    return prog, {}
+    return examples.probability_bound()[0], {}
 
 
 def probability_theirs():
@@ -237,22 +224,12 @@ def sosdemo2_theirs():
     return prob
 
 
-def _mg_f(x1, x2):
-    return [-x2 - 1.5 * x1**2 - 0.5 * x1**3, 3 * x1 - x2]
+_mg_f = examples.moore_greitzer_field
 
 
 def moore_greitzer(beta=0.77, delta=1e-3):
     def build():
-        x1, x2 = sd.variables("x1 x2")
-        f = _mg_f(x1, x2)
-        J = jacobian(f, [x1, x2])
-        prog = sd.SOSProgram()
-        m11, m12, m22 = (prog.new_poly([x1, x2], 4) for _ in range(3))
-        M = PolyMatrix([[m11, m12], [m12, m22]])
-        Mdot = M.directional_derivative(f, [x1, x2])
-        prog.add_sos_matrix(M - delta * PolyMatrix.identity(2))
-        prog.add_sos_matrix(-(M @ J + J.T @ M + Mdot + beta * M) - delta * PolyMatrix.identity(2))
-        return prog, {}
+        return examples.moore_greitzer(beta, delta), {}
     return build
 
 

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
-from sosdyn.poly import PolyMatrix, jacobian
+from problems import sos_examples
+from sosdyn.poly import PolyMatrix
 
 
 def sos_feasible(p, **kw):
@@ -71,32 +72,18 @@ def test_4_horn_form_not_sos_but_times_sum_of_squares_is():
 
 
 def test_5_chebyshev_leading_coefficient_is_128():
-    (x,) = sd.variables("x")
-    prog = sd.SOSProgram()
-    p = prog.new_poly([x], 8)
-    box = [1 - x**2]
-    prog.add_nonneg_on(1 - p, ineqs=box, degree=8)
-    prog.add_nonneg_on(1 + p, ineqs=box, degree=8)
-    gamma = p.coeff(x**8)
-    prog.maximize(gamma)
+    prog, p = sos_examples.chebyshev()
     sol = prog.solve()
     assert sol.status == "optimal"
-    assert sol.value(gamma) == pytest.approx(128.0, rel=1e-3)
+    assert sol.objective == pytest.approx(128.0, rel=1e-3)
     # the maximiser is the Chebyshev polynomial T8
     t8 = sd.from_sympy("128*x**8 - 256*x**6 + 160*x**4 - 32*x**2 + 1", ["x"])
     assert sol.value(p).allclose(t8, atol=1e-2)
 
 
 def test_6_bounds_in_probability_is_one_over_37():
-    (x,) = sd.variables("x")
-    prog = sd.SOSProgram()
-    a, b, c = (prog.new_var() for _ in range(3))
-    q = a + b * x + c * x**2
-    prog.add_nonneg_on(q, ineqs=[x * (5 - x)], degree=2)
-    prog.add_nonneg_on(q - 1, ineqs=[(x - 4) * (5 - x)], degree=2)
-    prog.minimize(a + b + 1.25 * c)
-    sol = prog.solve()
-    assert sol.objective == pytest.approx(1 / 37, rel=1e-3)
+    prog, _ = sos_examples.probability_bound()
+    assert prog.solve().objective == pytest.approx(1 / 37, rel=1e-3)
 
 
 def test_7_sos_matrix_feasible():
@@ -141,17 +128,8 @@ def test_9_motzkin():
         sol.value(g)
 
 
-def moore_greitzer_feasible(beta, delta=1e-3):
-    x1, x2 = sd.variables("x1 x2")
-    f = [-x2 - 1.5 * x1**2 - 0.5 * x1**3, 3 * x1 - x2]
-    J = jacobian(f, [x1, x2])
-    prog = sd.SOSProgram()
-    m11, m12, m22 = (prog.new_poly([x1, x2], 4) for _ in range(3))
-    M = PolyMatrix([[m11, m12], [m12, m22]])
-    Mdot = M.directional_derivative(f, [x1, x2])
-    prog.add_sos_matrix(M - delta * PolyMatrix.identity(2))
-    prog.add_sos_matrix(-(M @ J + J.T @ M + Mdot + beta * M) - delta * PolyMatrix.identity(2))
-    return prog.solve()
+def moore_greitzer_feasible(beta):
+    return sos_examples.moore_greitzer(beta).solve()
 
 
 def test_10_moore_greitzer_contraction_metric():
