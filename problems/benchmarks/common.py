@@ -140,26 +140,18 @@ class Meter:
             meter.solves += 1
             return out
 
-        def assemble_(*a, **k):
-            t0 = now()
-            try:
-                return orig[2](*a, **k)
-            finally:
-                meter.t["assemble"] += now() - t0
+        def timed(fn, key):
+            def wrapper(*a, **k):
+                t0 = now()
+                try:
+                    return fn(*a, **k)
+                finally:
+                    meter.t[key] += now() - t0
+            return wrapper
 
-        def update_(*a, **k):
-            t0 = now()
-            try:
-                return orig[3](*a, **k)
-            finally:
-                meter.t["update"] += now() - t0
-
-        def weights_(*a, **k):
-            t0 = now()
-            try:
-                return orig_weights(*a, **k)
-            finally:
-                meter.t["update"] += now() - t0
+        assemble_ = timed(orig[2], "assemble")
+        update_ = timed(orig[3], "update")
+        weights_ = timed(orig_weights, "update")
 
         backends._clarabel, backends._cvxpy, conic.assemble = clarabel_, cvxpy_, assemble_
         program.SOSConstraint.update = update_

@@ -89,12 +89,11 @@ class Block:
 class SOSConstraint:
     """Handle of one SOS constraint "poly is SOS"; after a solve it holds the certificate."""
 
-    def __init__(self, program, name, kind, poly, basis, psd, matrix=None, multipliers=()):
+    def __init__(self, program, name, kind, poly, basis, psd, multipliers=()):
         self.program, self.name, self.kind = program, name, kind
         self.poly: Polynomial = poly
         self.basis: Basis = basis
         self.psd: PsdBlock = psd
-        self.matrix: PolyMatrix | None = matrix
         self.multipliers = list(multipliers)   # [(g, sigma, SOS psd block)] for add_nonneg_on
         self._gram_exps, self._G = gram_matching(basis.exps)
         self.rows: LinearRows | None = None
@@ -319,14 +318,14 @@ class SOSProgram:
                                   "use add_sos_matrix for a PolyMatrix")
         return expr
 
-    def _register(self, name, kind, poly, basis_exps, matrix=None, multipliers=(), cone="psd"):
+    def _register(self, name, kind, poly, basis_exps, multipliers=(), cone="psd"):
         psd = self._block(name, svec_size(basis_exps.shape[0]), basis_exps.shape[0]).psd
         if cone == "dsos":
             psd.cone = "dsos"
             self._diagonally_dominant(psd)
         elif cone != "psd":
             raise InputError(f"unknown cone {cone!r}: use 'psd' (SOS) or 'dsos' (diagonally dominant SOS)")
-        con = SOSConstraint(self, name, kind, poly, Basis(poly.vars, basis_exps), psd, matrix, multipliers)
+        con = SOSConstraint(self, name, kind, poly, Basis(poly.vars, basis_exps), psd, multipliers)
         self.sos_constraints.append(con)
         return con
 
@@ -464,7 +463,7 @@ class SOSProgram:
         """
         name = self._name("sosmat", name)
         q, exps = self._matrix_form(P)
-        return self._register(name, "sos_matrix", q, exps, matrix=P if isinstance(P, PolyMatrix) else PolyMatrix(P))
+        return self._register(name, "sos_matrix", q, exps)
 
     @_timed
     def add_nonneg_on(self, expr, ineqs=(), eqs=(), degree=None, name=None) -> SOSConstraint:
@@ -506,33 +505,31 @@ class SOSProgram:
             return [diff]
         raise PolynomialError(f"cannot constrain an expression of type {type(diff).__name__}")
 
-    @_timed
-    def add_eq(self, lhs, rhs=0.0, name=None) -> LinearRows:
-        """lhs == rhs, coefficient by coefficient (polynomials or polynomial matrices)."""
-        name = self._name("eq", name)
-        items = self._affine_items(lhs, rhs)
-        rows = []
-        offset = 0
+    def _add_linear(self, name, kind, items) -> LinearRows:
+        """One row per coefficient of every affine polynomial in ``items`` (= 0 or >= 0)."""
+        parts, offset = [], 0
         for p in items:
-            rows.append(LinearRows.from_affine(name, "eq", p.coef, p.dec, offset + np.arange(p.nterms)))
+            parts.append(LinearRows.from_affine(name, kind, p.coef, p.dec, offset + np.arange(p.nterms)))
             offset += p.nterms
-        con = _concat_rows(name, "eq", rows)
+        cat = lambda field, dtype: np.concatenate([getattr(q, field) for q in parts] + [np.zeros(0, dtype)])  # noqa: E731
+        con = LinearRows(name, kind, cat("rows", np.int64), cat("ids", np.int64), cat("vals", float),
+                         cat("rhs", float))
         self.linear.append(con)
         return con
 
     @_timed
+    def add_eq(self, lhs, rhs=0.0, name=None) -> LinearRows:
+        """lhs == rhs, coefficient by coefficient (polynomials or polynomial matrices)."""
+        return self._add_linear(self._name("eq", name), "eq", self._affine_items(lhs, rhs))
+
+    @_timed
     def add_ge(self, lhs, rhs=0.0, name=None) -> LinearRows:
         """lhs >= rhs for degree-0 affine expressions (element-wise for matrices)."""
-        name = self._name("ge", name)
         items = self._affine_items(lhs, rhs)
         if any(not p.is_constant for p in items):
             raise PolynomialError("add_ge takes constant affine expressions; use add_sos or "
                                   "add_nonneg_on for polynomial inequalities")
-        rows = [LinearRows.from_affine(name, "ge", p.coef, p.dec, np.full(p.nterms, k))
-                for k, p in enumerate(items)]
-        con = _concat_rows(name, "ge", rows, len(items))
-        self.linear.append(con)
-        return con
+        return self._add_linear(self._name("ge", name), "ge", items)
 
     def add_constraint(self, constraint):
         """Add a cvxpy constraint written with :meth:`expr`; solves then go through cvxpy."""
@@ -609,13 +606,3 @@ class SOSProgram:
         if raise_on_failure:
             sol.raise_for_status()
         return sol
-
-
-def _concat_rows(name, kind, parts, n_rows=None):
-    rows = np.concatenate([p.rows for p in parts] + [np.zeros(0, dtype=np.int64)])
-    rhs = np.concatenate([p.rhs for p in parts] + [np.zeros(0)])
-    if n_rows is not None:
-        rhs = np.array([p.rhs[0] if p.rhs.size else 0.0 for p in parts])
-    return LinearRows(name, kind, rows,
-                      np.concatenate([p.ids for p in parts] + [np.zeros(0, dtype=np.int64)]),
-                      np.concatenate([p.vals for p in parts] + [np.zeros(0)]), rhs)
