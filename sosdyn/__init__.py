@@ -5,7 +5,8 @@ their conic lowering) -> :mod:`sosdyn.lfd` (learning from demonstrations).
 """
 from .errors import (DemonstrationError, InfeasibleError, InputError, ModelFileError,
                      NotCertifiedError, NotFittedError, NotSymmetricError, PolynomialError,
-                     SolverError, SosdynError)
+                     ResourceLimitError, SolverError, SosdynError, UnverifiedSolutionError)
+from .limits import get_limits, limits, set_limits
 from .poly import PolyMatrix, Polynomial, from_sympy, jacobian, to_sympy, variables
 from .sos import SOSProgram, Solution, sum_squares
 from .lfd import (CDSP, Demonstration, Demonstrations, Trajectory, check_demonstrations, lasa_names,
@@ -16,6 +17,7 @@ __version__ = "0.1.0"
 __all__ = [
     "SosdynError", "InputError", "PolynomialError", "NotSymmetricError", "DemonstrationError",
     "ModelFileError", "SolverError", "InfeasibleError", "NotCertifiedError", "NotFittedError",
+    "ResourceLimitError", "UnverifiedSolutionError", "get_limits", "set_limits", "limits",
     "Polynomial", "PolyMatrix", "variables", "jacobian", "from_sympy", "to_sympy",
     "SOSProgram", "Solution", "sum_squares",
     "CDSP", "Demonstration", "Demonstrations", "Trajectory", "check_demonstrations",

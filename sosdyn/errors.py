@@ -25,6 +25,14 @@ class DemonstrationError(InputError):
     """Demonstrations that cannot be learned from (NaN, ragged, too short, goals disagree)."""
 
 
+class ResourceLimitError(InputError):
+    """A request whose estimated size (bytes, steps, Gram entries) is over a limit.
+
+    Raised before the work starts; the limit is raised with :func:`sosdyn.limits.set_limits`
+    (or the ``limits`` context manager) when the machine can afford it.
+    """
+
+
 class ModelFileError(SosdynError):
     """A saved model that is corrupt, truncated, from another version, or was edited."""
 
@@ -42,6 +50,18 @@ class SolverError(SosdynError):
         self.detail = message
         text = message if hint is None else f"{message} Try: {hint}"
         super().__init__(text)
+
+
+class UnverifiedSolutionError(SolverError):
+    """The solver reported an answer whose certificate fails the independent check.
+
+    ``report`` is the :class:`~sosdyn.sos.solution.VerificationReport` naming the failing
+    block(s) and by how much.
+    """
+
+    def __init__(self, message, status="unverified", hint=None, report=None):
+        self.report = report
+        super().__init__(message, status, hint)
 
 
 class InfeasibleError(SolverError):

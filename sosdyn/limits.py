@@ -1,0 +1,102 @@
+"""Resource limits checked *before* work starts (solves, rollouts, file reads).
+
+Every large allocation sosdyn makes on a user's behalf is estimated first and compared with
+a limit here; over it, a :class:`~sosdyn.errors.ResourceLimitError` says the estimate, the
+limit and how to raise it. Defaults suit a workstation (a few GiB); raise them for big
+machines::
+
+    import sosdyn as sd
+    sd.set_limits(max_bytes=32 * 2**30)          # for the rest of the session
+    with sd.limits(max_rollout_steps=10**8):      # for one block
+        model.rollout(x0, duration=1e4)
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+from dataclasses import dataclass, fields, replace
+
+from .errors import InputError, ResourceLimitError
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The limits in force (see module docstring)."""
+
+    max_bytes: int = 4 * 2**30            # estimated working memory of one solve or rollout
+    max_rollout_steps: int = 10**7        # integration steps of one rollout (all starts)
+    max_file_bytes: int = 64 * 2**20      # a model or results file read from disk
+    max_json_depth: int = 64              # nesting depth accepted in a JSON file
+
+
+_current = Limits()
+
+
+def get_limits() -> Limits:
+    """The limits in force now."""
+    return _current
+
+
+def set_limits(**changes) -> Limits:
+    """Change limits for the rest of the session; returns the previous ones."""
+    global _current
+    previous = _current
+    _current = _validated(replace(_current, **_checked_names(changes)))
+    return previous
+
+
+@contextmanager
+def limits(**changes):
+    """Temporarily change limits: ``with sd.limits(max_bytes=2**34): ...``."""
+    previous = set_limits(**changes)
+    try:
+        yield _current
+    finally:
+        _restore(previous)
+
+
+def _restore(previous: Limits) -> None:
+    global _current
+    _current = previous
+
+
+def _checked_names(changes: dict) -> dict:
+    known = {f.name for f in fields(Limits)}
+    unknown = sorted(set(changes) - known)
+    if unknown:
+        raise InputError(f"unknown limit(s) {unknown}; known: {sorted(known)}")
+    return changes
+
+
+def _validated(lim: Limits) -> Limits:
+    for f in fields(Limits):
+        v = getattr(lim, f.name)
+        if isinstance(v, bool) or not isinstance(v, int) or v <= 0:
+            raise InputError(f"limit {f.name} must be a positive integer, got {v!r}")
+    return lim
+
+
+def format_bytes(n: float) -> str:
+    """1.5 GiB, 320 MiB, 12 KiB: for messages."""
+    for unit, size in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n >= size:
+            return f"{n / size:.1f} {unit}"
+    return f"{int(n)} B"
+
+
+def check_bytes(estimate: float, what: str, hint: str = "") -> None:
+    """Raise ResourceLimitError if ``estimate`` bytes exceed ``max_bytes``."""
+    limit = _current.max_bytes
+    if not estimate <= limit:
+        raise ResourceLimitError(
+            f"{what} needs about {format_bytes(estimate)}, over the limit of {format_bytes(limit)}. "
+            f"Try: {hint + '; or ' if hint else ''}raise the limit with "
+            f"sosdyn.set_limits(max_bytes=...) if this machine has the memory.")
+
+
+def check_count(value: float, limit_name: str, what: str, hint: str = "") -> None:
+    """Raise ResourceLimitError if ``value`` exceeds the named count limit."""
+    limit = getattr(_current, limit_name)
+    if not value <= limit:
+        raise ResourceLimitError(
+            f"{what} is {value:.3g}, over the limit {limit_name}={limit}. "
+            f"Try: {hint + '; or ' if hint else ''}raise it with sosdyn.set_limits({limit_name}=...).")
