@@ -8,8 +8,13 @@
     sosdyn lasa list
 
 Global options ``--quiet`` (no progress or summaries) and ``--debug`` (full
-tracebacks, debug logging) go before the command. Any sosdyn error or missing file ends
-the command with one red line on stderr and exit status 1.
+tracebacks, debug logging; also ``SOSDYN_DEBUG=1``) go before the command.
+
+Every ``--out`` is checked before any work: its folder exists and is writable, it is not a
+folder, and it is not one of the command's inputs (same resolved path or same file, so
+symlinks and hard links count). Any sosdyn error, OS error, bad value or over-deep input
+ends the command with one line ``error: ... Try: ...`` on stderr and exit status 1; a
+malformed option (wrong type, out of range) is a usage error with exit status 2.
 
 sosdyn itself and its solvers are imported inside the commands, so ``sosdyn --help``
 is quick.
@@ -20,9 +25,11 @@ from __future__ import annotations
 import enum
 import importlib
 import logging
+import os
 import pkgutil
 import sys
 import time
+from collections.abc import Sequence
 from contextlib import nullcontext
 from pathlib import Path
 from typing import Annotated
@@ -59,7 +66,8 @@ class SolverMethod(str, enum.Enum):
 @app.callback()
 def _global_options(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print results only: no progress, no summaries.")] = False,
-    debug: Annotated[bool, typer.Option("--debug", help="Show full tracebacks and debug logs.")] = False,
+    debug: Annotated[bool, typer.Option("--debug", envvar="SOSDYN_DEBUG",
+                                        help="Show full tracebacks and debug logs.")] = False,
 ) -> None:
     _State.quiet, _State.debug = quiet, debug
     if debug:
@@ -79,9 +87,55 @@ def _status(message: str):
 
 def _existing(path: Path, what: str) -> Path:
     """``path``, or FileNotFoundError naming ``what`` (checked before sosdyn is asked)."""
+    if path.is_dir():
+        raise InputError(f"{what} {path} is a folder. Try: give the file inside it.")
     if not path.is_file():
         raise FileNotFoundError(f"{what} not found: {path}")
     return path
+
+
+def _positive(value: float | None) -> float | None:
+    """Option callback: a finite number > 0 (or not given)."""
+    if value is not None and not 0 < value < float("inf"):
+        raise typer.BadParameter(f"must be a finite number > 0, got {value}.")
+    return value
+
+
+def same_file(a: Path, b: Path) -> bool:
+    """Do ``a`` and ``b`` name one file: equal after resolving symlinks, or (both existing)
+    the same inode, as for hard links."""
+    try:
+        return a.resolve() == b.resolve() or os.path.samefile(a, b)
+    except (OSError, RuntimeError):   # one of them does not exist, or a symlink loop
+        return False
+
+
+def check_output(path: Path, inputs: Sequence[Path] = (), what: str = "input") -> None:
+    """InputError unless ``path`` may be (over)written: not a folder, writable if it exists,
+    and not the same file as any of ``inputs`` (each described as ``what``)."""
+    if path.is_dir():
+        raise InputError(f"--out {path} is a folder. Try: give a file path inside it.")
+    for source in inputs:
+        if same_file(path, source):
+            raise InputError(f"--out {path} is the {what} {source}: writing it would destroy the input. "
+                             "Try: choose another --out.")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise InputError(f"--out {path} exists and is read-only. Try: choose another --out.")
+
+
+def check_folder(folder: Path, *, create: bool = False) -> None:
+    """InputError unless files can be written in ``folder``; with ``create`` it may also be
+    a new folder whose parent exists and is writable."""
+    target = folder
+    if not folder.is_dir():
+        if folder.exists():
+            raise InputError(f"{folder} is a file, not a folder. Try: choose another --out.")
+        if not (create and folder.parent.is_dir()):
+            raise InputError(f"the folder {folder} does not exist. Try: create it (mkdir -p {folder}) "
+                             "or choose another --out.")
+        target = folder.parent
+    if not os.access(target, os.W_OK | os.X_OK):
+        raise InputError(f"cannot write in the folder {target} (permission denied). Try: choose another --out.")
 
 
 def _parse_point(text: str) -> np.ndarray:
@@ -104,10 +158,10 @@ def fit(
     components: Annotated[int | None, typer.Option("--components", "-k", min=1, help="Gaussian components K.")] = None,
     metric_degree: Annotated[int | None, typer.Option(min=0, help="Degree of the polynomial metric.")] = None,
     field_degree: Annotated[int | None, typer.Option(min=1, help="Degree of the polynomial field.")] = None,
-    gamma: Annotated[float | None, typer.Option(help="Contraction rate.")] = None,
+    gamma: Annotated[float | None, typer.Option(callback=_positive, help="Contraction rate (> 0).")] = None,
     solver: Annotated[str | None, typer.Option(help="Conic solver, e.g. CLARABEL or SCS.")] = None,
     method: Annotated[SolverMethod | None, typer.Option(help="How the bilinear program is solved.")] = None,
-    seed: Annotated[int | None, typer.Option(help="Random seed (EM initialisation).")] = None,
+    seed: Annotated[int | None, typer.Option(min=0, max=2**32 - 1, help="Random seed (EM initialisation).")] = None,
 ) -> None:
     """Learn a certified CDSP model from demonstrations and save it.
 
@@ -115,11 +169,11 @@ def fit(
     """
     import sosdyn as sd
 
-    if len(demos) == 1 and demos[0].startswith("lasa:"):
-        data = sd.load_lasa(demos[0].removeprefix("lasa:"))
-    else:
-        paths = [_existing(Path(p), "demonstration file") for p in demos]
-        data = sd.load_demos(paths)
+    lasa = len(demos) == 1 and demos[0].startswith("lasa:")
+    paths = [] if lasa else [_existing(Path(p), "demonstration file") for p in demos]
+    check_output(out_path, paths, "demonstration file")
+    check_folder(out_path.parent)
+    data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(paths)
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": method and method.value,
                "random_state": seed}
@@ -146,8 +200,8 @@ def rollout(
     model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
     start: Annotated[str, typer.Option("--from", help="Start state, comma-separated, e.g. 10,-5.",
                                        show_default=False)],
-    duration: Annotated[float, typer.Option(min=0.0, help="Seconds to integrate.")] = 10.0,
-    dt: Annotated[float | None, typer.Option(min=0.0, help="Time step (s); default: the model's.")] = None,
+    duration: Annotated[float, typer.Option(callback=_positive, help="Seconds to integrate.")] = 10.0,
+    dt: Annotated[float | None, typer.Option(callback=_positive, help="Time step (s); default: the model's.")] = None,
     out_path: Annotated[Path | None, typer.Option("--out", "-o", help="Write t and positions as CSV.")] = None,
 ) -> None:
     """Integrate a saved model from a start state; print the end point, optionally write
@@ -156,11 +210,13 @@ def rollout(
 
     x0 = _parse_point(start)
     _existing(model_path, "model file")
+    if out_path is not None:
+        check_output(out_path, [model_path], "model file")
+        check_folder(out_path.parent)
     model = sd.load_model(model_path)
     traj = model.rollout(x0, duration, **({} if dt is None else {"dt": dt}))
     t, pos = np.asarray(traj.t), np.asarray(traj.pos)
-    if out_path is not None:
-        out_path.parent.mkdir(parents=True, exist_ok=True)     # same layout as load_demos reads
+    if out_path is not None:                     # the layout load_demos reads
         np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="",
                    header=",".join(["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]))
         _info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
@@ -200,9 +256,14 @@ def report(
     results: Annotated[Path, typer.Option(help="Results JSON written by the experiments.")] = Path("reports/results.json"),
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Folder for index.html and report.pdf.")] = Path("reports"),
 ) -> None:
-    """Build the HTML report and its PDF from a results JSON."""
-    from .report.html import build_report
+    """Build the HTML report and its PDF from a results JSON (refused, and --out left
+    untouched, unless it is a results file)."""
+    from .report.html import REPORT_FILES, build_report
 
+    _existing(results, "results file")
+    check_folder(out_dir, create=True)
+    for name in REPORT_FILES.values():
+        check_output(out_dir / name, [results], "results file")
     with _status("rendering the report ..."):
         paths = build_report(results, out_dir)
     _info(f"[green]wrote[/] {escape(str(paths['html']))} and {escape(str(paths['pdf']))}")
@@ -219,14 +280,47 @@ def lasa_list() -> None:
 
 # ------------------------------------------------------------------------ entry point
 
+# Errors reported as one line (anything else is a bug and keeps its traceback), and what
+# to try for those whose message does not say (first matching class wins).
+_REPORTED = (SosdynError, OSError, ValueError, RecursionError, MemoryError)
+_HINTS = (
+    (PermissionError, "check the permissions, or choose another path."),
+    (OSError, "check the path."),
+    (RecursionError, "check that the file is one sosdyn wrote (its nesting is too deep to read)."),
+    (MemoryError, "smaller inputs; sosdyn.set_limits(max_bytes=...) bounds what is attempted."),
+    (SosdynError, "rerun with --debug for details."),
+    (ValueError, "check the options (sosdyn COMMAND --help); rerun with --debug for the traceback."),
+)
+
+
+def error_line(exc: BaseException) -> str:
+    """The one-line report of ``exc``: its message's lines joined ("; " after a line without
+    closing punctuation) and, when the message has none, a "Try: ..." hint by class."""
+    if isinstance(exc, OSError) and exc.strerror:
+        names = [str(f) for f in (exc.filename, exc.filename2) if f is not None]
+        text = f"{exc.strerror}: {' -> '.join(names)}" if names else exc.strerror
+    else:
+        text = str(exc) or {MemoryError: "out of memory"}.get(type(exc), type(exc).__name__)
+    if isinstance(exc, RecursionError):
+        text = f"input nested too deeply ({text})"
+    lines = [line.strip() for line in text.splitlines() if line.strip()] or [type(exc).__name__]
+    text = "".join(line + (" " if line[-1] in ".:;,!?" else "; ") for line in lines[:-1]) + lines[-1]
+    if "Try:" not in text:
+        hint = next(h for cls, h in _HINTS if isinstance(exc, cls))
+        text = f"{text.rstrip('.')}. Try: {hint}"
+    return text
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Run the CLI; sosdyn errors and missing files become one red line and exit 1."""
+    """Run the CLI; the errors in ``_REPORTED`` become one line ``error: ...`` and exit 1
+    (re-raised with --debug or SOSDYN_DEBUG=1)."""
+    _State.debug = False
     try:
         app(args=argv, prog_name="sosdyn")
-    except (SosdynError, FileNotFoundError) as exc:
+    except _REPORTED as exc:
         if _State.debug:
             raise
-        err.print(f"[bold red]error:[/] {escape(str(exc))}", soft_wrap=True, highlight=False)
+        err.print(f"[bold red]error:[/] {escape(error_line(exc))}", soft_wrap=True, highlight=False)
         raise SystemExit(1) from None
     except KeyboardInterrupt:
         err.print("[red]interrupted[/]")

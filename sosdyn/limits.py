@@ -12,8 +12,11 @@ machines::
 """
 from __future__ import annotations
 
+import re
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
+
+import numpy as np
 
 from .errors import InputError, ResourceLimitError
 
@@ -100,3 +103,26 @@ def check_count(value: float, limit_name: str, what: str, hint: str = "") -> Non
         raise ResourceLimitError(
             f"{what} is {value:.3g}, over the limit {limit_name}={limit}. "
             f"Try: {hint + '; or ' if hint else ''}raise it with sosdyn.set_limits({limit_name}=...).")
+
+
+_JSON_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"')     # a JSON string literal, escapes included
+_BRACKET_STEP = np.zeros(256, dtype=np.int8)
+_BRACKET_STEP[[ord("["), ord("{")]] = 1
+_BRACKET_STEP[[ord("]"), ord("}")]] = -1
+
+
+def json_text_depth(data: bytes, chunk: int = 2**20) -> int:
+    """Deepest nesting of ``[ ]``/``{ }`` in JSON text: max over prefixes of (#open - #close),
+    brackets inside string literals not counted. Runs in chunks, so memory stays O(chunk)."""
+    steps = _BRACKET_STEP[np.frombuffer(_JSON_STRING.sub(b'""', data), dtype=np.uint8)]
+    level, deepest = 0, 0
+    for start in range(0, len(steps), chunk):
+        levels = level + np.cumsum(steps[start:start + chunk], dtype=np.int64)
+        deepest, level = max(deepest, int(levels.max())), int(levels[-1])
+    return deepest
+
+
+def check_json_depth(data: bytes, what: str, hint: str = "") -> None:
+    """Raise ResourceLimitError if the JSON text ``data`` nests deeper than ``max_json_depth``
+    (checked before parsing: Python's parser would otherwise hit its recursion limit)."""
+    check_count(json_text_depth(data), "max_json_depth", f"the nesting depth of {what}", hint)

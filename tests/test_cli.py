@@ -78,7 +78,8 @@ def test_real_process_prints_no_traceback(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "sosdyn.cli", "fit", str(tmp_path / "x.csv")],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 1
-    assert proc.stderr.strip().splitlines() == [f"error: demonstration file not found: {tmp_path / 'x.csv'}"]
+    assert proc.stderr.strip().splitlines() == [
+        f"error: demonstration file not found: {tmp_path / 'x.csv'}. Try: check the path."]
 
 
 # ---------------------------------------------------------------- experiment command
@@ -189,7 +190,7 @@ def test_lasa_list_prints_one_name_per_line(capsys, monkeypatch):
 
 
 def test_report_command_builds_both_files(capsys, tmp_path):
-    (tmp_path / "results.json").write_text(json.dumps({"findings": [
+    (tmp_path / "results.json").write_text(json.dumps({"meta": {"seed": 0}, "findings": [
         {"title": "metric collapse", "text": "constant", "numbers": {"shapes": 4}}]}))
     code, out, err = run(capsys, "report", "--results", str(tmp_path / "results.json"),
                          "--out", str(tmp_path / "out"))

@@ -11,23 +11,41 @@ dM(z)[A_k z] vanishes at z = 0, so evaluating (4) at z = 0 gives
 A_k^T M(0) + M(0) A_k + gamma M(0) <= 0 -- the constant metric M(0) certifies every A_k
 that M(z) certifies. The learner measures this (``metric_collapse_``). With polynomial
 sub-systems (``field_degree`` 3) the state-dependent metric does matter.
+
+Model files (:func:`save_model`, :func:`load_model`; the file format is in
+:mod:`sosdyn.lfd.model_io`): loading validates every field and re-checks the certificate from
+the model's own coefficients with the library's DEFAULT_SAMPLES states. The certificate lives
+in z-coordinates and does not involve the weights h_k, so an edited goal, scale or mixture
+leaves it valid while changing the motion: only the checksum (accidents) or the keyed
+signature (deliberate edits) detect such an edit.
 """
 from __future__ import annotations
 
+import inspect
+import math
 import time
 import warnings
+from numbers import Integral, Real
+from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, NotCertifiedError, NotFittedError, SolverError
-from .certificate import CertificateReport, check_model, extract_certificate
+from ..errors import InputError, ModelFileError, NotCertifiedError, NotFittedError, SolverError, SosdynError
+from ..sos.program import SOLVERS
+from .certificate import (DEFAULT_SAMPLES, CertificateReport, check_model, check_sample_count,
+                          extract_certificate)
 from .data import check_demonstrations
 from .fields import (eval_fields, field_exponents, metric_exponents, monomial_values)
 from .gmm import PositionMixture, gmm_linear_maps
+from .model_io import (FORMAT, REFIT_HINT, VERSION, array, integer, need, positive, read_model_file,
+                       short_string, write_model_file)
 from .rollout import rollout as integrate
 from .steps import DynamicsStep, ICAStep, LeastSquaresData, MetricStep, certify
 
 METHODS = ("alternating", "ica")
+METRICS = ("learned", "identity")
+MAX_SEED = 2**32 - 1            # numpy's and sklearn's bound on an integer seed
+LOAD_SEED = 0                   # the states of the sampled check when loading a file
 
 
 class CDSP:
@@ -41,14 +59,21 @@ class CDSP:
     field_degree : int           degree of the sub-systems f_k (1 = the paper's A_k x + b_k; odd).
     gamma : float                contraction rate (1/s, in the data's time units).
     metric : {"learned", "identity"}   "identity" fixes M = I (SEDS-like quadratic Lyapunov).
-    solver : str                 conic solver ("CLARABEL"; "SCS" via cvxpy).
+    solver : str                 conic solver ("CLARABEL"; "SCS" or another solver installed in cvxpy).
     solver_method : {"alternating", "ica"}   plain alternation, or the inner convex approximation.
     max_iter, tol                alternation / ICA iterations and relative cost tolerance.
     eps, margin                  M >= eps I; the trained fields satisfy -G_k >= margin I.
     refine_gmm : bool            also optimise the GMM's position means/covariances (paper's theta_G).
     max_samples : int or None    subsample the data to at most this many points (EM and fit).
-    random_state : int           seed of EM and of the verification samples.
+    random_state : None, int in [0, 2^32), np.random.Generator or RandomState
+                                 seed of EM and of the verification samples; the integer seed
+                                 actually used is ``seed_`` (and is what a saved file records).
+    verify_samples : int         states of the sampled certificate check, in [100, 10^6].
     allow_uncertified : bool     return a model whose check failed (flagged) instead of raising.
+    progress : callable or None  called with each history row while fitting.
+
+    Numbers may be Python or numpy scalars (np.float32, np.int64); booleans are not numbers
+    here. Every parameter is checked before any optimisation (InputError saying what to try).
 
     Learned attributes end in ``_``: ``goal_``, ``scale_``, ``mixture_``, ``C_`` (K, n, m),
     ``W_`` (n, n, p), ``history_``, ``certificate_``, ``verification_``, ``metric_collapse_``.
@@ -59,7 +84,7 @@ class CDSP:
     def __init__(self, n_components=6, metric_degree=0, field_degree=1, gamma=0.1, metric="learned",
                  solver="CLARABEL", solver_method="alternating", max_iter=20, tol=1e-4, eps=1e-3,
                  margin=1e-4, refine_gmm=False, max_samples=3000, random_state=0,
-                 verify_samples=10_000, allow_uncertified=False, progress=None):
+                 verify_samples=DEFAULT_SAMPLES, allow_uncertified=False, progress=None):
         self.n_components = n_components
         self.metric_degree = metric_degree
         self.field_degree = field_degree
@@ -86,11 +111,29 @@ class CDSP:
         return {k: getattr(self, k) for k in keys}
 
     def _check_params(self):
+        """Types and ranges of every parameter (no solver is touched: see _check_solver)."""
+        def fail(name, want):
+            default = inspect.signature(CDSP).parameters[name].default
+            raise InputError(f"{name} must be {want}, got {getattr(self, name)!r}. "
+                             f"Try: the default, {name}={default!r}.")
+
         def integer(name, lo):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-                raise InputError(f"{name} must be an integer >= {lo}, got {v!r}")
-        if self.n_components != "bic":
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, Integral) or v < lo:
+                fail(name, f"an integer >= {lo}")
+
+        def positive(name):
+            v = getattr(self, name)
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, Real) or not np.isfinite(v) or v <= 0:
+                fail(name, "a positive finite number")
+
+        def choice(name, options):
+            if not isinstance(getattr(self, name), str) or getattr(self, name) not in options:
+                fail(name, f"one of {options}")
+
+        if not (isinstance(self.n_components, str) and self.n_components == "bic"):
+            if isinstance(self.n_components, str):
+                fail("n_components", 'an integer >= 1 or "bic"')
             integer("n_components", 1)
         integer("metric_degree", 0)
         integer("field_degree", 1)
@@ -103,17 +146,38 @@ class CDSP:
                 f"field_degree={self.field_degree} is even: the contraction condition then has odd "
                 f"degree {self.metric_degree + self.field_degree - 1} in x and its leading part cannot "
                 "be negative definite, so no certificate exists; use field_degree 1 or 3")
-        for name in ("gamma", "eps", "tol"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not np.isfinite(v) or v <= 0:
-                raise InputError(f"{name} must be a positive number, got {v!r}")
-        if self.metric not in ("learned", "identity"):
-            raise InputError(f"metric must be 'learned' or 'identity', got {self.metric!r}")
-        if self.solver_method not in METHODS:
-            raise InputError(f"solver_method must be one of {METHODS}, got {self.solver_method!r}")
+        for name in ("gamma", "eps", "tol", "margin"):
+            positive(name)
+        choice("metric", METRICS)
+        choice("solver_method", METHODS)
+        if not isinstance(self.solver, str) or not self.solver:
+            fail("solver", f"the name of a conic solver, e.g. one of {SOLVERS}")
+        if self.max_samples is not None:
+            integer("max_samples", 1)
+        check_sample_count(self.verify_samples, "verify_samples")
+        rs = self.random_state
+        if not (rs is None or isinstance(rs, (np.random.Generator, np.random.RandomState))):
+            if isinstance(rs, (bool, np.bool_)) or not isinstance(rs, Integral) or not 0 <= rs <= MAX_SEED:
+                fail("random_state", f"None, an integer in [0, {MAX_SEED}], a np.random.Generator or a "
+                     "np.random.RandomState")
+        for name in ("refine_gmm", "allow_uncertified"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                fail(name, "True or False")
+        if self.progress is not None and not callable(self.progress):
+            fail("progress", "None or a function called with each history row")
         if self.solver_method == "ica" and self.metric == "identity":
             raise InputError("solver_method='ica' learns the metric; with metric='identity' there is "
                              "nothing to alternate: use solver_method='alternating'")
+
+    def _check_solver(self):
+        """The solver is one sosdyn drives directly or one installed in cvxpy."""
+        if self.solver.upper() in SOLVERS:
+            return
+        import cvxpy as cp              # heavy: only imported for a solver beyond the defaults
+        installed = cp.installed_solvers()
+        if self.solver.upper() not in installed:
+            raise InputError(f"unknown solver {self.solver!r}; use one of {SOLVERS} or a conic solver "
+                             f"installed in cvxpy ({', '.join(installed)}). Try: solver='CLARABEL'.")
 
     # ------------------------------------------------------------------ coordinates
     def _to_z(self, X):
@@ -145,16 +209,20 @@ class CDSP:
     def _fit(self, demos):
         t_start = time.perf_counter()
         self._check_params()
+        self._check_solver()
         demos = check_demonstrations(demos)
         X, Xdot = demos.stacked()
         n = demos.dim
         K = 1 if self.n_components == "bic" else int(self.n_components)
-        if X.shape[0] < 5 * K:
-            raise InputError(f"{X.shape[0]} samples are too few for {K} Gaussians; "
-                             "use fewer components or more demonstrations")
-        if self.max_samples and X.shape[0] > self.max_samples:
+        subsampled = self.max_samples is not None and X.shape[0] > self.max_samples
+        if subsampled:
             step = int(np.ceil(X.shape[0] / self.max_samples))
             X, Xdot = X[::step], Xdot[::step]
+        if X.shape[0] < 5 * K:
+            raise InputError(f"{X.shape[0]} samples{' (after max_samples)' if subsampled else ''} are "
+                             f"too few for {K} Gaussians; use fewer components, more demonstrations"
+                             f"{' or a larger max_samples' if subsampled else ''}")
+        self.seed_ = resolve_seed(self.random_state)
         self.dim_, self.goal_ = n, np.asarray(demos.goal, dtype=float)
         self.scale_ = float(np.abs(X - self.goal_).max()) or 1.0
         self.dt_ = float(np.median(np.concatenate([np.diff(d.t) for d in demos])))
@@ -168,7 +236,7 @@ class CDSP:
         data_xv = np.hstack([Z, Zdot])
 
         def em(k):
-            return GaussianMixture(k, covariance_type="full", random_state=self.random_state,
+            return GaussianMixture(k, covariance_type="full", random_state=self.seed_,
                                    reg_covar=1e-6, max_iter=500).fit(data_xv)
         if self.n_components == "bic":
             fits = [em(k) for k in range(1, min(10, X.shape[0] // 5) + 1)]
@@ -317,7 +385,7 @@ class CDSP:
         const = int(np.flatnonzero(self.metric_exps_.sum(axis=1) == 0)[0])
         W0 = self.W_[:, :, const:const + 1]
         exps0 = self.metric_exps_[const:const + 1]
-        Zs = np.random.default_rng(self.random_state).uniform(-2, 2, size=(2000, self.dim_))
+        Zs = np.random.default_rng(self.seed_).uniform(-2, 2, size=(2000, self.dim_))
         worst = float(generalized_max_eig(
             contraction_matrices(self.C_, self.field_exps_, W0, exps0, Zs, self.gamma),
             np.repeat(W0[None, :, :, 0], Zs.shape[0], axis=0)).max())
@@ -353,28 +421,41 @@ class CDSP:
     def predict(self, X):
         """Velocities (m, n) at the states X (m, n), in the data's units."""
         self._check_fitted()
-        return self.field(self._check_points(X), self.goal_)
+        X = self._check_points(X)
+        with np.errstate(over="ignore", invalid="ignore"):
+            V = self.field(X, self.goal_)
+        bad = np.flatnonzero(~np.isfinite(V).all(axis=1))
+        if bad.size:
+            raise InputError(f"X row {bad[0]} = {X[bad[0]]} is so far from the data (scale {self.scale_:.3g}) "
+                             f"that the degree-{self.field_degree} field overflows float. Try: states "
+                             "within a few orders of magnitude of the demonstrations.")
+        return V
 
     def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=()):
-        """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout."""
+        """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.
+
+        ``dt`` None means the model's ``dt_``; duration and dt are checked by the integrator."""
         self._check_fitted()
         x0 = self._check_points(x0, "x0")[0]
         goal = self.goal_ if goal is None else self._check_points(goal, "goal")[0]
-        if not (isinstance(duration, (int, float)) and duration > 0):
-            raise InputError(f"duration must be a positive number, got {duration!r}")
-        return integrate(self.field, x0, duration=float(duration), dt=dt or self.dt_, goal=goal,
+        return integrate(self.field, x0, duration=duration, dt=self.dt_ if dt is None else dt, goal=goal,
                          perturbations=perturbations, goal_changes=goal_changes)
 
     # ------------------------------------------------------------------ evidence
     def verify(self, n_samples=None, seed=None) -> CertificateReport:
-        """Independent check: Gram matrices, and the contraction inequality at sampled states."""
+        """Independent check: Gram matrices, and the contraction inequality at ``n_samples``
+        states (default ``verify_samples``) drawn with ``seed`` (default ``seed_``)."""
         self._check_fitted()
-        return check_model(self, n_samples or self.verify_samples,
-                           self.random_state if seed is None else seed)
+        if seed is not None and (isinstance(seed, (bool, np.bool_)) or not isinstance(seed, Integral)
+                                 or not 0 <= seed <= MAX_SEED):
+            raise InputError(f"seed must be None or an integer in [0, {MAX_SEED}], got {seed!r}")
+        return check_model(self, self.verify_samples if n_samples is None else n_samples,
+                           self.seed_ if seed is None else int(seed))
 
-    def save(self, path):
-        from .model_io import save_model
-        save_model(self, path)
+    def save(self, path, key=None) -> Path:
+        """Write the model to ``path`` (JSON, atomically); with ``key`` (or $SOSDYN_MODEL_KEY)
+        also an HMAC-SHA256 signature. See :func:`save_model`."""
+        return save_model(self, path, key)
 
     @property
     def _vars(self) -> tuple:
@@ -383,3 +464,165 @@ class CDSP:
     @property
     def n_iter_(self) -> int:
         return len(self.history_)
+
+
+def resolve_seed(random_state) -> int:
+    """The integer seed a fit uses: the integer itself, one drawn from a Generator/RandomState
+    (advancing it, as sklearn does), or a fresh one for None."""
+    if isinstance(random_state, np.random.RandomState):
+        return int(random_state.randint(0, MAX_SEED, dtype=np.int64))
+    if random_state is None or isinstance(random_state, np.random.Generator):
+        return int(np.random.default_rng(random_state).integers(0, MAX_SEED))
+    return int(random_state)
+
+
+# ---------------------------------------------------------------------- model files
+_STATE = ("dim_", "goal_", "scale_", "dt_", "units_", "n_components_", "gmr_cost_", "C_", "W_",
+          "field_exps_", "metric_exps_", "mixture_", "certificate_", "history_", "metric_collapse_",
+          "timings_")
+
+
+def save_model(model, path, key=None) -> Path:
+    """Write a fitted CDSP to ``path``: format, version, parameters, learned state, checksum and,
+    with ``key`` (bytes or str; default $SOSDYN_MODEL_KEY), an HMAC-SHA256 signature. Atomic: a
+    failing save leaves any previous file at ``path`` intact. The parameter ``random_state`` is
+    recorded as the integer seed the fit used (``seed_``)."""
+    model._check_fitted()
+    m = model.mixture_
+    state = {k: getattr(model, k) for k in _STATE if k != "mixture_"}
+    state["mixture_"] = {"weights": m.weights, "means": m.means, "covariances": m.covariances}
+    params = dict(model.get_params(), random_state=model.seed_)
+    return write_model_file({"format": FORMAT, "version": VERSION, "params": params, "state": state},
+                            path, key)
+
+
+def load_model(path, key=None) -> CDSP:
+    """Read a model written by :func:`save_model`: every field validated, certificate re-checked.
+
+    With ``key`` (bytes or str; default $SOSDYN_MODEL_KEY) the file must carry a matching HMAC.
+    The certificate is re-checked from the model's own coefficients (Gram matrices, and
+    DEFAULT_SAMPLES sampled states with a fixed seed): the file's ``verify_samples`` and
+    ``random_state`` do not make this check weaker. Every failure is a ModelFileError.
+    """
+    path = Path(path)
+    content = read_model_file(path, key)
+    try:
+        model = _model_from_content(content)
+    except ModelFileError as exc:
+        text = str(exc).rstrip(".")
+        raise ModelFileError(f"{path}: {text}." + ("" if "Try:" in text else f" {REFIT_HINT}")) from None
+    try:
+        report = model.verify(DEFAULT_SAMPLES, LOAD_SEED)
+    except (SosdynError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        raise ModelFileError(f"{path}: its certificate cannot be re-checked from its coefficients "
+                             f"({type(exc).__name__}: {exc}); refusing to load. {REFIT_HINT}") from None
+    if not report.passed:
+        raise ModelFileError(f"{path}: the stored certificate does not check out; refusing to load.\n"
+                             f"{report}\n{REFIT_HINT}")
+    model.verification_, model.certified_ = report, True
+    return model
+
+
+def _model_from_content(content: dict) -> CDSP:
+    """A CDSP (not yet verified) from a file's content; ModelFileError naming the first bad field."""
+    params = need(content, "params", "", dict)
+    expected = set(CDSP().get_params())
+    if set(params) != expected:
+        missing, unknown = sorted(expected - set(params)), sorted(set(params) - expected)
+        raise ModelFileError(f"malformed: params {'lacks ' + str(missing) if missing else ''}"
+                             f"{' and ' if missing and unknown else ''}"
+                             f"{'has unknown ' + str(unknown) if unknown else ''}")
+    model = CDSP(**params)
+    try:
+        model._check_params()
+    except InputError as exc:
+        raise ModelFileError(f"invalid params: {exc}") from None
+    model.seed_ = resolve_seed(model.random_state)
+    st = need(content, "state", "", dict)
+    n = integer(need(st, "dim_", "state"), "state.dim_", 1)
+    K = integer(need(st, "n_components_", "state"), "state.n_components_", 1)
+    if model.n_components != "bic" and K != model.n_components:
+        raise ModelFileError(f"malformed: state.n_components_ = {K} but params.n_components = "
+                             f"{model.n_components}")
+    F, D = model.field_degree, model.metric_degree if model.metric == "learned" else 0
+    fexps = _exponents(st, "field_exps_", n, math.comb(n + F, F) - 1, lambda: field_exponents(n, F))
+    mexps = _exponents(st, "metric_exps_", n, math.comb(n + D, D), lambda: metric_exponents(n, D))
+    model.dim_, model.n_components_, model.field_exps_, model.metric_exps_ = n, K, fexps, mexps
+    model.goal_ = array(need(st, "goal_", "state"), "state.goal_", (n,))
+    model.scale_ = positive(need(st, "scale_", "state"), "state.scale_")
+    model.dt_ = positive(need(st, "dt_", "state"), "state.dt_")
+    model.units_ = short_string(need(st, "units_", "state"), "state.units_")
+    model.gmr_cost_ = float(array(need(st, "gmr_cost_", "state"), "state.gmr_cost_", ()))
+    model.C_ = array(need(st, "C_", "state"), "state.C_", (K, n, len(fexps)))
+    model.W_ = array(need(st, "W_", "state"), "state.W_", (n, n, len(mexps)))
+    if not np.array_equal(model.W_, model.W_.transpose(1, 0, 2)):
+        raise ModelFileError("malformed: state.W_ is not symmetric in its first two axes, so M(z) "
+                             "would not be a symmetric matrix")
+    model.mixture_ = _mixture(need(st, "mixture_", "state", dict), K, n)
+    model.certificate_ = _certificate(need(st, "certificate_", "state", dict), K, 0.5 * model.eps)
+    model.history_ = need(st, "history_", "state", list)
+    if not all(isinstance(row, dict) for row in model.history_):
+        raise ModelFileError("malformed: state.history_ must be a list of objects")
+    model.timings_ = need(st, "timings_", "state", dict)
+    model.metric_collapse_ = need(st, "metric_collapse_", "state")
+    if not (model.metric_collapse_ is None or isinstance(model.metric_collapse_, dict)):
+        raise ModelFileError("malformed: state.metric_collapse_ must be null or an object")
+    unknown = sorted(set(st) - set(_STATE))
+    if unknown:
+        raise ModelFileError(f"malformed: state has unknown fields {unknown}")
+    return model
+
+
+def _exponents(st, name, n, count, expected):
+    """The exponent rows of ``name``: ``count`` distinct rows, the library's monomial set."""
+    exps = array(need(st, name, "state"), f"state.{name}", (count, n), dtype=int)
+    if not np.array_equal(np.unique(exps, axis=0), np.unique(expected(), axis=0)) \
+            or len(np.unique(exps, axis=0)) != count:
+        raise ModelFileError(f"malformed: state.{name} are not the monomials the parameters imply "
+                             f"({count} distinct exponent rows in {n} variables)")
+    return exps
+
+
+def _mixture(mx, K, n) -> PositionMixture:
+    """Weights > 0 summing to 1, means (K, n), covariances (K, n, n) symmetric positive definite."""
+    w = array(need(mx, "weights", "state.mixture_"), "state.mixture_.weights", (K,))
+    means = array(need(mx, "means", "state.mixture_"), "state.mixture_.means", (K, n))
+    cov = array(need(mx, "covariances", "state.mixture_"), "state.mixture_.covariances", (K, n, n))
+    if not (w > 0).all() or abs(w.sum() - 1.0) > 1e-9:
+        raise ModelFileError(f"malformed: state.mixture_.weights must be positive and sum to 1, got "
+                             f"{np.array2string(w, precision=4)} (sum {w.sum():.12g})")
+    for k in range(K):
+        S = cov[k]
+        if np.abs(S - S.T).max() > 1e-12 * max(1.0, np.abs(S).max()):
+            raise ModelFileError(f"malformed: state.mixture_.covariances[{k}] is not symmetric")
+        try:
+            np.linalg.cholesky(S)
+        except np.linalg.LinAlgError:
+            raise ModelFileError(f"malformed: state.mixture_.covariances[{k}] is not positive definite "
+                                 "(no Cholesky factor)") from None
+    return PositionMixture(w, means, cov)
+
+
+def _certificate(cert, K, eps) -> dict:
+    """Status, eps (the fit's eps / 2) and K + 1 constraints of square, finite Gram matrices."""
+    where = "state.certificate_"
+    if not isinstance(need(cert, "status", where), str):
+        raise ModelFileError(f"malformed: {where}.status must be a string")
+    if not math.isclose(positive(need(cert, "eps", where), f"{where}.eps"), eps, rel_tol=1e-12):
+        raise ModelFileError(f"malformed: {where}.eps = {cert['eps']!r}, but the parameters imply "
+                             f"eps / 2 = {eps!r}")
+    cons = need(cert, "constraints", where, list)
+    if len(cons) != K + 1:
+        raise ModelFileError(f"malformed: {where}.constraints has {len(cons)} entries; K + 1 = {K + 1} "
+                             "(M - eps I, then -G_k for each component)")
+    for i, c in enumerate(cons):
+        w = f"{where}.constraints[{i}]"
+        if not isinstance(need(c, "name", w), str):
+            raise ModelFileError(f"malformed: {w}.name must be a string")
+        vars = need(c, "vars", w, list)
+        if not vars or not all(isinstance(v, str) for v in vars) or len(set(vars)) != len(vars):
+            raise ModelFileError(f"malformed: {w}.vars must be distinct variable names")
+        basis = need(c, "basis", w, list)
+        array(basis, f"{w}.basis", (len(basis), len(vars)), dtype=int)
+        array(need(c, "gram", w), f"{w}.gram", (len(basis), len(basis)))
+    return cert

@@ -5,15 +5,22 @@ Two checks, neither reusing the solver's matching matrices:
 1. Gram check -- the polynomials y^T (M - eps I) y and y^T (-G_k) y are rebuilt from the
    model's own coefficients (C, W) and compared with z^T Q z for the stored Gram matrices Q;
    Q must be PSD (min eigenvalue) and the coefficient residual tiny.
-2. Sampled check -- at >= 10^4 states drawn in twice the data box (|z|_inf <= 2), the largest
+2. Sampled check -- at DEFAULT_SAMPLES = 10^4 states (or as many as asked, within
+   [MIN_SAMPLES, MAX_SAMPLES]) drawn in twice the data box (|z|_inf <= 2), the largest
    generalised eigenvalue of (G_k(z), M(z)) over k must be <= 0 and M(z) > 0.
+
+The Gram check is the proof; the sampled check is an independent sanity check of it. Loading a
+model file always runs both with DEFAULT_SAMPLES states, whatever the file's parameters say.
 """
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from numbers import Integral
 
 import numpy as np
 
+from ..errors import InputError
+from ..limits import check_bytes
 from ..poly import PolyMatrix
 from ..sos import SOSProgram
 from ..sos.solution import check_gram
@@ -21,6 +28,16 @@ from .fields import (contraction_matrices, contraction_polymatrix, eval_metric, 
                      numeric_fields, numeric_metric)
 
 SAMPLED_TOL = 1e-8
+DEFAULT_SAMPLES, MIN_SAMPLES, MAX_SAMPLES = 10_000, 100, 10**6   # states of the sampled check
+
+
+def check_sample_count(value, name: str = "n_samples") -> int:
+    """``value`` as the number of states of the sampled check; InputError outside the range."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, Integral) \
+            or not MIN_SAMPLES <= value <= MAX_SAMPLES:
+        raise InputError(f"{name} must be an integer in [{MIN_SAMPLES}, {MAX_SAMPLES}] (states of the "
+                         f"sampled certificate check), got {value!r}. Try: the default {DEFAULT_SAMPLES}.")
+    return int(value)
 
 
 @dataclass
@@ -47,10 +64,14 @@ class CertificateReport:
 
 
 def extract_certificate(solution, eps: float) -> dict:
-    """Plain-data certificate (bases and Gram matrices) of a certification Solution."""
+    """Plain-data certificate (bases and Gram matrices) of a certification Solution.
+
+    The solver's numbers are taken as they are (``checked=False``): :func:`check_model` is the
+    independent check that decides whether they certify the model."""
     cons = []
     for con in solution.program.sos_constraints:
-        Q = con.gram_matrix(solution) if np.isfinite(solution.x).all() else np.full((len(con.basis),) * 2, np.nan)
+        finite = np.isfinite(solution.x).all()
+        Q = con.gram_matrix(solution, checked=False) if finite else np.full((len(con.basis),) * 2, np.nan)
         cons.append({"name": con.name, "vars": list(con.basis.vars), "basis": con.basis.exps.tolist(),
                      "gram": Q.tolist()})
     return {"status": solution.status, "eps": eps, "constraints": cons}
@@ -67,12 +88,17 @@ def certificate_matrices(model):
 
 
 def check_model(model, n_samples: int, seed: int) -> CertificateReport:
+    """Both checks on ``model``; the sampled one at ``n_samples`` states drawn with ``seed``."""
+    n_samples = check_sample_count(n_samples)
+    K, n = model.C_.shape[:2]
+    m = model.C_.shape[2] + model.W_.shape[2]
+    # G, J, M repeated, J^T M, its transpose, dM[f], the whitened S: ~8 (K, n, n) blocks per state
+    check_bytes(8.0 * n_samples * (8 * K * n * n + n**3 + 2 * n * m), "the sampled certificate check",
+                "fewer samples (n_samples)")
     cert = model.certificate_
     checks = []
     mats = certificate_matrices(model)
-    if len(mats) != len(cert["constraints"]):
-        checks = []
-    else:
+    if len(mats) == len(cert["constraints"]):
         for P, c in zip(mats, cert["constraints"]):
             q, _ = SOSProgram._matrix_form(P)
             vars = tuple(c["vars"])

@@ -63,12 +63,47 @@ class PositionMixture:
         return self._cache
 
     def log_joint(self, X: np.ndarray) -> np.ndarray:
-        """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K)."""
+        """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K).
+
+        Far from the data the quadratic form overflows and an entry is -inf (NaN when
+        ``x - mu_k`` itself overflows); :meth:`responsibilities` handles both.
+        """
         inv, lognorm = self._factors()
-        z = np.einsum("kij,mkj->mki", inv, X[:, None, :] - self.means[None])
-        return lognorm[None, :] - 0.5 * np.einsum("mki,mki->mk", z, z)
+        with np.errstate(over="ignore", invalid="ignore"):
+            z = np.einsum("kij,mkj->mki", inv, X[:, None, :] - self.means[None])
+            return lognorm[None, :] - 0.5 * np.einsum("mki,mki->mk", z, z)
+
+    def log_mahalanobis(self, X: np.ndarray) -> np.ndarray:
+        """log ||S_k^-1/2 (x - mu_k)|| at the rows of X, shape (m, K), finite for any finite x.
+
+        Each row is divided by c = max(1, max_i |x_i|) before the triangular solve, so
+        nothing overflows: log d_k(x) = log c + 1/2 log ||L_k^-1 (x/c - mu_k/c)||^2.
+        """
+        inv, _ = self._factors()
+        c = np.maximum(np.abs(X).max(axis=1), 1.0)[:, None, None]
+        z = np.einsum("kij,mkj->mki", inv, X[:, None, :] / c - self.means[None] / c)
+        with np.errstate(divide="ignore"):
+            return np.log(c[:, :, 0]) + 0.5 * np.log(np.einsum("mki,mki->mk", z, z))
 
     def responsibilities(self, X: np.ndarray) -> np.ndarray:
-        """h_k(x), shape (m, K), rows sum to one (log-space, finite far from the data)."""
+        """h_k(x) = pi_k N(x; mu_k, S_k) / sum_i pi_i N(x; mu_i, S_i), shape (m, K), rows sum to one.
+
+        Computed in log-space: h = exp(l - logsumexp(l)), l_k = log pi_k + log N(x; mu_k, S_k).
+        Where every l_k underflows (the quadratic forms overflow float, ||x|| ~ 1e154 and up)
+        h is one-hot on the component nearest in Mahalanobis distance (:meth:`log_mahalanobis`):
+        the limit of the softmax as the quadratic terms dominate log pi_k and the normalisers.
+        Raises :class:`InputError` for rows of X that are NaN or inf.
+        """
+        X = np.asarray(X, dtype=float)
+        bad = np.flatnonzero(~np.isfinite(X).all(axis=1)) if X.ndim == 2 else []
+        if X.ndim != 2 or X.shape[1] != self.means.shape[1] or len(bad):
+            what = f"row {bad[0]} = {X[bad[0]]} is not finite" if len(bad) else f"has shape {X.shape}"
+            raise InputError(f"responsibilities: X {what}; pass finite states of shape "
+                             f"(m, {self.means.shape[1]}).")
         lj = self.log_joint(X)
-        return np.exp(lj - logsumexp(lj, axis=1, keepdims=True))
+        far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
+        lj[far] = 0.0
+        h = np.exp(lj - logsumexp(lj, axis=1, keepdims=True))
+        if far.any():
+            h[far] = np.eye(self.n_components)[np.argmin(self.log_mahalanobis(X[far]), axis=1)]
+        return h

@@ -1,7 +1,9 @@
 """Matrices of polynomials: M(x), Jacobians, and the contraction operator's building blocks.
 
 A :class:`PolyMatrix` is a 2-D array of :class:`Polynomial` entries (an object array), so
-numeric matrices combine with it by the usual operators: ``A.T @ M + M @ A``.
+numeric matrices combine with it by the usual operators: ``A.T @ M + M @ A``. Entries and
+numeric operands obey the polynomial layer's rules (:mod:`.polynomial`: real, finite,
+|c| <= 1e150), and so do evaluation points.
 """
 from __future__ import annotations
 
@@ -10,14 +12,14 @@ from numbers import Number
 import numpy as np
 
 from ..errors import NotSymmetricError, PolynomialError
-from .polynomial import Polynomial, variable_names
+from .polynomial import Polynomial, finite_points, real_array, variable_names
 
 
 def _entry(value, vars=()) -> Polynomial:
     if isinstance(value, Polynomial):
         return value
     if isinstance(value, Number) or (isinstance(value, np.ndarray) and value.ndim == 0):
-        return Polynomial.constant(float(value), vars)
+        return Polynomial.constant(real_array(value, "a matrix entry"), vars)
     raise PolynomialError(f"matrix entry {value!r} is neither a number nor a Polynomial")
 
 
@@ -87,7 +89,7 @@ class PolyMatrix:
         arr = np.asarray(other)
         if arr.dtype == object:
             return arr
-        return arr.astype(float)
+        return real_array(arr, "a matrix operand")
 
     def _check_same_shape(self, other):
         if isinstance(other, np.ndarray) and other.ndim and other.shape != self.shape:
@@ -155,7 +157,7 @@ class PolyMatrix:
     def __call__(self, X, vars) -> np.ndarray:
         """Values at the rows of X: array of shape (N, rows, cols)."""
         vars = variable_names(vars)
-        X = np.asarray(X, dtype=float).reshape(-1, len(vars))
+        X = finite_points(X).reshape(-1, len(vars))
         out = np.empty((X.shape[0],) + self.shape)
         for (i, j), p in np.ndenumerate(self.entries):
             out[:, i, j] = p(X, vars)

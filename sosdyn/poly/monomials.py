@@ -2,14 +2,21 @@
 
 A polynomial in variables (v_1, ..., v_n) stores its monomials as an integer array E of
 shape (m, n); row i is the exponent vector alpha_i of the monomial v^alpha_i.
+
+Total degrees are at most ``MAX_DEGREE`` = 1000: 2^1000 ~ 1e301, so a monomial of higher
+degree overflows float64 already at |v| = 2 and its values are meaningless in floating point.
 """
 from __future__ import annotations
 
-import itertools
+import math
 
 import numpy as np
 
+from ..errors import PolynomialError
+from ..limits import check_bytes
+
 _MAX_KEY = 2**62
+MAX_DEGREE = 1000
 
 
 def monomial_keys(exps: np.ndarray, base: int | None = None) -> np.ndarray | None:
@@ -61,18 +68,30 @@ def monomials_up_to(n: int, degree: int, min_degree: int = 0,
     """All exponent vectors in n variables with min_degree <= |alpha| <= degree.
 
     ``max_per_var`` optionally caps each variable's exponent. Rows are ordered by total
-    degree, then lexicographically (graded order).
+    degree, then lexicographically (graded order). There are at most C(n + degree, n) of
+    them; their size is checked against ``sosdyn.limits`` before they are built.
     """
     if degree < 0 or degree < min_degree:
         return np.zeros((0, n), dtype=np.int64)
+    if degree > MAX_DEGREE:
+        raise PolynomialError(f"degree {degree} is above {MAX_DEGREE} (see sosdyn.poly.monomials). "
+                              "Try: a lower degree")
     if n == 0:
         return np.zeros((1 if min_degree <= 0 else 0, 0), dtype=np.int64)
+    check_bytes(3 * 8.0 * n * math.comb(n + degree, n),           # the rows, sort keys, sorted copy
+                f"the monomials of degree <= {degree} in {n} variables",
+                "lower the degree or the number of variables")
     caps = np.full(n, degree) if max_per_var is None else np.minimum(max_per_var, degree)
-    rows = [a for a in itertools.product(*(range(int(c) + 1) for c in caps))
-            if min_degree <= sum(a) <= degree]
-    if not rows:
+    arr, used = np.zeros((1, 0), dtype=np.int64), np.zeros(1, dtype=np.int64)
+    for cap in caps:             # row r of the prefix gets exponents 0..min(cap, degree - used_r)
+        counts = np.maximum(np.minimum(cap, degree - used) + 1, 0)
+        starts = np.cumsum(counts) - counts
+        e = np.arange(counts.sum()) - np.repeat(starts, counts)
+        arr = np.column_stack([np.repeat(arr, counts, axis=0), e])
+        used = np.repeat(used, counts) + e
+    arr = arr[used >= min_degree]
+    if not arr.shape[0]:
         return np.zeros((0, n), dtype=np.int64)
-    arr = np.array(rows, dtype=np.int64).reshape(-1, n)
     order = np.lexsort(tuple(-arr[:, i] for i in range(n - 1, -1, -1)) + (arr.sum(1),))
     return arr[order]
 

@@ -10,6 +10,19 @@ A :class:`Polynomial` p(v) = sum_i c_i(d) v^alpha_i stores
 
 A numeric polynomial has k = 0. Products are allowed when at most one factor depends on
 decision variables, so every result stays affine in d (the form an SOS program needs).
+
+Admissible data (checked whenever a polynomial is made, so also after every operation):
+
+* coefficients are real and finite with |c| <= ``MAX_COEFFICIENT`` = 1e150, so the product
+  of two admissible coefficients is finite (1e300 < 1.8e308, the float64 maximum); NaN, inf,
+  complex numbers and larger magnitudes raise :class:`~sosdyn.errors.PolynomialError` (an
+  operation whose result breaks the rule -- an overflow -- raises too);
+* exponents are non-negative integers and the total degree is <= ``MAX_DEGREE``
+  (:mod:`.monomials`), checked before a power is expanded (``canonical=True`` marks exponent
+  rows already in canonical form, made by sosdyn itself: they are not checked again);
+* the arrays of a product, and of combining like terms, fit ``sosdyn.limits`` (max_bytes),
+  checked before they are allocated;
+* evaluation points are real and finite.
 """
 from __future__ import annotations
 
@@ -18,11 +31,72 @@ from numbers import Number
 import numpy as np
 
 from ..errors import PolynomialError
-from .monomials import match_rows, sum_rows
+from ..limits import check_bytes
+from .monomials import MAX_DEGREE, match_rows, sum_rows
+
+MAX_COEFFICIENT = 1e150
+_RESCALE = ("rescale the variables (x = s*u turns c*x^k into c*s^k*u^k) or divide the polynomial "
+            "by its largest coefficient, so that the numbers are of moderate size")
+_SIZE_HINT = "lower the degrees or the number of variables, or split the expression into smaller parts"
 
 
-def _as_array(values) -> np.ndarray:
-    return np.asarray(values, dtype=float)
+def real_array(values, what: str = "coefficients") -> np.ndarray:
+    """``values`` as a float array; :class:`PolynomialError` for complex or non-numeric entries."""
+    arr = np.asarray(values)
+    if arr.dtype == np.float64:
+        return arr
+    if arr.dtype.kind == "c" or (arr.dtype == object and any(isinstance(v, complex) for v in arr.flat)):
+        raise PolynomialError(f"{what} are complex; sosdyn polynomials have real coefficients and "
+                              "are evaluated at real points. Try: pass real numbers (e.g. np.real), "
+                              "or split real and imaginary parts into two polynomials")
+    try:
+        return arr.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise PolynomialError(f"{what} must be real numbers: {exc}") from None
+
+
+def finite_points(X, what: str = "evaluation points") -> np.ndarray:
+    """Real, finite evaluation points as a float array (PolynomialError otherwise)."""
+    X = real_array(X, what)
+    if not np.isfinite(X).all():
+        raise PolynomialError(f"{what} contain NaN or inf (at flat index "
+                              f"{int(np.flatnonzero(~np.isfinite(X))[0])}). Try: evaluate at finite points")
+    return X
+
+
+def check_coefficients(coef: np.ndarray) -> None:
+    """Raise PolynomialError unless every entry is finite with |c| <= MAX_COEFFICIENT."""
+    if not coef.size or (coef.max() <= MAX_COEFFICIENT and coef.min() >= -MAX_COEFFICIENT):
+        return
+    if np.isnan(coef).any():
+        raise PolynomialError("a coefficient is NaN: a polynomial needs finite numbers. "
+                              "Try: remove NaN from the input data")
+    if np.isinf(coef).any():
+        raise PolynomialError("a coefficient is infinite (an inf in the input, or an overflow in "
+                              f"arithmetic). Try: {_RESCALE}")
+    worst = float(coef.flat[np.abs(coef).argmax()])
+    raise PolynomialError(f"coefficient {worst:.3g} is above {MAX_COEFFICIENT:.0e} in magnitude: "
+                          f"numbers this large make any computation with it meaningless in double "
+                          f"precision. Try: {_RESCALE}")
+
+
+def _check_degree(degree: int, what: str) -> None:
+    if degree > MAX_DEGREE:
+        raise PolynomialError(f"{what} has degree {degree}, above {MAX_DEGREE} (its monomials "
+                              "overflow double precision already at |x| = 2). Try: a lower degree")
+
+
+def check_terms_size(nterms: int, nvars: int, ncoef: int, what: str) -> None:
+    """Check against ``sosdyn.limits`` the memory of a polynomial of ``nterms`` terms.
+
+    16 bytes per stored number: the exponent (nterms x nvars) and coefficient
+    (nterms x ncoef) arrays, and their sorted copies made while combining like terms.
+    """
+    check_bytes(16.0 * nterms * (nvars + ncoef), f"{what} ({nterms} terms before combining)", _SIZE_HINT)
+
+
+def _scalar(value) -> float:
+    return float(real_array(value, "a scalar operand"))
 
 
 class Polynomial:
@@ -33,10 +107,15 @@ class Polynomial:
 
     def __init__(self, vars, exps, coef, dec=None, *, canonical: bool = False):
         self.vars = tuple(vars)
-        coef = _as_array(coef)
+        coef = real_array(coef)
         if coef.ndim == 1:
             coef = coef[:, None]
-        exps = np.asarray(exps, dtype=np.int64)
+        exps = np.asarray(exps)
+        if exps.dtype != np.int64:
+            if exps.size and exps.dtype.kind not in "iu" and not (
+                    exps.dtype.kind == "f" and np.isfinite(exps).all() and (exps == np.round(exps)).all()):
+                raise PolynomialError(f"exponents must be non-negative integers, got {exps.ravel()[:5]}")
+            exps = exps.astype(np.int64)
         exps = exps.reshape(coef.shape[0], len(self.vars)) if exps.size or not self.vars \
             else exps.reshape(-1, len(self.vars))
         dec = np.zeros(0, dtype=np.int64) if dec is None else np.asarray(dec, dtype=np.int64)
@@ -44,8 +123,14 @@ class Polynomial:
             raise PolynomialError(
                 f"coefficient array of shape {coef.shape} does not fit {exps.shape[0]} "
                 f"monomials and {dec.size} decision variables")
-        if (exps < 0).any():
-            raise PolynomialError("negative exponents: only polynomials are supported")
+        if not canonical and exps.shape[0] > 1:
+            check_terms_size(exps.shape[0], exps.shape[1], coef.shape[1], "combining like terms")
+        if not canonical and exps.size:
+            if exps.min() < 0:
+                raise PolynomialError("negative exponents: only polynomials are supported")
+            if int(exps.max()) * exps.shape[1] > MAX_DEGREE:     # else no row can exceed it
+                _check_degree(int(exps.sum(axis=1).max()), "a polynomial")
+        check_coefficients(coef)
         if not canonical:
             if exps.shape[0] > 1:
                 exps, coef = sum_rows(exps, coef)
@@ -62,14 +147,14 @@ class Polynomial:
     @classmethod
     def constant(cls, value: float, vars=()) -> "Polynomial":
         """The constant polynomial ``value``."""
-        return cls(vars, np.zeros((1, len(vars)), dtype=np.int64), [float(value)])
+        return cls(vars, np.zeros((1, len(vars)), dtype=np.int64), [_scalar(value)])
 
     @classmethod
     def affine(cls, dec_ids, coefs, const: float = 0.0, vars=()) -> "Polynomial":
         """The degree-0 polynomial ``const + sum_j coefs[j] * d[dec_ids[j]]``."""
         dec_ids = np.asarray(dec_ids, dtype=np.int64)
         order = np.argsort(dec_ids)
-        row = np.r_[const, _as_array(coefs)[order]][None, :]
+        row = np.r_[_scalar(const), real_array(coefs)[order]][None, :]
         return cls(vars, np.zeros((1, len(vars)), dtype=np.int64), row, dec_ids[order])
 
     # ------------------------------------------------------------------ properties
@@ -120,6 +205,7 @@ class Polynomial:
         dec = np.asarray(dec, dtype=np.int64)
         if dec.size == self.dec.size and np.array_equal(dec, self.dec):
             return self
+        check_terms_size(self.nterms, 0, 1 + dec.size, "aligning decision variables")
         coef = np.zeros((self.nterms, 1 + dec.size))
         coef[:, 0] = self.coef[:, 0]
         coef[:, 1 + np.searchsorted(dec, self.dec)] = self.coef[:, 1:]
@@ -140,7 +226,7 @@ class Polynomial:
         if isinstance(other, Polynomial):
             return other
         if isinstance(other, Number) or (isinstance(other, np.ndarray) and other.ndim == 0):
-            return Polynomial.constant(float(other), self.vars)
+            return Polynomial.constant(other, self.vars)
         return NotImplemented
 
     # ------------------------------------------------------------------ arithmetic
@@ -170,7 +256,7 @@ class Polynomial:
 
     def __mul__(self, other):
         if isinstance(other, Number) or (isinstance(other, np.ndarray) and other.ndim == 0):
-            return Polynomial(self.vars, self.exps, self.coef * float(other), self.dec)
+            return Polynomial(self.vars, self.exps, self.coef * _scalar(other), self.dec)
         if not isinstance(other, Polynomial):
             return NotImplemented
         if not self.is_numeric and not other.is_numeric:
@@ -181,6 +267,7 @@ class Polynomial:
         if a.vars != b.vars:
             vars = a.vars + tuple(v for v in b.vars if v not in a.vars)
             a, b = a.with_vars(vars), b.with_vars(vars)
+        check_terms_size(a.nterms * b.nterms, a.nvars, a.coef.shape[1], "a product")
         exps = (a.exps[:, None, :] + b.exps[None, :, :]).reshape(a.nterms * b.nterms, a.nvars)
         coef = (a.coef[:, None, :] * b.coef[None, :, :1]).reshape(-1, a.coef.shape[1])
         return Polynomial(a.vars, exps, coef, a.dec)
@@ -188,13 +275,17 @@ class Polynomial:
     __rmul__ = __mul__
 
     def __truediv__(self, other):
-        if isinstance(other, Number):
-            return self * (1.0 / float(other))
+        if isinstance(other, Number) or (isinstance(other, np.ndarray) and other.ndim == 0):
+            d = _scalar(other)
+            if d == 0.0:
+                raise PolynomialError("division of a polynomial by zero")
+            return self * (1.0 / d)
         return NotImplemented
 
     def __pow__(self, k: int):
         if not isinstance(k, (int, np.integer)) or k < 0:
             raise PolynomialError(f"power must be a non-negative integer, got {k!r}")
+        _check_degree(max(self.degree, 0) * int(k), f"a power p**{k}")
         result, base = Polynomial.constant(1.0, self.vars), self
         while k:
             if k & 1:
@@ -229,7 +320,7 @@ class Polynomial:
 
     # ------------------------------------------------------------------ evaluation
     def _points(self, X, vars) -> np.ndarray:
-        X = _as_array(X)
+        X = finite_points(X)
         vars = self.vars if vars is None else tuple(vars)
         X = X.reshape(-1, len(vars)) if X.ndim <= 1 else X
         if X.shape[1] != len(vars):
@@ -266,7 +357,7 @@ class Polynomial:
     def assign(self, dec_ids, values) -> "Polynomial":
         """Substitute numbers for the decision variables ``dec_ids`` (others stay)."""
         dec_ids = np.asarray(dec_ids, dtype=np.int64)
-        values = _as_array(values)
+        values = real_array(values, "decision values")
         order = np.argsort(dec_ids)
         dec_ids, values = dec_ids[order], values[order]
         hit = np.isin(self.dec, dec_ids)

@@ -8,6 +8,8 @@ from a ``results.json``.
 Results schema
 --------------
 Every key is optional: a missing (or unreadable) section is shown as "not run".
+A results *file* (:func:`load_results`) must hold ``meta`` and ``findings`` and no keys but
+those below, each a JSON value of the listed kind or null (so a model file or ``{}`` is refused).
 Lengths are in the demonstrations' unit (mm for LASA), times in seconds. A *stat* is
 ``{"mean": float, "std": float, "per_demo": [float, ...]}`` (``per_demo`` optional).
 
@@ -43,6 +45,7 @@ from __future__ import annotations
 import base64
 import json
 import math
+import os
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -51,8 +54,11 @@ import jinja2
 from markupsafe import escape
 
 from ..errors import InputError, SosdynError
+from ..limits import check_count, check_json_depth, get_limits
 
-__all__ = ["build_report", "load_results", "render_html", "render_pdf"]
+__all__ = ["REPORT_FILES", "build_report", "check_results", "load_results", "render_html", "render_pdf"]
+
+REPORT_FILES = {"html": "index.html", "pdf": "report.pdf"}     # written into the output folder
 
 _MAX_INLINE_SVG = 2_000_000      # bytes; larger SVGs (dense streamplots) go in as PNG
 _MIME_TYPES = {"svg": "image/svg+xml", "png": "image/png"}      # in order of preference
@@ -253,6 +259,15 @@ _SECTIONS: dict[str, Callable] = {
     "robustness": _robustness, "certificates": _certificates, "timings": _timings,
     "meta": _environment, "bench": _bench,
 }
+_JSON_KINDS = {"object": Mapping, "array": list, "string": str, "boolean": bool, "number": (int, float),
+               "null": type(None)}
+# JSON kind of each top-level value of a results file (null also allowed); the first two are required.
+_SECTION_KINDS = {"meta": "object", "findings": "array", "methods": "object", "accuracy": "object",
+                  "robustness": "object", "certificates": "object", "timings": "object",
+                  "figures": "object", "bench": "string"}
+_REQUIRED_SECTIONS = ("meta", "findings")
+_RESULTS_HINT = ("pass the results.json written by `python -m problems run` (or `make run`), "
+                 "e.g. reports/results.json")
 
 
 # --------------------------------------------------------------------------- public
@@ -264,18 +279,52 @@ def _environment_jinja() -> jinja2.Environment:
     return env
 
 
+def _json_kind(value) -> str:
+    return next(kind for kind, types in _JSON_KINDS.items() if isinstance(value, types))
+
+
+def check_results(results, source: str = "results") -> dict:
+    """``results`` if it is a results dict (module docstring), else InputError naming every
+    missing, unexpected or mistyped top-level key."""
+    if not isinstance(results, Mapping):
+        raise InputError(f"{source} holds a JSON {_json_kind(results)}, expected a JSON object. "
+                         f"Try: {_RESULTS_HINT}.")
+    problems = []
+    missing = [k for k in _REQUIRED_SECTIONS if results.get(k) is None]
+    if missing:
+        problems.append(f"no {' or '.join(map(repr, missing))}")
+    unknown = sorted(set(results) - set(_SECTION_KINDS))
+    if unknown:
+        problems.append(f"unexpected key(s) {', '.join(map(repr, unknown[:8]))}{' ...' if len(unknown) > 8 else ''}")
+    for key, kind in _SECTION_KINDS.items():
+        value = results.get(key)
+        if value is not None and not isinstance(value, _JSON_KINDS[kind]):
+            problems.append(f"{key!r} should be a JSON {kind}, not {_json_kind(value)}")
+    if isinstance(results.get("findings"), list) and not all(isinstance(f, Mapping) for f in results["findings"]):
+        problems.append("'findings' holds non-objects")
+    if problems:
+        raise InputError(f"{source} is not a sosdyn results file ({'; '.join(problems)}). Try: {_RESULTS_HINT}.")
+    return dict(results)
+
+
 def load_results(path: str | Path) -> dict:
-    """Read a results JSON; a missing file raises FileNotFoundError, bad JSON InputError."""
+    """Read and check a results JSON (:func:`check_results`): a missing file raises
+    FileNotFoundError; a file over ``max_file_bytes`` or nested deeper than ``max_json_depth``
+    ResourceLimitError (before parsing); bad JSON or a wrong schema InputError."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"results file not found: {path}")
+    size_of = f"the size of {path} in bytes"
+    with path.open("rb") as file:
+        check_count(os.fstat(file.fileno()).st_size, "max_file_bytes", size_of, _RESULTS_HINT)
+        data = file.read(get_limits().max_file_bytes + 1)      # never more, even if it grows
+    check_count(len(data), "max_file_bytes", size_of, _RESULTS_HINT)
+    check_json_depth(data, str(path), _RESULTS_HINT)
     try:
-        results = json.loads(path.read_text(encoding="utf-8"))
+        results = json.loads(data.decode("utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path} is not valid JSON ({exc}); re-run the experiment that writes it.") from exc
-    if not isinstance(results, dict):
-        raise InputError(f"{path} holds a {type(results).__name__}, expected a JSON object.")
-    return results
+        raise InputError(f"{path} is not valid JSON ({exc}). Try: re-run the experiment that writes it.") from exc
+    return check_results(results, str(path))
 
 
 def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path | None = None) -> Path:
@@ -300,7 +349,7 @@ def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path |
     context["figures"] = _figures(results.get("figures") or {}, Path(base_dir or out_dir))
     context["meta_raw"] = results.get("meta") or {}
     html = _environment_jinja().get_template("report.html.j2").render(**context)
-    path = out_dir / "index.html"
+    path = out_dir / REPORT_FILES["html"]
     path.write_text(html, encoding="utf-8")
     return path
 
@@ -333,4 +382,4 @@ def build_report(results_json_path: str | Path, out_dir: str | Path) -> dict[str
     results_json_path = Path(results_json_path)
     results = load_results(results_json_path)
     html = render_html(results, out_dir, base_dir=results_json_path.parent)
-    return {"html": html, "pdf": render_pdf(html, Path(out_dir) / "report.pdf")}
+    return {"html": html, "pdf": render_pdf(html, Path(out_dir) / REPORT_FILES["pdf"])}

@@ -6,6 +6,14 @@
 x stacks every decision id of the program (free scalars and Gram svec entries) in
 creation order. With ``scale`` each row of A_eq / A_ge is divided by its largest entry,
 so coefficients of very different magnitude reach the solver equilibrated.
+
+Admissible data (:func:`check_data`, before any solver sees it): every equality row's
+right-hand side, relative to the row's largest coefficient, is at most ``MAX_RHS`` = 1e8,
+and the objective is finite. Interior-point solvers work to absolute tolerances near 1e-8
+on data of order 1; measured with Clarabel, right-hand sides of 3e9 relative to their rows
+already give wrong answers (a feasible x^4 + 3e9 x^2 + 1 - g reported infeasible) and 1e7
+to 1e9 give solver errors on some problems, while the learner's and the known-answer
+problems stay below 4e4. Larger numbers mean the variables are badly scaled.
 """
 from __future__ import annotations
 
@@ -18,6 +26,8 @@ import scipy.sparse as sp
 from ..errors import InputError, PolynomialError
 from ..poly import PolyMatrix, Polynomial
 from .objective import QuadraticForm, affine_rows, is_cvxpy
+
+MAX_RHS = 1e8
 
 
 @dataclass
@@ -35,6 +45,8 @@ class ConicData:
     scaled: bool
     infeasible_reason: str | None
     seconds: float
+    rhs_ratio: float = 0.0      # largest |b_i| / max_j |A_ij| over the equality rows
+    rhs_source: str = ""        # the constraint that owns that row
 
     @property
     def n(self) -> int:
@@ -57,9 +69,11 @@ def positions(ids: np.ndarray, wanted: np.ndarray, what: str = "expression") -> 
 
 
 def _stack(ids, parts, kind, scale):
+    """Rows of one kind stacked: (A, b, largest |b_i| / max_j |A_ij|, its constraint's name)."""
     parts = [p for p in parts if p.kind == kind]
-    n_rows, r, c, v, rhs = 0, [], [], [], []
+    n_rows, r, c, v, rhs, starts = 0, [], [], [], [], []
     for p in parts:
+        starts.append(n_rows)
         r.append(p.rows + n_rows)
         c.append(positions(ids, p.ids, f"constraint {p.name!r}"))
         v.append(p.vals)
@@ -68,16 +82,24 @@ def _stack(ids, parts, kind, scale):
     cat = lambda xs, dt: np.concatenate(xs) if xs else np.zeros(0, dtype=dt)  # noqa: E731
     A = sp.csr_matrix((cat(v, float), (cat(r, np.int64), cat(c, np.int64))), shape=(n_rows, ids.size))
     b = cat(rhs, float)
+    owner = np.arange(n_rows)
     empty = np.diff(A.indptr) == 0
     if kind == "eq":      # 0 = 0 rows carry nothing; 0 = b != 0 rows are caught as infeasible
         keep = ~(empty & (b == 0))
-        A, b = A[keep], b[keep]
+        A, b, owner = A[keep], b[keep], owner[keep]
+    norms = abs(A).max(axis=1).toarray().ravel() if A.nnz else np.zeros(A.shape[0])
+    has = norms > 0
+    ratio, source = 0.0, ""
+    if has.any():
+        rel = np.abs(b[has]) / norms[has]
+        worst = int(np.argmax(np.where(np.isnan(rel), np.inf, rel)))
+        ratio = float(rel[worst])
+        source = parts[int(np.searchsorted(starts, owner[has][worst], side="right")) - 1].name
     if scale and A.nnz:
-        norms = np.maximum(abs(A).max(axis=1).toarray().ravel(), 1e-300)
-        norms[np.diff(A.indptr) == 0] = 1.0
+        norms = np.where(has, norms, 1.0)
         A = sp.diags(1.0 / norms) @ A
         b = b / norms
-    return A.tocsc(), b
+    return A.tocsc(), b, ratio, source
 
 
 def _objective(program, ids):
@@ -104,13 +126,64 @@ def assemble(program, scale: bool = True) -> ConicData:
     t0 = time.perf_counter()
     ids = program.ids
     rows = [c.rows for c in program.sos_constraints] + list(program.linear)
-    A_eq, b_eq = _stack(ids, rows, "eq", scale)
-    A_ge, b_ge = _stack(ids, rows, "ge", scale)
+    A_eq, b_eq, ratio, source = _stack(ids, rows, "eq", scale)
+    A_ge, b_ge, _, _ = _stack(ids, rows, "ge", scale)
     psd = [(positions(ids, b.ids), b.size) for b in program.psd_blocks]
     P, q, c, sense = _objective(program, ids)
     reasons = [c.infeasible_reason for c in program.sos_constraints if c.infeasible_reason]
     return ConicData(ids, A_eq, b_eq, A_ge, b_ge, psd, P, q, c, sense, scale,
-                     reasons[0] if reasons else None, time.perf_counter() - t0)
+                     reasons[0] if reasons else None, time.perf_counter() - t0, ratio, source)
+
+
+def check_data(data: ConicData) -> None:
+    """Refuse conic data no solver can resolve in double precision (module docstring)."""
+    if not data.rhs_ratio <= MAX_RHS:
+        raise InputError(
+            f"constraint {data.rhs_source!r} has a coefficient equation whose constant term is "
+            f"{data.rhs_ratio:.3g} times its largest decision coefficient (above {MAX_RHS:.0e}): a "
+            "solver cannot resolve numbers of such different size in double precision and would "
+            "report a wrong status. Try: rescale the variables (x = s*u, so that c*x^k becomes "
+            "c*s^k*u^k with moderate c*s^k), or divide the polynomial by its largest coefficient")
+    finite = np.isfinite(data.q).all() and np.isfinite(data.c) and (
+        data.P is None or np.isfinite(data.P.data).all())
+    if not finite:
+        raise InputError("the objective has NaN or infinite coefficients. Try: finite numbers in "
+                         "the objective")
+
+
+def coupled_psd_sizes(data: ConicData) -> np.ndarray:
+    """Size D of each group of PSD blocks coupled through shared equality rows.
+
+    Blocks that appear in a common equality row (a Gram block and the multipliers of the
+    same constraint) are grouped; D = (sum of their svec sizes) + (equality rows they touch).
+    A solver's KKT factor over one group is at most dense of order D.
+    """
+    nb, m = len(data.psd), data.A_eq.shape[0]
+    if not nb:
+        return np.zeros(0)
+    owner = np.full(data.n, nb, dtype=np.int64)
+    svec = np.zeros(nb)
+    for k, (pos, _) in enumerate(data.psd):
+        owner[pos] = k
+        svec[k] = pos.size
+    A = data.A_eq.tocsc()
+    blk = np.repeat(owner, np.diff(A.indptr))           # block of every nonzero's column
+    hit = blk < nb
+    rows, blk = A.indices[hit], blk[hit]
+    label = np.arange(nb + 1)
+    while True:                   # label propagation: every block takes the least label it meets
+        row_label = np.full(m, nb)
+        np.minimum.at(row_label, rows, label[blk])
+        new = label.copy()
+        np.minimum.at(new, blk, row_label[rows])
+        new = new[new]
+        if np.array_equal(new, label):
+            break
+        label = new
+    touched = row_label < nb
+    size = np.bincount(label[:nb], weights=svec, minlength=nb + 1)
+    size += np.bincount(row_label[touched], minlength=nb + 1)
+    return size[:nb][np.bincount(label[:nb], minlength=nb + 1)[:nb] > 0]
 
 
 def cvxpy_block_vars(program) -> list:

@@ -4,12 +4,18 @@ If p = sum_i q_i^2 then every monomial x^a of every q_i satisfies 2a in N(p), th
 hull of p's exponents (Reznick 1978). We keep the half-degree candidates a with
 ceil(min deg/2) <= |a| <= floor(max deg/2) and 2a in N(p); the hull test works in the
 affine hull of the support (a homogeneous p has a lower-dimensional Newton polytope).
+
+The basis is checked against ``sosdyn.limits`` (max_bytes) before it is returned: coefficient
+matching over a basis of b monomials builds arrays over all s = b(b+1)/2 pairs
+(:func:`gram_matching_bytes`), so a basis too large to match is refused before the Gram
+matching allocates anything.
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
+from ..limits import check_bytes
 from ..poly.monomials import monomials_up_to
 
 
@@ -38,6 +44,16 @@ def in_hull(points: np.ndarray, support: np.ndarray, tol: float = 1e-9) -> np.nd
     return ~off_plane & inside
 
 
+def gram_matching_bytes(b: int, n: int) -> float:
+    """Bytes of matching coefficients over a Gram basis of b monomials in n variables.
+
+    s = b(b+1)/2 pairs: their exponent sums (s x n int64) and a sorted copy, plus about
+    twelve length-s arrays (svec pairs, sort keys, order, inverse, weights, the sparse
+    map's indices and values, the matching rows).
+    """
+    return 8.0 * b * (b + 1) / 2 * (2 * n + 12)
+
+
 def newton_basis(support: np.ndarray) -> np.ndarray:
     """Half-degree monomials whose doubles lie in the Newton polytope of ``support``.
 
@@ -53,4 +69,9 @@ def newton_basis(support: np.ndarray) -> np.ndarray:
     cand = cand[(2 * cand >= support.min(axis=0)).all(axis=1)]
     if cand.shape[0] == 0 or n == 0:
         return cand
-    return cand[in_hull(2 * cand, support)]
+    basis = cand[in_hull(2 * cand, support)]
+    check_bytes(gram_matching_bytes(basis.shape[0], n),
+                f"coefficient matching over a Gram basis of {basis.shape[0]} monomials in {n} variables",
+                "lower the degree or the number of variables, or split the polynomial into parts in "
+                "fewer variables")
+    return basis

@@ -8,15 +8,16 @@ them into one standard-form problem and :mod:`.backends` hands it to a solver.
 """
 from __future__ import annotations
 
+import copy
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, PolynomialError
-from ..poly import PolyMatrix, Polynomial, allocate, monomials_up_to, variable_names
+from ..errors import InputError, PolynomialError, UnverifiedSolutionError
+from ..poly import PolyMatrix, Polynomial, allocate, check_terms_size, monomials_up_to, variable_names
 from ..poly.monomials import match_rows, unique_rows
-from .gram import gram_matching, svec_pairs, svec_size, svec_to_matrix
+from .gram import SQRT2, gram_matching, svec_pairs, svec_size
 from .newton import newton_basis
 from .objective import QuadraticForm, is_cvxpy
 
@@ -54,6 +55,7 @@ class LinearRows:
     ids: np.ndarray
     vals: np.ndarray
     rhs: np.ndarray
+    role: str = "user"   # "user" (add_eq/add_ge), "dsos" (auxiliary rows of a DSOS block)
 
     @classmethod
     def from_affine(cls, name, kind, coef, dec, offset_rows=None):
@@ -69,12 +71,17 @@ class PsdBlock:
 
     ``cone`` "psd" (Q >= 0, an SDP block) or "dsos" (Q diagonally dominant with a
     nonnegative diagonal: linear inequalities only, an LP inner approximation of "psd").
+    ``role`` says who owns it: "gram" (an SOS constraint's Gram matrix), "multiplier" (an
+    SOS multiplier of add_nonneg_on), "sos_var" (new_sos) or "psd_var" (new_psd). Every
+    block is checked by ``Solution.verify()``. Off the diagonal, Q_ij = s_k * SQRT2 / 2
+    (s the svec entry): the one convention every expression built on a block uses.
     """
 
     name: str
     ids: np.ndarray
     size: int
     cone: str = "psd"
+    role: str = "gram"
 
 
 @dataclass
@@ -86,15 +93,60 @@ class Block:
     psd: PsdBlock | None = None
 
 
-class SOSConstraint:
-    """Handle of one SOS constraint "poly is SOS"; after a solve it holds the certificate."""
+class Multiplier:
+    """An SOS multiplier sigma >= 0 of ``add_nonneg_on``: sigma = z^T S z for ``constraint`` g >= 0.
 
-    def __init__(self, program, name, kind, poly, basis, psd, multipliers=()):
+    ``poly`` is sigma as a decision polynomial (``sol.value(m.poly)`` gives its numbers),
+    ``basis`` is z, ``psd`` the Gram block of S; ``gram_matrix(sol)`` reads S from a solution.
+    """
+
+    def __init__(self, program, constraint: Polynomial, poly: Polynomial, basis: Basis, psd: PsdBlock):
+        self.program, self.constraint, self.poly, self.basis, self.psd = program, constraint, poly, basis, psd
+
+    def gram_matrix(self, solution=None) -> np.ndarray:
+        """S of ``solution`` (default: the program's latest); raises unless it is verified."""
+        return _solution_of(self, solution).gram_matrix(self)
+
+    def value(self, solution=None) -> Polynomial:
+        """sigma as a numeric polynomial at ``solution`` (default: the program's latest)."""
+        return _solution_of(self, solution).value(self.poly)
+
+    def __repr__(self) -> str:
+        return f"Multiplier({self.psd.name!r} for {self.constraint!r} >= 0, basis size {len(self.basis)})"
+
+
+@dataclass
+class EqualityMultiplier:
+    """A free multiplier lambda of an equality ``constraint`` h = 0 in ``add_nonneg_on``."""
+
+    constraint: Polynomial
+    poly: Polynomial
+
+
+def _solution_of(handle, solution):
+    sol = solution if solution is not None else handle.program.solution
+    if sol is None:
+        raise InputError(f"{handle!r} has no solution yet: call prog.solve() first")
+    return sol
+
+
+class SOSConstraint:
+    """Handle of one SOS constraint "poly is SOS"; after a solve it holds the certificate.
+
+    For ``add_nonneg_on``, ``source`` is the polynomial shown nonnegative, ``multipliers``
+    the SOS multipliers (:class:`Multiplier`) and ``eq_multipliers`` the free ones; ``poly``
+    is then source - sum sigma_i g_i - sum lambda_j h_j.
+    """
+
+    def __init__(self, program, name, kind, poly, basis, psd, multipliers=(), eq_multipliers=(),
+                 source=None):
         self.program, self.name, self.kind = program, name, kind
         self.poly: Polynomial = poly
         self.basis: Basis = basis
         self.psd: PsdBlock = psd
-        self.multipliers = list(multipliers)   # [(g, sigma, SOS psd block)] for add_nonneg_on
+        self.multipliers: list[Multiplier] = list(multipliers)
+        self.eq_multipliers: list[EqualityMultiplier] = list(eq_multipliers)
+        self.source: Polynomial = poly if source is None else source
         self._gram_exps, self._G = gram_matching(basis.exps)
         self.rows: LinearRows | None = None
         self.infeasible_reason: str | None = None
@@ -129,11 +181,16 @@ class SOSConstraint:
         """Replace the polynomial by one with new numbers, keeping the Gram basis.
 
         This is the compile-once path: no Newton polytope, no Gram matching is recomputed.
+        For ``add_nonneg_on`` the new polynomial is the new source p of "p >= 0 on the set";
+        the multipliers stay.
         """
         if self.kind == "sos_matrix":
             poly, exps = self.program._matrix_form(poly)
         else:
             poly, exps = self.program._as_sos_polynomial(poly), None
+        source = poly
+        for m in self.multipliers + self.eq_multipliers:
+            poly = poly - m.poly * m.constraint
         vars = self.basis.vars + tuple(v for v in poly.vars if v not in self.basis.vars)
         poly = poly.with_vars(vars)
         if vars != self.basis.vars or (match_rows(self._gram_exps, poly.exps) < 0).any():
@@ -142,17 +199,21 @@ class SOSConstraint:
             self.basis = Basis(poly.vars, exps if exps.shape[1] == len(poly.vars) else newton_basis(poly.exps))
             self.psd = self.program._replace_psd(self.psd, len(self.basis))
             self._gram_exps, self._G = gram_matching(self.basis.exps)
-        self.poly = poly
+        self.poly, self.source = poly, source.with_vars(vars)
         self._match()
         self.program._invalidate()
         return self
 
-    def gram_matrix(self, solution=None) -> np.ndarray:
-        """The Gram matrix Q of the last (or given) solution: poly = z^T Q z."""
-        sol = solution if solution is not None else self.program.solution
-        if sol is None:
-            raise InputError(f"constraint {self.name!r} has no solution yet: call prog.solve() first")
-        return svec_to_matrix(sol.values_of(self.psd.ids), self.psd.size)
+    def gram_matrix(self, solution=None, checked: bool = True) -> np.ndarray:
+        """The Gram matrix Q with poly = z^T Q z, read from ``solution``.
+
+        ``solution`` defaults to the program's latest solve (``program.solution``), which a
+        later re-solve replaces; pass the Solution (or call ``sol.gram_matrix(con)``) to read
+        the one this certificate belongs to. Raises UnverifiedSolutionError / SolverError
+        unless that solution passes the independent check; ``checked=False`` returns the
+        solver's numbers anyway, for diagnostics only.
+        """
+        return _solution_of(self, solution).gram_matrix(self, checked=checked)
 
     def __repr__(self) -> str:
         return f"SOSConstraint({self.name!r}, kind={self.kind}, basis size {len(self.basis)})"
@@ -186,7 +247,7 @@ class FamilySOSConstraint(SOSConstraint):
     def set_weights(self, weights) -> "FamilySOSConstraint":
         """New numbers, same structure: re-match without any polynomial algebra."""
         self.weights = self._check_weights(weights)
-        self.poly = self._weighted()
+        self.poly = self.source = self._weighted()
         self._match()
         self.program._invalidate()
         return self
@@ -213,6 +274,7 @@ class SOSProgram:
         self.build_seconds = 0.0      # total time spent declaring (all add_* calls)
         self.build_reported = 0.0     # part of it already charged to an earlier Solution
         self._compiled = None
+        self.version = 0              # bumped by every change; a Solution records the one it solved
         self._cvx_vars: dict = {}
         self._counter = 0
         self._depth = 0
@@ -225,6 +287,7 @@ class SOSProgram:
 
     def _invalidate(self):
         self._compiled = None
+        self.version += 1
 
     def _timed(fn):  # noqa: N805 -- decorator over methods
         def wrapper(self, *args, **kwargs):
@@ -241,9 +304,9 @@ class SOSProgram:
         return wrapper
 
     # ------------------------------------------------------------------ decision variables
-    def _block(self, name, count, psd_size=None) -> Block:
+    def _block(self, name, count, psd_size=None, role="gram") -> Block:
         ids = allocate(count)
-        psd = PsdBlock(name, ids, psd_size) if psd_size is not None else None
+        psd = PsdBlock(name, ids, psd_size, role=role) if psd_size is not None else None
         block = Block(name, ids, psd)
         self.blocks.append(block)
         return block
@@ -251,7 +314,7 @@ class SOSProgram:
     def _replace_psd(self, psd: PsdBlock, size: int) -> PsdBlock:
         """Swap a Gram block for a new one of another size (blocks stay in id order)."""
         self.blocks = [b for b in self.blocks if b.psd is not psd]
-        return self._block(psd.name, svec_size(size), size).psd
+        return self._block(psd.name, svec_size(size), size, psd.role).psd
 
     @_timed
     def new_var(self, shape=(), name=None):
@@ -283,29 +346,33 @@ class SOSProgram:
 
     def _gram_polynomial(self, basis: Basis, psd: PsdBlock) -> Polynomial:
         i, j = svec_pairs(len(basis))
+        check_terms_size(i.size, basis.exps.shape[1], 1 + i.size, f"a Gram polynomial over {len(basis)} monomials")
         coef = np.zeros((i.size, 1 + i.size))
-        coef[np.arange(i.size), 1 + np.arange(i.size)] = np.where(i == j, 1.0, np.sqrt(2.0))
+        coef[np.arange(i.size), 1 + np.arange(i.size)] = np.where(i == j, 1.0, SQRT2)
         return Polynomial(basis.vars, basis.exps[i] + basis.exps[j], coef, psd.ids)
 
-    @_timed
-    def new_sos(self, vars, degree: int, name=None) -> Polynomial:
-        """An SOS polynomial z^T Q z, Q >= 0 a new Gram block, z all monomials up to degree/2."""
+    def _sos_block(self, vars, degree: int, name, role):
+        """(z^T Q z, z, block of Q) for a new Gram block, z all monomials up to degree/2."""
         if degree < 0 or degree % 2:
             raise PolynomialError(f"an SOS polynomial has even degree, got {degree}")
         names = variable_names(vars)
         basis = Basis(names, monomials_up_to(len(names), degree // 2))
-        name = self._name("sos", name)
-        psd = self._block(name, svec_size(len(basis)), len(basis)).psd
-        return self._gram_polynomial(basis, psd)
+        psd = self._block(name, svec_size(len(basis)), len(basis), role).psd
+        return self._gram_polynomial(basis, psd), basis, psd
+
+    @_timed
+    def new_sos(self, vars, degree: int, name=None) -> Polynomial:
+        """An SOS polynomial z^T Q z, Q >= 0 a new Gram block, z all monomials up to degree/2."""
+        return self._sos_block(vars, degree, self._name("sos", name), "sos_var")[0]
 
     @_timed
     def new_psd(self, n: int, name=None) -> PolyMatrix:
         """A constant symmetric matrix variable P >= 0 (an LMI block), as a PolyMatrix."""
-        psd = self._block(self._name("psd", name), svec_size(n), n).psd
+        psd = self._block(self._name("psd", name), svec_size(n), n, "psd_var").psd
         i, j = svec_pairs(n)
         entries = np.empty((n, n), dtype=object)
         for k, (a, b) in enumerate(zip(i, j)):
-            entries[a, b] = entries[b, a] = Polynomial.affine([psd.ids[k]], [1.0 if a == b else 1 / np.sqrt(2.0)])
+            entries[a, b] = entries[b, a] = Polynomial.affine([psd.ids[k]], [1.0 if a == b else SQRT2 / 2])
         return PolyMatrix(entries)
 
     # ------------------------------------------------------------------ constraints
@@ -318,14 +385,14 @@ class SOSProgram:
                                   "use add_sos_matrix for a PolyMatrix")
         return expr
 
-    def _register(self, name, kind, poly, basis_exps, multipliers=(), cone="psd"):
+    def _register(self, name, kind, poly, basis_exps, cone="psd", **handles):
         psd = self._block(name, svec_size(basis_exps.shape[0]), basis_exps.shape[0]).psd
         if cone == "dsos":
             psd.cone = "dsos"
             self._diagonally_dominant(psd)
         elif cone != "psd":
             raise InputError(f"unknown cone {cone!r}: use 'psd' (SOS) or 'dsos' (diagonally dominant SOS)")
-        con = SOSConstraint(self, name, kind, poly, Basis(poly.vars, basis_exps), psd, multipliers)
+        con = SOSConstraint(self, name, kind, poly, Basis(poly.vars, basis_exps), psd, **handles)
         self.sos_constraints.append(con)
         return con
 
@@ -334,7 +401,7 @@ class SOSProgram:
         i, j = svec_pairs(psd.size)
         off = np.flatnonzero(i != j)
         t = self._block(f"{psd.name}.t", off.size).ids
-        w = 1.0 / np.sqrt(2.0)                      # svec stores sqrt2 Q_ij off the diagonal
+        w = SQRT2 / 2                               # Q_ij = w s_k off the diagonal
         rows, ids, vals = [], [], []
         for r, k in enumerate(off):                 # t_k - w s_k >= 0 and t_k + w s_k >= 0
             rows += [2 * r, 2 * r, 2 * r + 1, 2 * r + 1]
@@ -349,7 +416,7 @@ class SOSProgram:
             vals += [1.0] + [-1.0] * len(touching)
         self.linear.append(LinearRows(f"{psd.name} (dsos)", "ge", np.array(rows, dtype=np.int64),
                                       np.array(ids, dtype=np.int64), np.array(vals),
-                                      np.zeros(base + psd.size)))
+                                      np.zeros(base + psd.size), role="dsos"))
 
     @_timed
     def add_sos(self, expr, basis=None, name=None, cone="psd") -> SOSConstraint:
@@ -479,22 +546,27 @@ class SOSProgram:
             allv = allv + tuple(v for v in g.vars if v not in allv)
         degree = degree if degree is not None else max([p.degree] + [g.degree for g in ineqs + eqs])
         name = self._name("nonneg", name)
-        rest, mults = p.with_vars(allv), []
+        source = p.with_vars(allv)
+        rest, mults, eq_mults = source, [], []
         for k, g in enumerate(ineqs):
             d = degree - g.degree
             d -= d % 2
             if d < 0:
                 raise PolynomialError(f"degree {degree} is below the degree of constraint g{k} ({g.degree})")
-            sigma = self.new_sos(allv, d, name=f"{name}.sigma{k}")
-            mults.append((g, sigma, self.blocks[-1].psd))
-            rest = rest - sigma * g.with_vars(allv)
+            g = g.with_vars(allv)
+            sigma, basis, psd = self._sos_block(allv, d, f"{name}.sigma{k}", "multiplier")
+            mults.append(Multiplier(self, g, sigma, basis, psd))
+            rest = rest - sigma * g
         for k, h in enumerate(eqs):
             d = degree - h.degree
             if d < 0:
                 raise PolynomialError(f"degree {degree} is below the degree of equality h{k} ({h.degree})")
+            h = h.with_vars(allv)
             lam = self.new_poly(allv, d, name=f"{name}.lambda{k}")
-            rest = rest - lam * h.with_vars(allv)
-        return self._register(name, "nonneg_on", rest, newton_basis(rest.exps), multipliers=mults)
+            eq_mults.append(EqualityMultiplier(h, lam))
+            rest = rest - lam * h
+        return self._register(name, "nonneg_on", rest, newton_basis(rest.exps), multipliers=mults,
+                              eq_multipliers=eq_mults, source=source)
 
     @staticmethod
     def _affine_items(lhs, rhs):
@@ -584,15 +656,59 @@ class SOSProgram:
             self._compiled = assemble(self, scale=scale)
         return self._compiled
 
+    def tightened(self, kept: dict, margins: dict) -> "SOSProgram":
+        """A copy whose Gram blocks are tightened: Q[K, K] >= eps I and Q = 0 outside K.
+
+        ``kept`` maps id(PsdBlock) to the kept indices K (default all), ``margins`` to eps
+        (default 0). Each block (PSD or DSOS) becomes Q[K, K] = P + eps I with P a new block
+        in the same cone; its other rows and columns are fixed to zero (the face a solution
+        of this program lies on). Objective, constraints and decision ids are shared with
+        this program. Used by rigorous bounds (``Solution.rigorous_bound``).
+        """
+        clone = copy.copy(self)
+        clone.name = f"{self.name} (tightened)"
+        clone.blocks = [Block(b.name, b.ids) if b.psd is not None and b.psd.cone == "psd" else b
+                        for b in self.blocks]
+        clone.linear, clone.sos_constraints = list(self.linear), list(self.sos_constraints)
+        clone.solution, clone._compiled, clone._forms, clone._cvx_vars = None, None, {}, {}
+        for b in self.blocks:
+            if b.psd is None or not b.psd.size:
+                continue
+            n = b.psd.size
+            K = np.asarray(kept.get(id(b.psd), np.arange(n)), dtype=np.int64)
+            i, j = svec_pairs(n)
+            zero = np.flatnonzero(~(np.isin(i, K) & np.isin(j, K)))
+            rows = [LinearRows(f"{b.name} face", "eq", np.arange(zero.size), b.ids[zero],
+                               np.ones(zero.size), np.zeros(zero.size))]
+            if K.size:
+                inner = clone._block(f"{b.name}.interior", svec_size(K.size), K.size, b.psd.role).psd
+                if b.psd.cone == "dsos":
+                    inner.cone = "dsos"
+                    clone._diagonally_dominant(inner)
+                a, c = svec_pairs(K.size)
+                outer = K[c] * (K[c] + 1) // 2 + K[a]          # svec index of (K[a], K[c])
+                k = a.size
+                rows.append(LinearRows(f"{b.name} = interior + eps I", "eq",
+                                       np.concatenate([np.arange(k), np.arange(k)]),
+                                       np.concatenate([b.ids[outer], inner.ids]),
+                                       np.concatenate([np.ones(k), -np.ones(k)]),
+                                       np.where(a == c, float(margins.get(id(b.psd), 0.0)), 0.0)))
+            clone.linear += rows
+        return clone
+
     def solve(self, solver: str = "CLARABEL", backend: str = "auto", scale: bool = True,
-              verbose: bool = False, raise_on_failure: bool = False, **settings):
+              verbose: bool = False, raise_on_failure: bool = False, rigorous: bool = False,
+              **settings):
         """Solve and return a :class:`~sosdyn.sos.solution.Solution`.
 
         ``backend``: "direct" hands the conic data straight to Clarabel (no canonicalisation;
         the fast re-solve path); "cvxpy" goes through cvxpy (any cvxpy solver, and needed for
         cvxpy constraints/objectives); "auto" picks direct when it can.
-        ``raise_on_failure``: raise SolverError/InfeasibleError instead of returning a
-        Solution whose status is not optimal.
+        ``raise_on_failure``: raise SolverError/InfeasibleError/UnverifiedSolutionError
+        instead of returning a Solution that is not verified.
+        ``rigorous``: the objective (and every value) is read at a point where the whole
+        certificate holds exactly: ``sol.objective`` is the proven bound, ``sol.bound``
+        compares it with the solver's value (see :mod:`sosdyn.sos.solution`).
         """
         from .backends import solve_program
         solver = solver.upper()
@@ -603,6 +719,13 @@ class SOSProgram:
                                  f"(installed in cvxpy: {cp.installed_solvers()})")
         sol = solve_program(self, solver=solver, backend=backend, scale=scale, verbose=verbose, **settings)
         self.solution = sol
+        sol.rigorous = rigorous
+        sol.verify()                        # now, while the program is the one that was solved
+        if rigorous and sol.verified:
+            try:
+                sol.rigorous_bound()        # now, so its time is in sol.timings["rigorous"]
+            except UnverifiedSolutionError:
+                pass                        # raised again, with its reason, when a number is asked for
         if raise_on_failure:
             sol.raise_for_status()
         return sol
