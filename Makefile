@@ -20,6 +20,7 @@ run: venv
 	$(BIN)/python -m problems run
 
 test: venv
+	$(BIN)/lint-imports
 	$(PYTEST) -q -m "not slow"
 
 test-slow: venv

@@ -1,1 +1,34 @@
-"""Experiments: one module per experiment, each with ``main(argv=None)``; make targets call them."""
+"""The experiments of the sosdyn repository (not part of the installed package).
+
+Run one with ``python -m problems NAME [options]`` (from the repository root), ``make NAME``
+or ``sosdyn experiment NAME [--repo DIR] [options]``; :data:`EXPERIMENTS` lists them.
+"""
+from __future__ import annotations
+
+import importlib
+from collections.abc import Sequence
+
+from sosdyn.errors import InputError
+
+#: Experiment name -> the module of this package whose ``main(argv)`` runs it.
+EXPERIMENTS = {
+    "run": "run",                      # make run: shapes x methods, Figs. 1-4, findings, report
+    "report": "report",                # make report: results.json + report from the cache (no fits)
+    "fig1": "fig1", "fig2": "fig2", "fig3": "fig3", "fig4": "fig4",
+    "lasa-all": "lasa_all",
+    "demo3d": "demo3d",
+    "learner-table": "learner_table",
+    "bench": "bench.learner",          # where the CDSP learner spends its time
+    "bench-sos": "bench.sos",          # the SOS layer against SumOfSquares
+}
+
+
+def run_experiment(name: str, argv: Sequence[str] = ()) -> int:
+    """Run experiment ``name`` ("lasa-all" or "lasa_all") with command-line ``argv``; its exit code."""
+    key = name.replace("_", "-")
+    if key not in EXPERIMENTS:
+        raise InputError(f"no experiment {name!r}; available: {', '.join(EXPERIMENTS)}. "
+                         "Try: one of those names.")
+    # By name: an experiment's (heavy) imports load only when it runs.
+    module = importlib.import_module(f"{__name__}.{EXPERIMENTS[key]}")
+    return module.main(list(argv)) or 0

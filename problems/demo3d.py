@@ -11,8 +11,19 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from threadpoolctl import threadpool_limits
 
-from problems import common as C
+import sosdyn as sd
+from sosdyn.evaluation.convergence import grid_convergence_batched
+from sosdyn.evaluation.reproduction import describe, evaluate_reproductions
+from sosdyn.lfd.rollout import BudgetRollout
+from sosdyn.report.figures import save_figure, trajectories_3d
+
+from . import settings
+from .jsonio import write_json
+from .plumbing import parse_args
+from .results import relpath
+from .settings import REPORTS, Shape
 
 DATA = Path(__file__).parent / "data" / "demo3d"
 METHODS = ("CDSP-ICA", "CDSP-cubic")
@@ -20,44 +31,39 @@ K = 4
 
 
 def load(n_demos=None, subsample=1):
-    import sosdyn as sd
     demos = sd.load_demos(sorted(DATA.glob("demo_*.csv")), units="mm", name="demo3d")
     if n_demos:
         demos = demos[:n_demos]
     return demos.subsample(subsample) if subsample > 1 else demos
 
 
-def run(out_dir=C.REPORTS, *, quick=False, methods=METHODS, n_demos=None, subsample=1) -> dict:
-    from threadpoolctl import threadpool_limits
-
-    from sosdyn.evaluation.metrics import evaluate_reproductions, grid_convergence_batched
-    from sosdyn.report.figures import save_figure, trajectories_3d
+def run(out_dir=REPORTS, *, quick=False, methods=METHODS, n_demos=None, subsample=1) -> dict:
     out_dir = Path(out_dir)
     demos = load(n_demos, subsample)
-    shp = C.Shape("demo3d", K=2 if quick else K)
+    shp = Shape("demo3d", K=2 if quick else K)
     results, repros = {}, {}
     with threadpool_limits(1):
         for name in methods:
             t0 = time.perf_counter()
             try:
-                model = C.METHODS[name].factory(shp, quick).fit(demos)
+                model = settings.METHODS[name].factory(shp, quick).fit(demos)
             except Exception as exc:
                 results[name] = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
                 print(f"demo3d {name}: FAILED {exc}")
                 continue
             fit_s = time.perf_counter() - t0
-            roll = C.BudgetRollout(model)
+            roll = BudgetRollout(model)
             rep = evaluate_reproductions(roll, demos)
             grid = grid_convergence_batched(model, demos, n_grid=3 if quick else 6)
-            results[name] = {"status": "ok", "dtwd_total": C.stat(rep["dtwd"]),
-                             "sea": C.stat(rep["sea"]), "goal_error": C.stat(rep["goal_error"]),
+            results[name] = {"status": "ok", "dtwd_total": describe(rep["dtwd"]),
+                             "sea": describe(rep["sea"]), "goal_error": describe(rep["goal_error"]),
                              "grid_convergence": grid.fraction, "grid_starts": grid.n_starts,
                              "certified": bool(model.certified_), "fit_time_s": fit_s,
                              "metric_collapse": model.metric_collapse_}
             repros[name] = [t.pos for t in rep["trajectories"]]
             print(f"demo3d {name}: fit {fit_s:.1f} s, DTWD {rep['mean']['dtwd']:.1f} mm, "
                   f"certified {model.certified_}, grid {100 * grid.fraction:.0f} %", flush=True)
-    C.write_json(out_dir / "demo3d.json", results)
+    write_json(out_dir / "demo3d.json", results)
     shown = next((m for m in reversed(methods) if m in repros), None)
     if shown is None:
         return {}
@@ -72,12 +78,12 @@ def run(out_dir=C.REPORTS, *, quick=False, methods=METHODS, n_demos=None, subsam
                f"(problems/data/demo3d, sensor noise 1 mm, tremor 3 mm), K = {shp.K}: demonstrations "
                f"(solid red) and {shown} reproductions (dashed blue). {scores}.")
     (out_dir / "figures" / "demo3d.caption.txt").write_text(caption)
-    return {"demo3d": {"svg": C.relpath(paths["svg"], out_dir), "png": C.relpath(paths["png"], out_dir),
+    return {"demo3d": {"svg": relpath(paths["svg"], out_dir), "png": relpath(paths["png"], out_dir),
                        "caption": caption}}
 
 
 def main(argv=None):
-    args = C.parse_args(argv, "Fit CDSP-ICA and CDSP-cubic to the 3-D demonstrations")
+    args = parse_args(argv, "Fit CDSP-ICA and CDSP-cubic to the 3-D demonstrations")
     t0 = time.perf_counter()
     spec = run(args.out, quick=args.quick)
     for name, s in spec.items():

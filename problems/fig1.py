@@ -8,25 +8,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from problems import common as C
+from sosdyn.report.figures import save_figure, streamline_panel
+
+from .lattice import field_panel
+from .plumbing import Context, figure_main, figure_spec
 
 METHODS = ("CDSP-cubic", "CDSP-ICA")
 
 
-def figure(entries: dict, ctx: C.Context, methods=METHODS) -> dict:
-    from sosdyn.report.figures import save_figure, streamline_panel
-    panels = []
-    for method in methods:
-        for shp in ctx.shapes:
-            e = entries.get(shp.name, {}).get(method)
-            if not e or e.get("status") != "ok" or "field" not in e.get("plot", {}):
-                continue
-            demos = C.load_shape(shp, ctx.config)
-            fld = e["plot"]["field"]
-            panels.append({"predict": C.CachedField(fld), "demos_pos": [d.pos for d in demos],
-                           "reproductions": e["plot"]["reproductions"], "goal": demos.goal,
-                           "bounds": fld["bounds"], "grid": fld["grid"],
-                           "title": f"{shp.name}: {method}"})
+def figure(entries: dict, ctx: Context, methods=METHODS) -> dict:
+    panels = [field_panel(entries.get(shp.name, {}).get(method), shp, ctx.config, f"{shp.name}: {method}")
+              for method in methods for shp in ctx.shapes]
+    panels = [p for p in panels if p]
     if not panels:
         return {}
     fig = streamline_panel(panels, ncols=min(len(ctx.shapes), 4))
@@ -35,9 +28,9 @@ def figure(entries: dict, ctx: C.Context, methods=METHODS) -> dict:
     caption = ("Fig. 1 — learned models of the LASA shapes, one row per method ("
                + ", ".join(shown) + "): streamlines of the field (gray), the demonstrations (solid "
                "red), and the reproductions from the demonstrations' starts (dashed blue).")
-    return C.figure_spec("fig1", paths, ctx.out_dir, caption)
+    return figure_spec("fig1", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    return C.figure_main(argv, "Fig. 1: streamlines of CDSP-cubic and CDSP-ICA on the paper's shapes",
+    return figure_main(argv, "Fig. 1: streamlines of CDSP-cubic and CDSP-ICA on the paper's shapes",
                          figure, methods=METHODS)

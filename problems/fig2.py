@@ -3,12 +3,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from problems import common as C
+from sosdyn.report.figures import accuracy_bars, save_figure
+
+from .plumbing import Context, figure_main, figure_spec
+from .results import results_sections
 
 
-def figure(entries: dict, ctx: C.Context) -> dict:
-    from sosdyn.report.figures import accuracy_bars, save_figure
-    table = C.results_sections(entries)["accuracy"]
+def figure(entries: dict, ctx: Context) -> dict:
+    table = results_sections(entries)["accuracy"]
     table = {s: {m: e for m, e in per.items() if "sea" in e} for s, per in table.items()}
     table = {s: per for s, per in table.items() if per}
     if not table:
@@ -19,8 +21,8 @@ def figure(entries: dict, ctx: C.Context) -> dict:
     caption = (f"Fig. 2 — swept error area (SEA) and dynamic time warping distance (DTWD) between "
                f"the {n} demonstrations and their reproductions, mean ± one standard deviation, "
                "per shape and method (log axis where the values span more than two decades).")
-    return C.figure_spec("fig2", paths, ctx.out_dir, caption)
+    return figure_spec("fig2", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    return C.figure_main(argv, "Fig. 2: accuracy bars (SEA, DTWD) for all methods", figure)
+    return figure_main(argv, "Fig. 2: accuracy bars (SEA, DTWD) for all methods", figure)

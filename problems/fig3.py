@@ -9,12 +9,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from problems import common as C
+from sosdyn.report.figures import robustness_bars, save_figure
+
+from .plumbing import Context, figure_main, figure_spec
+from .results import results_sections
 
 
-def figure(entries: dict, ctx: C.Context) -> dict:
-    from sosdyn.report.figures import robustness_bars, save_figure
-    table = C.results_sections(entries)["robustness"]
+def figure(entries: dict, ctx: Context) -> dict:
+    table = results_sections(entries)["robustness"]
     if not table:
         return {}
     fig = robustness_bars(table, metric="dtwd_total")
@@ -26,8 +28,8 @@ def figure(entries: dict, ctx: C.Context) -> dict:
                f"{100 * cfg.at_frac:.0f} % of each demonstration, same seeded events for every method; "
                f"rollouts last {cfg.duration_factor:g}x the demonstration. Mean ± one std over the "
                "demonstrations; hatched: not every run ended within 1 mm of its goal.")
-    return C.figure_spec("fig3", paths, ctx.out_dir, caption)
+    return figure_spec("fig3", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    return C.figure_main(argv, "Fig. 3: robustness bars after pushes and goal changes", figure)
+    return figure_main(argv, "Fig. 3: robustness bars after pushes and goal changes", figure)

@@ -6,21 +6,22 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib as mpl
 import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
-from problems import common as C
+from sosdyn.report.figures import (GOAL_STYLE, STYLE, method_color, perturbation_trajectories,
+                                   save_figure)
+
+from .findings import coincide
+from .plumbing import Context, figure_main, figure_spec
+from .settings import load_shape
 
 SHAPES = ("BendedLine", "Leaf_1")
 
 
-def figure(entries: dict, ctx: C.Context, shapes=SHAPES) -> dict:
-    from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
-
-    from sosdyn.report.figures import (GOAL_STYLE, STYLE, method_color,
-                                       perturbation_trajectories, save_figure)
-    import matplotlib as mpl
-
+def figure(entries: dict, ctx: Context, shapes=SHAPES) -> dict:
     shapes = [s for s in ctx.shapes if s.name in shapes] or list(ctx.shapes)[:2]
     methods = [m for m in ctx.methods
                if any(entries.get(s.name, {}).get(m, {}).get("status") == "ok" for s in shapes)]
@@ -31,7 +32,7 @@ def figure(entries: dict, ctx: C.Context, shapes=SHAPES) -> dict:
         fig = Figure(figsize=(4.2 * len(shapes), 8.9), layout="constrained")
         axes = fig.subplots(2, len(shapes), squeeze=False).ravel()
         for i, (ax, (kind, shp)) in enumerate(zip(axes, panels)):
-            demo = C.load_shape(shp, ctx.config)[0]
+            demo = load_shape(shp, ctx.config)[0]
             runs, events, goal_history = {}, {}, None
             for m in methods:
                 e = entries.get(shp.name, {}).get(m)
@@ -57,13 +58,12 @@ def figure(entries: dict, ctx: C.Context, shapes=SHAPES) -> dict:
                "arrows from the state before to the state after, one per method) and a sudden goal "
                "change (c, d), same event for every method. The gray band is the demonstration "
                "(for c, d: before the change).")
-    from problems.report import coincide
     if all(m in methods for m in ("CDSP (paper)", "SEDS-like")) and coincide(entries, "CDSP (paper)",
                                                                              "SEDS-like"):
         caption += " CDSP (paper) and SEDS-like coincide (same reproductions)."
-    return C.figure_spec("fig4", paths, ctx.out_dir, caption)
+    return figure_spec("fig4", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    return C.figure_main(argv, "Fig. 4: exemplar perturbed and goal-changed trajectories", figure,
+    return figure_main(argv, "Fig. 4: exemplar perturbed and goal-changed trajectories", figure,
                          shapes=SHAPES)

@@ -11,31 +11,31 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from problems import common as C
+import sosdyn as sd
+from sosdyn.report.figures import save_figure, streamline_panel
+from sosdyn.report.html import build_report, render_html
+
+from .fig2 import figure as fig2
+from .jobs import evaluate_all
+from .jsonio import write_json
+from .lattice import field_panel
+from .plumbing import Context, parse_args
+from .results import assemble, relpath
+from .settings import METHOD_ORDER, METHODS, REPORTS, EvalConfig, shape
 
 FIELD_METHOD = "CDSP-cubic"
 
 
-def run(names, methods, config: C.EvalConfig, out_dir=C.REPORTS, *, n_jobs=2, K=6,
+def run(names, methods, config: EvalConfig, out_dir=REPORTS, *, n_jobs=2, K=6,
         field_method=FIELD_METHOD, cache_dir=None, force=False, render_pdf=True) -> dict:
-    from sosdyn.report.figures import save_figure, streamline_panel
-    from sosdyn.report.html import build_report, render_html
-    from problems import report
     out_dir = Path(out_dir)
-    shapes = tuple(C.shape(n, K=K) for n in names)
-    entries = C.evaluate_all(shapes, methods, config=config, n_jobs=n_jobs,
-                             cache_dir=cache_dir or out_dir / "cache" / "lasa_all", force=force)
+    shapes = tuple(shape(n, K=K) for n in names)
+    entries = evaluate_all(shapes, methods, config=config, n_jobs=n_jobs,
+                           cache_dir=cache_dir or out_dir / "cache" / "lasa_all", force=force)
     field_method = field_method if field_method in methods else next(
-        (m for m in methods if C.METHODS[m].plot_field), None)
-    panels = []
-    for s in shapes:
-        e = entries[s.name].get(field_method)
-        if e and e.get("status") == "ok" and "field" in e["plot"]:
-            demos = C.load_shape(s, config)
-            f = e["plot"]["field"]
-            panels.append({"predict": C.CachedField(f), "demos_pos": [d.pos for d in demos],
-                           "reproductions": e["plot"]["reproductions"], "goal": demos.goal,
-                           "bounds": f["bounds"], "grid": f["grid"], "title": s.name})
+        (m for m in methods if METHODS[m].plot_field), None)
+    panels = [field_panel(entries[s.name].get(field_method), s, config, s.name) for s in shapes]
+    panels = [p for p in panels if p]
     figures = {}
     sub = out_dir / "lasa_all"
     if panels:
@@ -46,27 +46,22 @@ def run(names, methods, config: C.EvalConfig, out_dir=C.REPORTS, *, n_jobs=2, K=
                    "demonstrations (red) and reproductions (dashed blue). Full table: "
                    "reports/lasa_all/index.html.")
         (out_dir / "figures" / "lasa_all.caption.txt").write_text(caption)
-        figures["lasa_all"] = {"svg": C.relpath(paths["svg"], sub), "png": C.relpath(paths["png"], sub),
+        figures["lasa_all"] = {"svg": relpath(paths["svg"], sub), "png": relpath(paths["png"], sub),
                                "caption": caption}
-    ctx = C.Context(shapes=shapes, config=config, out_dir=sub, methods=methods)
-    from problems.fig2 import figure as fig2
-    figures.update(fig2(entries, C.Context(shapes=shapes, config=config, out_dir=sub, methods=methods)))
-    results = {"meta": C.meta(grid_convergence=report.grid_note(ctx), n_shapes=len(shapes), K=K),
-               "findings": report.findings(entries),
-               "methods": C.methods_section(shapes, methods, quick=config.quick),
-               **C.results_sections(entries), "figures": figures}
-    path = C.write_json(sub / "results.json", results)
-    if render_pdf:
-        return build_report(path, sub)
-    return {"html": render_html(results, sub)}
+    figures.update(fig2(entries, Context(shapes=shapes, config=config, out_dir=sub, methods=methods)))
+    results = assemble(entries, shapes, methods, config, figures, bench=False,
+                       meta_extra={"n_shapes": len(shapes), "K": K})
+    path = write_json(sub / "results.json", results)
+    if render_pdf:   # trusted: the grid figure sits in ../figures, shared with the main report
+        return build_report(path, sub, trusted=True)
+    return {"html": render_html(results, sub, trusted=True)}
 
 
 def main(argv=None):
-    import sosdyn as sd
-    args = C.parse_args(argv, "All 30 LASA shapes x methods (slow)")
+    args = parse_args(argv, "All 30 LASA shapes x methods (slow)")
     names = args.shapes or sd.lasa_names()
-    config = C.EvalConfig(quick=args.quick, n_grid=5, field_grid=50)
+    config = EvalConfig(quick=args.quick, n_grid=5, field_grid=50)
     t0 = time.perf_counter()
-    paths = run(names, C.METHOD_ORDER, config, args.out, n_jobs=args.jobs, force=args.force)
+    paths = run(names, METHOD_ORDER, config, args.out, n_jobs=args.jobs, force=args.force)
     print(f"lasa-all: {paths['html']} ({time.perf_counter() - t0:.1f} s)")
     return 0

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -18,7 +17,9 @@ import sosdyn as sd
 from sosdyn.evaluation.baselines import GMR
 from sosdyn.evaluation.metrics import dtwd, velocity_rmse
 
-SHAPES = {"BendedLine": 6, "DoubleBendedLine": 7, "Leaf_1": 6, "Leaf_2": 6}
+from .settings import PAPER_SHAPES, REPORTS
+
+SHAPES = {s.name: s.K for s in PAPER_SHAPES}
 VARIANTS = {
     "linear, constant M, alternating": dict(metric_degree=0, solver_method="alternating"),
     "linear, degree-2 M (paper), alternating": dict(metric_degree=2, solver_method="alternating"),
@@ -64,7 +65,7 @@ def main(argv=None):
                 print(f"{shape:17s} {name:42s} refine={refine!s:5s} rmse {r['vel_rmse']:7.2f} "
                       f"DTWD {r['dtwd_mean']:9.0f} fit {r['fit_s']:5.1f}s cert {r['certified']} "
                       f"collapse {r['metric_collapse']}", flush=True)
-    out = Path("reports")
+    out = REPORTS
     out.mkdir(exist_ok=True)
     (out / "learner_table.json").write_text(json.dumps(rows, indent=1))
     lines = ["| shape | variant | GMM refined | vel RMSE (mm/s) | DTWD total (mean ± std, 1000 pts) | "

@@ -3,8 +3,8 @@
     sosdyn fit demo1.csv demo2.csv --out model.json [--components K ...]
     sosdyn fit lasa:Leaf_1 --out leaf.json
     sosdyn rollout model.json --from 10,-5 [--duration T --dt DT --out traj.csv]
-    sosdyn experiment fig1              # runs problems.fig1.main() (from the repo root)
-    sosdyn report [--results reports/results.json --out reports]
+    sosdyn experiment fig1 [--repo DIR] [--quick ...]   # python -m problems fig1, in DIR
+    sosdyn report [--results reports/results.json --out reports]   # render a results file
     sosdyn lasa list
 
 Global options ``--quiet`` (no progress or summaries) and ``--debug`` (full
@@ -16,6 +16,13 @@ symlinks and hard links count). Any sosdyn error, OS error, bad value or over-de
 ends the command with one line ``error: ... Try: ...`` on stderr and exit status 1; a
 malformed option (wrong type, out of range) is a usage error with exit status 2.
 
+The experiments live in the repository's ``problems/`` folder, not in the package:
+``sosdyn experiment`` finds them in ``--repo DIR``, by default in the source tree the
+installed sosdyn comes from (an editable install), and says so when there is none.
+``sosdyn report`` only renders an existing results file; ``make report`` (``python -m
+problems report``) rebuilds the results file and the figures from the cached experiment
+entries first.
+
 sosdyn itself and its solvers are imported inside the commands, so ``sosdyn --help``
 is quick.
 """
@@ -26,7 +33,6 @@ import enum
 import importlib
 import logging
 import os
-import pkgutil
 import sys
 import time
 from collections.abc import Sequence
@@ -160,7 +166,8 @@ def fit(
     field_degree: Annotated[int | None, typer.Option(min=1, help="Degree of the polynomial field.")] = None,
     gamma: Annotated[float | None, typer.Option(callback=_positive, help="Contraction rate (> 0).")] = None,
     solver: Annotated[str | None, typer.Option(help="Conic solver, e.g. CLARABEL or SCS.")] = None,
-    method: Annotated[SolverMethod | None, typer.Option(help="How the bilinear program is solved.")] = None,
+    solver_method: Annotated[SolverMethod | None, typer.Option(
+        "--solver-method", "--method", help="How the bilinear program is solved (CDSP's solver_method).")] = None,
     seed: Annotated[int | None, typer.Option(min=0, max=2**32 - 1, help="Random seed (EM initialisation).")] = None,
 ) -> None:
     """Learn a certified CDSP model from demonstrations and save it.
@@ -175,7 +182,7 @@ def fit(
     check_folder(out_path.parent)
     data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(paths)
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
-               "gamma": gamma, "solver": solver, "solver_method": method and method.value,
+               "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed}
     model = sd.CDSP(**{k: v for k, v in options.items() if v is not None})
     start = time.perf_counter()
@@ -224,31 +231,46 @@ def rollout(
     out.print(f"t = {t[-1]:.3g} s: x = ({end})")
 
 
-@app.command()
-def experiment(name: Annotated[str, typer.Argument(help="Experiment module in problems/, e.g. fig1.",
-                                                   show_default=False)]) -> None:
-    """Run one experiment, problems/<name>.py (run from the repository root)."""
-    module_name = name.replace("-", "_")
-    if not module_name.isidentifier():
-        raise InputError(f"{name!r} is not an experiment name.")
-    if str(Path.cwd()) not in sys.path:          # problems/ lives in the repo, not the package
-        sys.path.insert(0, str(Path.cwd()))
-    try:
-        module = importlib.import_module(f"problems.{module_name}")
-    except ModuleNotFoundError as exc:
-        if exc.name not in ("problems", f"problems.{module_name}"):
-            raise                                 # a missing dependency of the experiment
-        raise InputError(f"no experiment {name!r}; available: {', '.join(_experiments()) or 'none'} "
-                         "(run sosdyn from the repository root).") from None
-    module.main()
+#: The source tree this sosdyn was imported from (the repository, for an editable install).
+SOURCE_TREE = Path(__file__).resolve().parents[1]
 
 
-def _experiments() -> list[str]:
-    try:
-        package = importlib.import_module("problems")
-    except ModuleNotFoundError:
-        return []
-    return sorted(m.name for m in pkgutil.iter_modules(package.__path__) if not m.name.startswith("_"))
+def experiments_package(repo: Path | None = None):
+    """The ``problems`` package of ``repo`` (default :data:`SOURCE_TREE`), imported from there.
+
+    InputError when the folder holds no ``problems/`` (an installed, non-editable sosdyn has
+    none) or when another ``problems`` package is already loaded.
+    """
+    root = (SOURCE_TREE if repo is None else Path(repo)).resolve()
+    init = root / "problems" / "__init__.py"
+    if not init.is_file():
+        where = (f"this sosdyn is not installed from a source checkout ({root} has no problems/)"
+                 if repo is None else f"{root} has no problems/ folder")
+        raise InputError(f"no experiments found: {where}. Try: --repo DIR with DIR a clone of the "
+                         "sosdyn repository (git clone, then pip install -e DIR).")
+    loaded = sys.modules.get("problems")
+    if loaded is None:
+        sys.path.insert(0, str(root))
+        loaded = importlib.import_module("problems")
+    if Path(loaded.__file__ or "").resolve() != init:
+        raise InputError(f"a different package named 'problems' is loaded ({loaded.__file__}), not {init}. "
+                         "Try: run sosdyn experiment from another folder, or python -m problems in the repository.")
+    return loaded
+
+
+@app.command(context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+def experiment(
+    ctx: typer.Context,
+    name: Annotated[str, typer.Argument(help="Experiment name, e.g. run, fig1, lasa-all, bench; options after "
+                                             "it (--quick, --shapes ...) go to the experiment.", show_default=False)],
+    repo: Annotated[Path | None, typer.Option(
+        help="The sosdyn repository whose problems/ holds the experiments; default: the source tree of "
+             "this sosdyn (editable install).", show_default=False)] = None,
+) -> None:
+    """Run one experiment of the repository's problems/ (same as `python -m problems NAME`)."""
+    code = experiments_package(repo).run_experiment(name, ctx.args)
+    if code:
+        raise typer.Exit(code)
 
 
 @app.command()
@@ -256,8 +278,11 @@ def report(
     results: Annotated[Path, typer.Option(help="Results JSON written by the experiments.")] = Path("reports/results.json"),
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="Folder for index.html and report.pdf.")] = Path("reports"),
 ) -> None:
-    """Build the HTML report and its PDF from a results JSON (refused, and --out left
-    untouched, unless it is a results file)."""
+    """Render a results JSON into index.html and report.pdf (refused, and --out left
+    untouched, unless it is a results file; figures must lie below the results file's folder).
+
+    This only renders. `make report` (python -m problems report) rebuilds the results file and
+    its figures from the cached experiment entries first."""
     from .report.html import REPORT_FILES, build_report
 
     _existing(results, "results file")

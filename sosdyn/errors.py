@@ -55,7 +55,7 @@ class SolverError(SosdynError):
 class UnverifiedSolutionError(SolverError):
     """The solver reported an answer whose certificate fails the independent check.
 
-    ``report`` is the :class:`~sosdyn.sos.solution.VerificationReport` naming the failing
+    ``report`` is the :class:`~sosdyn.sos.verification.VerificationReport` naming the failing
     block(s) and by how much.
     """
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -84,36 +85,60 @@ def test_real_process_prints_no_traceback(tmp_path):
 
 # ---------------------------------------------------------------- experiment command
 
+_REGISTRY = """
+import importlib
+
+EXPERIMENTS = {"hello-world": "hello_world", "needs-missing": "needs_missing"}
+
+
+def run_experiment(name, argv=()):
+    module = importlib.import_module(f"{__name__}.{EXPERIMENTS[name.replace('_', '-')]}")
+    return module.main(list(argv)) or 0
+"""
+
+
 @pytest.fixture
-def problems_dir(tmp_path, monkeypatch):
-    """A throw-away problems/ package in the working directory."""
-    pkg = tmp_path / "problems"
-    pkg.mkdir()
-    (pkg / "__init__.py").write_text("")
+def repo(tmp_path, monkeypatch):
+    """A throw-away repository with a problems/ package, away from the working directory."""
+    pkg = tmp_path / "repo" / "problems"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text(_REGISTRY)
     (pkg / "hello_world.py").write_text(
-        "from pathlib import Path\n\ndef main():\n    Path('ran.txt').write_text('yes')\n")
-    (pkg / "needs_missing.py").write_text("import no_such_module_xyz\n\ndef main():\n    pass\n")
-    monkeypatch.chdir(tmp_path)
+        "from pathlib import Path\n\ndef main(argv):\n    Path('ran.txt').write_text(' '.join(argv) or 'yes')\n")
+    (pkg / "needs_missing.py").write_text("import no_such_module_xyz\n\ndef main(argv):\n    pass\n")
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
     monkeypatch.setattr(sys, "path", list(sys.path))
     for name in [m for m in sys.modules if m == "problems" or m.startswith("problems.")]:
         monkeypatch.delitem(sys.modules, name)
-    return tmp_path
+    return tmp_path / "repo"
 
 
-def test_experiment_runs_main(capsys, problems_dir):
-    code, _, err = run(capsys, "experiment", "hello-world")
+def test_experiment_runs_main_from_any_folder(capsys, repo):
+    code, _, err = run(capsys, "experiment", "hello-world", "--repo", str(repo), "--quick", "--shapes", "A")
     assert code == 0, err
-    assert (problems_dir / "ran.txt").read_text() == "yes"
+    assert (repo.parent / "elsewhere" / "ran.txt").read_text() == "--quick --shapes A"
 
 
-def test_experiment_unknown_lists_the_known_ones(capsys, problems_dir):
+def test_experiment_without_problems_folder_is_a_typed_error(capsys, tmp_path):
+    code, _, err = run(capsys, "experiment", "fig1", "--repo", str(tmp_path))
+    assert_one_error_line(code, err, "no experiments found", "has no problems/ folder", "Try: --repo")
+
+
+def test_experiment_default_is_the_source_tree_of_sosdyn():
+    from sosdyn import cli
+    assert cli.SOURCE_TREE == Path(sd.__file__).resolve().parents[1]
+    assert cli.experiments_package().EXPERIMENTS["fig1"] == "fig1"     # this checkout's problems/
+
+
+def test_experiment_unknown_lists_the_known_ones(capsys):
     code, _, err = run(capsys, "experiment", "fig99")
-    assert_one_error_line(code, err, "no experiment 'fig99'", "hello_world, needs_missing")
+    assert_one_error_line(code, err, "no experiment 'fig99'", "run, report, fig1", "bench-sos")
 
 
-def test_experiment_missing_dependency_is_not_hidden(problems_dir):
+def test_experiment_missing_dependency_is_not_hidden(repo):
     with pytest.raises(ModuleNotFoundError, match="no_such_module_xyz"):
-        main(["experiment", "needs_missing"])
+        main(["experiment", "needs_missing", "--repo", str(repo)])
 
 
 # ------------------------------------------------- option plumbing with stand-in models
@@ -149,7 +174,7 @@ def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
     monkeypatch.setattr(sd, "CDSP", FakeCDSP, raising=False)
     monkeypatch.setattr(sd, "load_demos", lambda paths: _Demos(paths), raising=False)
     code, out, err = run(capsys, "fit", str(demo_file), "--out", str(tmp_path / "m.json"),
-                         "--components", "3", "--method", "ica", "--seed", "7")
+                         "--components", "3", "--solver-method", "ica", "--seed", "7")
     assert code == 0, err
     assert made["kwargs"] == {"n_components": 3, "solver_method": "ica", "random_state": 7}
     assert made["demos"].paths == [demo_file]

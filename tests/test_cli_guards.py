@@ -240,6 +240,17 @@ def test_report_file_size_cap(capsys, tmp_path, out_dir):
     assert _snapshot(out_dir) == before
 
 
+def test_report_refuses_figures_outside_its_folder(capsys, tmp_path, out_dir):
+    (tmp_path / "secret.png").write_bytes(b"\x89PNG not really")
+    results = tmp_path / "in" / "results.json"
+    results.parent.mkdir()
+    results.write_text(json.dumps({"meta": {}, "findings": [], "figures": {"x": {"png": "../secret.png"}}}))
+    before = _snapshot(out_dir)
+    code, _, err = run(capsys, "report", "--results", results, "--out", out_dir)
+    assert_one_error_line(code, err, "'x': ../secret.png lies outside the report folder")
+    assert _snapshot(out_dir) == before
+
+
 @pytest.mark.parametrize("name", ["index.html", "report.pdf"])
 def test_report_never_overwrites_its_results_file(capsys, tmp_path, name):
     folder = tmp_path / "r"

@@ -11,8 +11,9 @@ of the public repository nbfigueroa/ds-opt (with ``lpv-opt/CLFDM_lib/Simulation.
    (>= 4) at which every velocity component of every start was below 0.1 (L/s) in absolute
    value at steps i-3..i, or at step i = 3000 - 1 (``Simulation.m``: ``i > i_max - 2``). The
    reproduction is x_1..x_i (the last Euler update is dropped), so at most 2999 points.
-3. DTWD = cumulative Euclidean dynamic time warping between the reproduction and the whole
-   500-point demonstration (no window; steps (1,0), (0,1), (1,1)); mean over the 3 test
+3. DTWD = cumulative Euclidean dynamic time warping (:func:`sosdyn.evaluation.metrics.dtwd`)
+   between the reproduction and the whole 500-point demonstration (no window; steps (1,0),
+   (0,1), (1,1)); mean over the 3 test
    demonstrations, then over the 26 single-pattern shapes (all LASA shapes but
    Multi_Models_1-4).
 
@@ -31,11 +32,11 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.distance import cdist
 
 from sosdyn.errors import InputError, SolverError
+from sosdyn.evaluation.metrics import curve, dtwd
 from sosdyn.lfd.data import Demonstration, Demonstrations
-from sosdyn.limits import check_bytes, check_count
+from sosdyn.lfd.rollout import euler_until_rest
 
 TRAIN_DEMOS = (0, 1, 2, 3)          # 0-based indices of the training demonstrations (1-4)
 TEST_DEMOS = (4, 5, 6)              # and of the test demonstrations (5-7)
@@ -50,20 +51,6 @@ SINGLE_PATTERN_SHAPES = (
     "Khamesh", "LShape", "Leaf_1", "Leaf_2", "Line", "NShape", "PShape", "RShape", "Saeghe",
     "Sharpc", "Sine", "Snake", "Spoon", "Sshape", "Trapezoid", "WShape", "Worm", "Zshape", "heee",
 )
-
-
-def _positions(x, what: str) -> np.ndarray:
-    """Positions (T, n) of an array or of an object with ``pos``, checked finite and non-empty."""
-    try:
-        arr = np.asarray(getattr(x, "pos", x), dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{what} must be an array (T, n) or have a .pos array ({exc}).") from exc
-    if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
-        raise InputError(f"{what} has shape {arr.shape}; expected (T, n) with T, n >= 1.")
-    if not np.all(np.isfinite(arr)):
-        first = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
-        raise InputError(f"{what} contains NaN or inf (first at sample {first}); pass finite values.")
-    return arr
 
 
 # ---------------------------------------------------------------- train / test split
@@ -98,7 +85,7 @@ def split(demos) -> tuple[Demonstrations, Demonstrations]:
 
 def start_points(demos) -> np.ndarray:
     """The reproductions' starts: the 20th kept point of each demonstration, (m, n)."""
-    curves = [_positions(d, f"demonstration {i}") for i, d in enumerate(demos)]
+    curves = [curve(d, f"demonstration {i}") for i, d in enumerate(demos)]
     short = [i for i, c in enumerate(curves) if len(c) <= START_INDEX]
     if short:
         raise InputError(f"Demonstration {short[0]} has {len(curves[short[0]])} samples; the protocol "
@@ -112,83 +99,15 @@ def start_points(demos) -> np.ndarray:
 def euler_reproduce(field: Callable[[np.ndarray], np.ndarray], starts, dt: float = DT,
                     max_steps: int = MAX_STEPS, vel_tol: float = VEL_TOL,
                     window: int = WINDOW) -> list[np.ndarray]:
-    """Protocol step 2: explicit-Euler reproductions from all rows of ``starts`` (m, n) at once.
+    """Protocol step 2: :func:`sosdyn.lfd.rollout.euler_until_rest` with the protocol's constants.
 
-    ``v_i = field(X_i)`` (one call for all m starts), ``X_{i+1} = X_i + dt v_i``, i = 1, 2, ...
-    Stops at the first i >= ``window`` with ``|v_j[s, c]| < vel_tol`` for every start s,
-    component c and j = i-window+1..i, or at i = ``max_steps`` - 1 (``Simulation.m`` stops at
-    ``i > i_max - 2``). Returns m arrays (i, n): x_1..x_i of each start (the last update,
-    X_{i+1}, is dropped as in ``Simulation.m``), all of the same length i.
-
-    Raises InputError if ``field`` returns another shape, SolverError if a state or a velocity
-    becomes NaN/inf (the reproduction diverged).
+    ``X_{i+1} = X_i + dt field(X_i)`` from all rows of ``starts`` (m, n) at once, stopped at the
+    first i >= ``window`` at which every velocity component of every start was below
+    ``vel_tol`` at steps i-window+1..i, or at i = ``max_steps`` - 1 (``Simulation.m`` stops at
+    ``i > i_max - 2``). Returns m arrays (i, n): x_1..x_i (the last update is dropped as in
+    ``Simulation.m``). InputError for another output shape, SolverError when a start diverges.
     """
-    X = np.array(starts, dtype=float, ndmin=2)
-    if X.ndim != 2 or not np.all(np.isfinite(X)):
-        raise InputError(f"starts must be a finite array (m, n), got shape {X.shape}.")
-    for name, value, lo in (("max_steps", max_steps, 2), ("window", window, 1)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-            raise InputError(f"{name} must be an integer >= {lo}, got {value!r}.")
-    for name, value in (("dt", dt), ("vel_tol", vel_tol)):
-        if not (isinstance(value, (int, float, np.floating)) and np.isfinite(value) and value > 0):
-            raise InputError(f"{name} must be a positive number, got {value!r}.")
-    m, n = X.shape
-    check_count(max_steps * m, "max_rollout_steps", f"An Euler reproduction of {m} starts x max_steps",
-                "lower max_steps")
-    check_bytes(8.0 * max_steps * m * n, "The Euler reproduction's trajectory array", "lower max_steps")
-    out = np.empty((max(max_steps - 1, window), m, n))
-    quiet, i = 0, 0                             # steps in a row with every |v| < vel_tol; step
-    while True:
-        i += 1
-        if not np.all(np.isfinite(X)):
-            bad = int(np.flatnonzero(~np.isfinite(X).all(axis=1))[0])
-            raise SolverError(f"The reproduction from start {bad} diverged: its state is NaN/inf at "
-                              f"step {i}.", hint="check the model's stability, or lower dt.")
-        out[i - 1] = X
-        V = np.asarray(field(X), dtype=float)
-        if V.shape != X.shape:
-            raise InputError(f"The field returned shape {V.shape} for X of shape {X.shape}; "
-                             "expected the same shape.")
-        if not np.all(np.isfinite(V)):
-            bad = int(np.flatnonzero(~np.isfinite(V).all(axis=1))[0])
-            raise SolverError(f"The reproduction from start {bad} diverged: the field returned NaN/inf "
-                              f"at step {i}.", hint="check the model's stability, or lower dt.")
-        quiet = quiet + 1 if np.all(np.abs(V) < vel_tol) else 0
-        if i >= window and (quiet >= window or i >= max_steps - 1):
-            return [out[:i, s].copy() for s in range(m)]
-        with np.errstate(over="ignore", invalid="ignore"):
-            X = X + dt * V
-
-
-# ---------------------------------------------------------------- dynamic time warping
-
-
-def dtw_cumulative(a, b) -> float:
-    """Protocol step 3: ``min_P sum_{(i, j) in P} ||a_i - b_j||`` over warping paths P.
-
-    P runs from (0, 0) to (N-1, M-1) with steps (1, 0), (0, 1), (1, 1) and no window; the
-    recurrence is ``D[i, j] = ||a_i - b_j|| + min(D[i-1, j-1], D[i-1, j], D[i, j-1])``. The
-    cost is symmetric in (a, b), so rows run over the shorter curve (r of them) and each row
-    of the longer one (length L) is computed at once: with ``u_j = min(D[i-1, j-1], D[i-1, j])``
-    and the row's prefix sums ``S_j = sum_{l <= j} c_l``, ``D[i, j] = S_j + min_{k <= j}
-    (u_k - S_{k-1})`` (a cumulative minimum). O(r L) time and memory (the cost matrix);
-    about 0.05 s for 3000 x 500 points.
-    """
-    A, B = _positions(a, "first curve"), _positions(b, "second curve")
-    if A.shape[1] != B.shape[1]:
-        raise InputError(f"The curves have dimensions {A.shape[1]} and {B.shape[1]}; they must match.")
-    short, long_ = (A, B) if len(A) <= len(B) else (B, A)
-    check_bytes(8.0 * len(short) * len(long_), f"DTW of {len(A)} x {len(B)} points (the cost matrix)",
-                "subsample the curves")
-    S = np.cumsum(cdist(short, long_), axis=1)            # S[i, j] = sum_{l <= j} ||short_i - long_l||
-    row, u = S[0], np.empty(len(long_))
-    for prefix in S[1:]:
-        u[0] = row[0]
-        np.minimum(row[1:], row[:-1], out=u[1:])
-        u[1:] -= prefix[:-1]
-        np.minimum.accumulate(u, out=u)
-        row = prefix + u
-    return float(row[-1])
+    return euler_until_rest(field, starts, dt=dt, max_steps=max_steps, vel_tol=vel_tol, window=window)
 
 
 def nearest_demo_score(train, test) -> float:
@@ -200,7 +119,7 @@ def nearest_demo_score(train, test) -> float:
     train, test = list(train), list(test)
     if not train or not test:
         raise InputError(f"Need at least one training and one test curve, got {len(train)} and {len(test)}.")
-    return float(np.mean([min(dtw_cumulative(tr, te) for tr in train) for te in test]))
+    return float(np.mean([min(dtwd(tr, te).total for tr in train) for te in test]))
 
 
 # ---------------------------------------------------------------- one shape
@@ -234,7 +153,7 @@ def evaluate_shape(fit_fn: Callable, demos) -> dict:
             result.update({f"dtwd_{part}": [np.inf] * len(curves), f"dtwd_{part}_mean": np.inf,
                            f"n_points_{part}": 0, "failure": str(exc)})
             continue
-        scores = [dtw_cumulative(r, d.pos) for r, d in zip(reps, curves)]
+        scores = [dtwd(r, d.pos).total for r, d in zip(reps, curves)]
         result.update({f"dtwd_{part}": scores, f"dtwd_{part}_mean": float(np.mean(scores)),
                        f"n_points_{part}": len(reps[0])})
     result["reproduce_s"] = time.perf_counter() - t0
@@ -266,6 +185,6 @@ def load_seds_published(path) -> dict[str, dict[str, float]]:
 
 
 __all__ = [
-    "SINGLE_PATTERN_SHAPES", "split", "start_points", "euler_reproduce", "dtw_cumulative",
+    "SINGLE_PATTERN_SHAPES", "split", "start_points", "euler_reproduce",
     "nearest_demo_score", "evaluate_shape", "load_seds_published",
 ]

@@ -1,4 +1,4 @@
-"""Accuracy metrics for reproductions of demonstrations.
+"""Accuracy metrics for reproductions of demonstrations: DTWD, SEA, velocity and goal errors.
 
 Units: positions in the data's length unit L (mm for LASA), time in s. Curves are given as
 arrays (T, n) or as objects with a ``pos`` attribute (``Trajectory``, ``Demonstration``).
@@ -10,12 +10,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sosdyn.errors import InputError, SolverError, SosdynError
+from sosdyn.errors import InputError, SosdynError
+from sosdyn.limits import check_bytes
 from sosdyn.lfd.data import Demonstration, Demonstrations
 
 
-def _curve(x, what: str) -> np.ndarray:
-    """Positions (T, n) of an array or of an object with ``pos``, checked finite and non-empty."""
+def curve(x, what: str) -> np.ndarray:
+    """Positions (T, n) of an array or of an object with ``pos``, as a writable float copy,
+    checked finite and non-empty (InputError naming ``what`` and the first bad sample)."""
     try:
         arr = np.array(getattr(x, "pos", x), dtype=float)  # a writable copy (the C DTW needs one)
     except (TypeError, ValueError) as exc:
@@ -29,7 +31,7 @@ def _curve(x, what: str) -> np.ndarray:
 
 
 def _pair(a, b) -> tuple[np.ndarray, np.ndarray]:
-    A, B = _curve(a, "first curve"), _curve(b, "second curve")
+    A, B = curve(a, "first curve"), curve(b, "second curve")
     if A.shape[1] != B.shape[1]:
         raise InputError(f"The curves have dimensions {A.shape[1]} and {B.shape[1]}; they must match.")
     return A, B
@@ -58,7 +60,7 @@ class DTWDistance:
     path_length: int
 
 
-def _path_length(D: np.ndarray) -> int:
+def warping_path_length(D: np.ndarray) -> int:
     """Number of pairs on the optimal warping path, traced back through the cumulative cost
     matrix D (N+1, M+1) from (N, M) to (1, 1), preferring diagonal, then vertical steps."""
     item = D.item  # plain floats: much faster than numpy scalar indexing in this loop
@@ -81,10 +83,13 @@ def dtwd(a, b) -> DTWDistance:
     ``total = min_P sum_{(i, j) in P} ||a_i - b_j||`` over monotone warping paths P from
     (0, 0) to (N-1, M-1) with steps (1,0), (0,1), (1,1): the cumulative (not root-of-squares)
     sum, the convention of ds-opt and of the CDSP authors. ``per_point = total / |P|``.
-    Uses the C implementation of dtaidistance (about 10 ms for 1000 x 1000 points).
+    Uses the C implementation of dtaidistance (about 10 ms for 1000 x 1000 points); the
+    (N+1) x (M+1) cost matrix is checked against ``max_bytes`` first.
     """
     A, B = _pair(a, b)
-    try:
+    check_bytes(8.0 * (len(A) + 1) * (len(B) + 1), f"DTW of {len(A)} x {len(B)} points (the cost matrix)",
+                "subsample the curves")
+    try:   # lazy: dtaidistance is an optional dependency (the "eval" extra); say how to get it
         from dtaidistance import dtw
     except ImportError as exc:
         raise SosdynError("dtwd needs dtaidistance: pip install 'dtaidistance>=2.3.12'.") from exc
@@ -95,25 +100,8 @@ def dtwd(a, b) -> DTWDistance:
     # returns the square root); warping_path(use_c=True) ignores inner_dist, so the path is
     # read back from the cumulative-cost matrix instead.
     total, D = dtw.warping_paths_fast(A, B, use_ndim=True, inner_dist="euclidean")
-    length = _path_length(D)
+    length = warping_path_length(D)
     return DTWDistance(float(total), float(total) / length, (len(A), len(B)), length)
-
-
-def dtwd_reference(a, b) -> DTWDistance:
-    """Pure numpy/Python O(N M) version of :func:`dtwd` (slow; for tests and cross-checks).
-
-    ``D[i, j] = ||a_i - b_j|| + min(D[i-1, j-1], D[i-1, j], D[i, j-1])`` with ``D[0, 0] = 0``
-    and ``inf`` on the rest of row and column 0 (1-based indices into a and b).
-    """
-    A, B = _pair(a, b)
-    cost = np.linalg.norm(A[:, None, :] - B[None, :, :], axis=2)
-    D = np.full((len(A) + 1, len(B) + 1), np.inf)
-    D[0, 0] = 0.0
-    for i in range(1, len(A) + 1):
-        for j in range(1, len(B) + 1):
-            D[i, j] = cost[i - 1, j - 1] + min(D[i - 1, j - 1], D[i - 1, j], D[i, j - 1])
-    length = _path_length(D)
-    return DTWDistance(float(D[-1, -1]), float(D[-1, -1]) / length, (len(A), len(B)), length)
 
 
 # ---------------------------------------------------------------- swept error area
@@ -164,7 +152,7 @@ def resample(reproduction, n_samples: int) -> np.ndarray:
 
     Uses ``reproduction.t`` when present, otherwise assumes uniform sampling.
     """
-    X = _curve(reproduction, "reproduction")
+    X = curve(reproduction, "reproduction")
     t = np.asarray(getattr(reproduction, "t", np.arange(len(X))), dtype=float)
     if len(X) < 2 or t.shape != (len(X),) or np.any(np.diff(t) <= 0):
         raise InputError(f"The reproduction needs >= 2 samples with increasing times, got {len(X)} samples.")
@@ -181,7 +169,7 @@ def sea(reproduction, demo) -> float:
     the same duration as the demo (e.g. :func:`evaluate_reproductions`), so SEA penalises both
     spatial and temporal mismatch.
     """
-    X = _curve(demo, "demo")
+    X = curve(demo, "demo")
     if len(X) < 2:
         raise InputError("The demo needs at least 2 samples for SEA.")
     Xh = resample(reproduction, len(X))
@@ -230,234 +218,8 @@ def edot(model_or_predict, demos, *, min_speed: float | None = None) -> float:
 
 def goal_error(traj, goal) -> float:
     """``||x(T) - goal||``: distance of the last position to the goal, in L."""
-    X = _curve(traj, "trajectory")
+    X = curve(traj, "trajectory")
     g = np.asarray(goal, dtype=float)
     if g.shape != (X.shape[1],):
         raise InputError(f"goal has shape {g.shape}; expected ({X.shape[1]},).")
     return float(np.linalg.norm(X[-1] - g))
-
-
-# ---------------------------------------------------------------- rollouts of models
-
-
-def rollout_function(model):
-    """``model.rollout`` if present, else ``model`` itself: called as ``f(x0, duration, dt=...)``."""
-    fn = getattr(model, "rollout", model)
-    if not callable(fn):
-        raise InputError("Pass a model with .rollout(x0, duration, dt=...) or such a function.")
-    return fn
-
-
-def summarize(values: dict[str, list]) -> tuple[dict[str, float], dict[str, float]]:
-    """Mean and (population, ddof = 0) standard deviation of each list of numbers; both are inf
-    when a list holds inf (a failed rollout)."""
-    finite = {k: bool(np.all(np.isfinite(v))) for k, v in values.items()}
-    return ({k: float(np.mean(v)) if finite[k] else np.inf for k, v in values.items()},
-            {k: float(np.std(v)) if finite[k] else np.inf for k, v in values.items()})
-
-
-@dataclass
-class GridConvergence:
-    """Result of :func:`grid_convergence`: ``fraction`` converged of ``n_starts``; each failure is
-    a dict with ``x0``, ``final_error`` (L, inf if the rollout failed) and ``reason``."""
-
-    fraction: float
-    n_starts: int
-    tol: float
-    failures: list[dict]
-
-
-def grid_starts(demos, n_grid: int = 10, seed: int = 0) -> np.ndarray:
-    """Start points over the data's bounding box scaled by 2 about its centre.
-
-    n <= 2: a full grid with ``n_grid`` points per axis; n > 2: ``n_grid**2`` uniform random
-    points (``seed``). Flat axes get the half-width of the widest axis (1 if all are flat).
-    """
-    X, _ = as_demonstrations(demos).stacked()
-    if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 2:
-        raise InputError(f"n_grid must be an integer >= 2, got {n_grid!r}.")
-    lo, hi = X.min(axis=0), X.max(axis=0)
-    centre, half = (lo + hi) / 2, (hi - lo) / 2
-    half = np.where(half > 0, half, max(half.max(), 1.0))
-    lo, hi = centre - 2 * half, centre + 2 * half
-    if X.shape[1] <= 2:
-        axes = np.meshgrid(*[np.linspace(a, b, n_grid) for a, b in zip(lo, hi)], indexing="ij")
-        return np.column_stack([a.ravel() for a in axes])
-    return np.random.default_rng(seed).uniform(lo, hi, size=(n_grid**2, X.shape[1]))
-
-
-def grid_convergence(model_rollout_fn, demos, n_grid: int = 10, horizon: float | None = None,
-                     tol_mm: float = 1.0, *, dt: float | None = None, seed: int = 0) -> GridConvergence:
-    """Fraction of rollouts from :func:`grid_starts` that end within ``tol_mm`` (L) of their goal.
-
-    Each start is rolled out for ``horizon`` s (default 5 x the longest demo), sampled every
-    ``dt`` (default horizon / 500), at the model's training goal; converged means
-    ``||x(horizon) - goal|| <= tol_mm``. A rollout that raises SolverError counts as a failure.
-    """
-    demos = as_demonstrations(demos)
-    fn = rollout_function(model_rollout_fn)
-    horizon = 5.0 * max(d.duration for d in demos) if horizon is None else float(horizon)
-    dt = horizon / 500 if dt is None else float(dt)
-    starts = grid_starts(demos, n_grid, seed)
-    failures = []
-    for x0 in starts:
-        try:
-            traj = fn(x0, horizon, dt=dt)
-        except SolverError as exc:
-            failures.append({"x0": x0, "final_error": np.inf, "reason": str(exc)})
-            continue
-        error = goal_error(traj, traj.goal_history[-1])
-        if not error <= tol_mm:
-            failures.append({"x0": x0, "final_error": error, "reason": f"ends {error:.3g} from the goal"})
-    return GridConvergence(1.0 - len(failures) / len(starts), len(starts), float(tol_mm), failures)
-
-
-_BATCH_METHODS = ("LSODA", "BDF", "Radau")
-
-
-def _integrate_batch(field, X0: np.ndarray, horizon: float, goal: np.ndarray, *, method: str,
-                     rtol: float, atol: float, escape: float = np.inf) -> np.ndarray:
-    """Final states (m, n) of ``xdot = field(x, goal)`` from all rows of ``X0`` at once.
-
-    The starts are stacked into one ODE ``y = X.ravel()`` (start-major, so its Jacobian is
-    block diagonal with n x n blocks). LSODA is told the band (``lband = uband = n - 1``), so
-    a finite-difference Jacobian costs 2n - 1 field calls, not m n; BDF/Radau get the block
-    sparsity pattern. LSODA's error test uses the weighted max-norm, so every start is held
-    to ``rtol``/``atol`` as in a rollout of its own. Starts farther than ``escape`` from the
-    goal are frozen there (their derivative set to 0): they have diverged, and integrating
-    their exponential growth would only shrink everybody's steps. Raises SolverError on failure.
-    """
-    from scipy.integrate import solve_ivp
-
-    m, n = X0.shape
-
-    def rhs(_t, y):
-        X = y.reshape(m, n)
-        V = np.asarray(field(X, goal), dtype=float)
-        if V.shape != X.shape:
-            raise InputError(f"The field returned shape {V.shape} for X of shape {X.shape}.")
-        if not np.all(np.isfinite(V)):
-            raise SolverError("The field returned NaN/inf.", status="solver_error")
-        if np.isfinite(escape):
-            V[np.linalg.norm(X - goal, axis=1) > escape] = 0.0
-        return V.ravel()
-
-    options = {}
-    if method == "LSODA":
-        options = {"lband": n - 1, "uband": n - 1}
-    else:
-        from scipy.sparse import block_diag
-        options = {"jac_sparsity": block_diag([np.ones((n, n))] * m, format="csc")}
-    with np.errstate(over="ignore", invalid="ignore"):
-        sol = solve_ivp(rhs, (0.0, horizon), X0.ravel(), method=method, t_eval=[horizon],
-                        rtol=rtol, atol=atol, **options)
-    if not sol.success or sol.y.shape[1] != 1 or not np.all(np.isfinite(sol.y)):
-        raise SolverError(f"Integration failed: {sol.message}", status="solver_error")
-    return sol.y[:, -1].reshape(m, n)
-
-
-def final_states(field, starts, horizon: float, goal, *, method: str = "LSODA", rtol: float = 1e-6,
-                 atol: float = 1e-8, escape: float = np.inf) -> tuple[np.ndarray, list[str | None]]:
-    """``x(horizon)`` of ``xdot = field(x, goal)`` from every row of ``starts`` (m, n), batched.
-
-    All starts are integrated as one ODE (:func:`_integrate_batch`); if that fails (a start
-    diverges, the field returns NaN), the batch is split in halves recursively, so only the
-    failing starts are lost. Returns the final states (inf rows for failures) and, per
-    start, None or the failure reason. ``escape``: see :func:`_integrate_batch`; a start
-    frozen there is reported with reason "diverged".
-    """
-    X0 = np.atleast_2d(np.asarray(starts, dtype=float))
-    goal = np.asarray(goal, dtype=float)
-    if method not in _BATCH_METHODS:
-        raise InputError(f"method must be one of {_BATCH_METHODS}, got {method!r}.")
-    out = np.full(X0.shape, np.inf)
-    reasons: list[str | None] = [None] * len(X0)
-
-    def solve(idx):
-        try:
-            out[idx] = _integrate_batch(field, X0[idx], float(horizon), goal, method=method,
-                                        rtol=rtol, atol=atol, escape=escape)
-            for i in idx:
-                if np.linalg.norm(out[i] - goal) > escape:
-                    reasons[i] = f"diverged: left the ball of radius {escape:.3g} about the goal"
-        except SolverError as exc:
-            if len(idx) == 1:
-                reasons[idx[0]] = str(exc)
-                return
-            half = len(idx) // 2
-            solve(idx[:half])
-            solve(idx[half:])
-
-    if len(X0):
-        solve(np.arange(len(X0)))
-    return out, reasons
-
-
-def grid_convergence_batched(model, demos, n_grid: int = 10, horizon: float | None = None,
-                             tol_mm: float = 1.0, *, goal=None, seed: int = 0, method: str = "LSODA",
-                             rtol: float = 1e-6, atol: float = 1e-8,
-                             escape_factor: float = 100.0) -> GridConvergence:
-    """:func:`grid_convergence` for an autonomous model, all starts integrated at once.
-
-    ``model`` has ``field(X (m, n), goal) -> Xdot (m, n)`` (the field functions of CDSP, GMR
-    and CLF-DM accept many rows) and ``goal_``; or pass the field callable itself and ``goal``
-    (default: the demos' goal). Same starts, horizon (default 5 x the longest demo), goal and
-    criterion ``||x(horizon) - goal|| <= tol_mm`` as :func:`grid_convergence`, with the
-    integrator's tolerances of a single rollout; about one rollout's cost instead of
-    ``n_grid**2`` (see :func:`final_states`). A start whose integration fails counts as a
-    failure with ``final_error`` inf; one that gets farther than ``escape_factor`` x the
-    diagonal of the data's bounding box from the goal is stopped there and counts as a
-    failure (diverged) with its distance at that moment.
-    """
-    demos = as_demonstrations(demos)
-    field = getattr(model, "field", model)
-    if not callable(field):
-        raise InputError("Pass a model with .field(X, goal) or such a function.")
-    if goal is None:
-        goal = getattr(model, "goal_", None)
-    goal = np.asarray(demos.goal if goal is None else goal, dtype=float)
-    if goal.shape != (demos.dim,):
-        raise InputError(f"goal has shape {goal.shape}; expected ({demos.dim},).")
-    horizon = 5.0 * max(d.duration for d in demos) if horizon is None else float(horizon)
-    if not horizon > 0:
-        raise InputError(f"horizon must be > 0, got {horizon!r}.")
-    starts = grid_starts(demos, n_grid, seed)
-    X, _ = demos.stacked()
-    escape = escape_factor * max(float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))), tol_mm)
-    final, reasons = final_states(field, starts, horizon, goal, method=method, rtol=rtol, atol=atol,
-                                  escape=escape)
-    errors = np.linalg.norm(final - goal, axis=1)
-    failures = []
-    for x0, error, reason in zip(starts, errors, reasons):
-        if reason is not None and reason.startswith("diverged"):
-            failures.append({"x0": x0, "final_error": float(error), "reason": reason})
-        elif reason is not None:
-            failures.append({"x0": x0, "final_error": np.inf, "reason": reason})
-        elif not error <= tol_mm:
-            failures.append({"x0": x0, "final_error": float(error),
-                             "reason": f"ends {error:.3g} from the goal"})
-    return GridConvergence(1.0 - len(failures) / len(starts), len(starts), float(tol_mm), failures)
-
-
-def evaluate_reproductions(model, demos) -> dict:
-    """Reproduce each demo from its first point and score it.
-
-    Each rollout lasts the demo's own duration with dt = its mean step (so it has the demo's
-    sample count), at the model's training goal (``goal=None``). Returns per-demo lists
-    ``sea`` (L^2), ``dtwd`` and ``dtwd_per_point`` (L), ``goal_error`` (L, to the goal in
-    effect at the end), ``trajectories``, and their ``mean`` / ``std`` (ddof = 0).
-    """
-    demos = as_demonstrations(demos)
-    fn = rollout_function(model)
-    scores = {"sea": [], "dtwd": [], "dtwd_per_point": [], "goal_error": []}
-    trajectories = []
-    for demo in demos:
-        traj = fn(demo.pos[0], demo.duration, dt=demo.duration / (len(demo.t) - 1))
-        distance = dtwd(traj, demo)
-        scores["sea"].append(sea(traj, demo))
-        scores["dtwd"].append(distance.total)
-        scores["dtwd_per_point"].append(distance.per_point)
-        scores["goal_error"].append(goal_error(traj, traj.goal_history[-1]))
-        trajectories.append(traj)
-    mean, std = summarize(scores)
-    return {**scores, "trajectories": trajectories, "mean": mean, "std": std}

@@ -14,7 +14,8 @@ from typing import NamedTuple
 import numpy as np
 
 from sosdyn.errors import InputError, SolverError
-from sosdyn.evaluation.metrics import as_demonstrations, dtwd, goal_error, rollout_function, summarize
+from sosdyn.evaluation.metrics import as_demonstrations, dtwd, goal_error
+from sosdyn.evaluation.reproduction import rollout_function, summarize
 
 KINDS = ("push", "goal_change")
 

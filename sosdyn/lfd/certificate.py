@@ -1,5 +1,8 @@
 """Evidence that a learned CDSP model contracts: its SOS certificate, checked independently.
 
+The certificate: M(z) - eps I and -G_k(z) (k = 1..K) are SOS matrices
+(:func:`~sosdyn.lfd.contraction.certificate_matrices`, the one builder of these matrices,
+used by :func:`certify` to solve for it and by :func:`check_certificate` to check it).
 Two checks, neither reusing the solver's matching matrices:
 
 1. Gram check -- the polynomials y^T (M - eps I) y and y^T (-G_k) y are rebuilt from the
@@ -11,6 +14,11 @@ Two checks, neither reusing the solver's matching matrices:
 
 The Gram check is the proof; the sampled check is an independent sanity check of it. Loading a
 model file always runs both with DEFAULT_SAMPLES states, whatever the file's parameters say.
+
+Why the paper's polynomial metric adds nothing for linear sub-systems: with f_k = A_k z,
+dM(z)[A_k z] vanishes at z = 0, so evaluating (4) at z = 0 gives
+A_k^T M(0) + M(0) A_k + gamma M(0) <= 0 -- the constant metric M(0) certifies every A_k
+that M(z) certifies. :func:`collapse_diagnostic` measures it on a learned model.
 """
 from __future__ import annotations
 
@@ -21,13 +29,11 @@ import numpy as np
 
 from ..errors import InputError
 from ..limits import check_bytes
-from ..poly import PolyMatrix
-from ..sos import SOSProgram
-from ..sos.solution import check_gram
-from .fields import (contraction_matrices, contraction_polymatrix, eval_metric, generalized_max_eig,
-                     numeric_fields, numeric_metric)
+from ..sos import SOSProgram, check_gram, matrix_form
+from .contraction import certificate_matrices, constant_index, degree, sample_states, sampled_eigenvalues
 
 SAMPLED_TOL = 1e-8
+COLLAPSE_TOL, COLLAPSE_SAMPLES = 1e-7, 2000
 DEFAULT_SAMPLES, MIN_SAMPLES, MAX_SAMPLES = 10_000, 100, 10**6   # states of the sampled check
 
 
@@ -63,11 +69,21 @@ class CertificateReport:
                 f"{self.min_metric_eig:.3e} -> {'PASSED' if self.passed else 'FAILED'}")
 
 
+def certify(C, fexps, W, mexps, gamma, eps, solver="CLARABEL"):
+    """Solve for the certificate of numeric (C, W): M - eps I and -G_k SOS matrices.
+
+    Returns the Solution (its program's constraints carry the Gram matrices)."""
+    prog = SOSProgram("certificate")
+    for name, P in certificate_matrices(C, fexps, W, mexps, gamma, eps):
+        prog.add_sos_matrix(P, name=name)
+    return prog.solve(solver=solver)
+
+
 def extract_certificate(solution, eps: float) -> dict:
     """Plain-data certificate (bases and Gram matrices) of a certification Solution.
 
-    The solver's numbers are taken as they are (``checked=False``): :func:`check_model` is the
-    independent check that decides whether they certify the model."""
+    The solver's numbers are taken as they are (``checked=False``): :func:`check_certificate`
+    is the independent check that decides whether they certify the model."""
     cons = []
     for con in solution.program.sos_constraints:
         finite = np.isfinite(solution.x).all()
@@ -77,30 +93,21 @@ def extract_certificate(solution, eps: float) -> dict:
     return {"status": solution.status, "eps": eps, "constraints": cons}
 
 
-def certificate_matrices(model):
-    """The polynomial matrices the certificate is about, in its order: M - eps I, -G_1..-G_K."""
-    vars, n = model._vars, model.dim_
-    M = numeric_metric(model.W_, model.metric_exps_, vars)
-    mats = [M - model.certificate_["eps"] * PolyMatrix.identity(n)]
-    mats += [-contraction_polymatrix(f, M, vars, model.gamma)
-             for f in numeric_fields(model.C_, model.field_exps_, vars)]
-    return mats
-
-
-def check_model(model, n_samples: int, seed: int) -> CertificateReport:
-    """Both checks on ``model``; the sampled one at ``n_samples`` states drawn with ``seed``."""
+def check_certificate(C, fexps, W, mexps, gamma, certificate: dict, n_samples: int,
+                      seed: int) -> CertificateReport:
+    """Both checks of ``certificate`` (as :func:`extract_certificate` returns it) for the model
+    (C, W, gamma); the sampled one at ``n_samples`` states drawn with ``seed``."""
     n_samples = check_sample_count(n_samples)
-    K, n = model.C_.shape[:2]
-    m = model.C_.shape[2] + model.W_.shape[2]
+    K, n = C.shape[:2]
+    m = C.shape[2] + W.shape[2]
     # G, J, M repeated, J^T M, its transpose, dM[f], the whitened S: ~8 (K, n, n) blocks per state
     check_bytes(8.0 * n_samples * (8 * K * n * n + n**3 + 2 * n * m), "the sampled certificate check",
                 "fewer samples (n_samples)")
-    cert = model.certificate_
     checks = []
-    mats = certificate_matrices(model)
-    if len(mats) == len(cert["constraints"]):
-        for P, c in zip(mats, cert["constraints"]):
-            q, _ = SOSProgram._matrix_form(P)
+    mats = certificate_matrices(C, fexps, W, mexps, gamma, certificate["eps"])
+    if len(mats) == len(certificate["constraints"]):
+        for (_, P), c in zip(mats, certificate["constraints"]):
+            q, _ = matrix_form(P)
             vars = tuple(c["vars"])
             basis = np.asarray(c["basis"], dtype=np.int64).reshape(-1, len(vars))
             Q = np.asarray(c["gram"], dtype=float)
@@ -108,14 +115,30 @@ def check_model(model, n_samples: int, seed: int) -> CertificateReport:
                 continue
             checks.append(check_gram(c["name"], "sos_matrix", q.with_vars(vars), basis, Q))
     complete = len(checks) == len(mats)
-    Zs = np.random.default_rng(seed).uniform(-2.0, 2.0, size=(int(n_samples), model.dim_))
-    G = contraction_matrices(model.C_, model.field_exps_, model.W_, model.metric_exps_, Zs, model.gamma)
-    M = eval_metric(model.W_, model.metric_exps_, Zs)
-    min_m = float(np.linalg.eigvalsh(M)[:, 0].min())
-    max_g = float(generalized_max_eig(G, M).max()) if min_m > 0 else np.inf
+    max_g, min_m = sampled_eigenvalues(C, fexps, W, mexps, sample_states(seed, n_samples, n), gamma)
     passed = (complete and all(c.passed for c in checks) and max_g <= SAMPLED_TOL and min_m > 0
-              and cert["status"] in ("optimal", "optimal_inaccurate"))
+              and certificate["status"] in ("optimal", "optimal_inaccurate"))
     return CertificateReport(
-        cert["status"], min((c.min_eig for c in checks), default=np.nan),
+        certificate["status"], min((c.min_eig for c in checks), default=np.nan),
         max((c.residual for c in checks), default=np.nan), max_g, min_m, int(n_samples), bool(passed),
         [asdict(c) for c in checks])
+
+
+def collapse_diagnostic(C, fexps, W, mexps, gamma, seed: int) -> dict | None:
+    """Does the constant part M(0) of the metric certify the same fields? (module docstring).
+
+    None for a constant metric; else the largest generalised eigenvalue of (G_k, M(0)) at
+    COLLAPSE_SAMPLES states drawn with ``seed``, and whether it is <= COLLAPSE_TOL."""
+    if degree(mexps) == 0:
+        return None
+    const = constant_index(mexps)
+    Zs = sample_states(seed, COLLAPSE_SAMPLES, W.shape[0])
+    worst, _ = sampled_eigenvalues(C, fexps, W[:, :, const:const + 1], mexps[const:const + 1], Zs, gamma)
+    holds = worst <= COLLAPSE_TOL
+    linear = degree(fexps) == 1
+    return {"constant_metric_certifies": bool(holds), "max_eig_with_constant_metric": worst,
+            "field_degree": degree(fexps),
+            "note": ("collapse: M(0) alone certifies the learned fields, as it must for linear "
+                     "sub-systems (dM[A z] = 0 at z = 0)") if holds and linear else
+                    ("the state-dependent metric is needed: M(0) alone does not certify the fields"
+                     if not holds else "M(0) alone also certifies these fields")}

@@ -12,6 +12,9 @@ from scipy.special import logsumexp
 
 from ..errors import InputError
 
+MAX_BIC_COMPONENTS = 10         # n_components="bic" tries K = 1..10
+MIN_SAMPLES_PER_COMPONENT = 5   # and needs at least 5 samples per Gaussian
+
 
 def check_joint_gmm(gmm, n: int) -> None:
     """A fitted full-covariance sklearn GaussianMixture on [x, xdot] with x of dimension n."""
@@ -29,6 +32,36 @@ def gmm_linear_maps(gmm, n: int):
     A = np.linalg.solve(cov[:, :n, :n], cov[:, :n, n:]).transpose(0, 2, 1)   # S_xx^-1 S_x,xdot = A^T
     b = mean[:, n:] - np.einsum("kij,kj->ki", A, mean[:, :n])
     return A, b
+
+
+def fit_joint_gmm(Z, Zdot, n_components, seed: int):
+    """EM on the joint samples [z, zdot]: (sklearn GaussianMixture, BIC list or None).
+
+    ``n_components`` is K, or "bic" for the K in 1..MAX_BIC_COMPONENTS (at most one per
+    MIN_SAMPLES_PER_COMPONENT samples) with the lowest Bayesian information criterion."""
+    from sklearn.mixture import GaussianMixture     # lazy: importing sklearn takes seconds; only fits need it
+
+    data = np.hstack([Z, Zdot])
+
+    def em(k):
+        return GaussianMixture(k, covariance_type="full", random_state=seed, reg_covar=1e-6,
+                               max_iter=500).fit(data)
+    if n_components != "bic":
+        return em(n_components), None
+    top = min(MAX_BIC_COMPONENTS, Z.shape[0] // MIN_SAMPLES_PER_COMPONENT)
+    fits = [em(k) for k in range(1, top + 1)]
+    bic = [float(g.bic(data)) for g in fits]
+    return fits[int(np.argmin(bic))], bic
+
+
+def gmr_cost(gmm, Z, Zdot) -> float:
+    """Cost (18) of the unconstrained GMR of ``gmm``: mean_t |sum_k h_k(z_t)(A_k z_t + b_k) - zdot_t|^2,
+    the accuracy ceiling of this GMM."""
+    n = Z.shape[1]
+    A, b = gmm_linear_maps(gmm, n)
+    H = PositionMixture.from_joint(gmm, n).responsibilities(Z)
+    pred = np.einsum("tk,kij,tj->ti", H, A, Z) + H @ b
+    return float(((pred - Zdot) ** 2).sum() / Z.shape[0])
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """Model files: plain JSON (no pickle), checksummed, optionally signed, written atomically.
 
-This module knows the file, not the estimator (the estimator's fields are checked by
-:func:`sosdyn.lfd.cdsp.load_model` with the validators below). A file is one JSON object::
+This module knows the file, not the estimator: its content is a dict whose ``state`` is
+checked field by field by :mod:`sosdyn.lfd.model_state`. A file is one JSON object::
 
     format       "sosdyn-cdsp"
     version      2
@@ -42,8 +42,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, ModelFileError
-from ..limits import format_bytes, get_limits
+from ..errors import InputError, ModelFileError, ResourceLimitError
+from ..limits import check_json_depth, format_bytes, get_limits
 
 FORMAT, VERSION = "sosdyn-cdsp", 2
 CHECKSUM, SIGNATURE = "sha256", "hmac_sha256"
@@ -116,17 +116,6 @@ def first_bad_value(obj, where: str = "") -> tuple[str, str] | None:
         elif not (v is None or isinstance(v, (str, int))):
             return w, f"a {type(v).__name__}, not JSON data"
     return None
-
-
-def json_depth(obj) -> int:
-    """Nesting depth of parsed JSON ([] and {} count one level each; a scalar is 0)."""
-    deepest, stack = 0, [(obj, 1)]
-    while stack:
-        v, d = stack.pop()
-        if isinstance(v, (dict, list)):
-            deepest = max(deepest, d)
-            stack.extend((x, d + 1) for x in (v.values() if isinstance(v, dict) else v))
-    return deepest
 
 
 # ---------------------------------------------------------------------- writing
@@ -245,24 +234,22 @@ def _unique_keys(pairs):
 
 
 def parse_json(data: bytes, path: Path):
-    """Parse ``data`` strictly; nesting over ``max_json_depth`` is refused."""
-    limit = get_limits().max_json_depth
+    """Parse ``data`` strictly; nesting over ``max_json_depth`` is refused before parsing."""
     try:
-        doc = json.loads(data.decode("utf-8"), object_pairs_hook=_unique_keys)
+        check_json_depth(data, "its JSON text", "check it is the right file")
+    except ResourceLimitError as exc:
+        raise ModelFileError(f"{path} is not a model file (one nests about 7 levels): {exc}") from None
+    try:
+        return json.loads(data.decode("utf-8"), object_pairs_hook=_unique_keys)
     except ModelFileError as exc:
         raise ModelFileError(f"{path} is not a valid model file: {exc}. {REFIT_HINT}") from None
-    except RecursionError:
+    except RecursionError:                  # only with max_json_depth raised past Python's own limit
         raise ModelFileError(f"{path} nests JSON deeper than Python's parser allows (the limit "
-                             f"max_json_depth is {limit}); not a model file. {REFIT_HINT}") from None
+                             f"max_json_depth is {get_limits().max_json_depth}); not a model file. "
+                             f"{REFIT_HINT}") from None
     except (UnicodeDecodeError, ValueError) as exc:       # JSONDecodeError is a ValueError
         raise ModelFileError(f"{path} is not a sosdyn model file (corrupt or truncated JSON: {exc}). "
                              f"{REFIT_HINT}") from None
-    depth = json_depth(doc)
-    if depth > limit:
-        raise ModelFileError(f"{path} nests JSON {depth} levels deep, over the limit max_json_depth = "
-                             f"{limit}; a model file nests about 7. Try: check it is the right file, or "
-                             "raise the limit with sosdyn.set_limits(max_json_depth=...).")
-    return doc
 
 
 def read_model_file(path, key=None) -> dict:
@@ -300,52 +287,3 @@ def read_model_file(path, key=None) -> dict:
                                  "signed with another key. Try: the key it was saved with; otherwise do "
                                  "not trust this file.")
     return {k: v for k, v in doc.items() if k not in (CHECKSUM, SIGNATURE)}
-
-
-# ---------------------------------------------------------------------- field validators
-def need(mapping: dict, name: str, where: str, kind=None):
-    """mapping[name] (``where`` names the mapping; "" at the top), present and (if ``kind`` is
-    given) of that JSON type."""
-    full = f"{where}.{name}" if where else name
-    if not isinstance(mapping, dict) or name not in mapping:
-        raise ModelFileError(f"malformed: the field {full} is missing")
-    v = mapping[name]
-    if kind is not None and not isinstance(v, kind):
-        raise ModelFileError(f"malformed: {full} is a {type(v).__name__}, expected a {kind.__name__}")
-    return v
-
-
-def integer(value, where: str, lo: int = 0) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < lo:
-        raise ModelFileError(f"malformed: {where} must be an integer >= {lo}, got {value!r:.40}")
-    return value
-
-
-def positive(value, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-        raise ModelFileError(f"malformed: {where} must be a positive number, got {value!r:.40}")
-    return float(value)
-
-
-def short_string(value, where: str, max_len: int = 32) -> str:
-    if not isinstance(value, str) or len(value) > max_len or not value.isprintable():
-        raise ModelFileError(f"malformed: {where} must be a printable string of at most {max_len} "
-                             f"characters, got {value!r:.60}")
-    return value
-
-
-def array(value, where: str, shape: tuple, dtype=float) -> np.ndarray:
-    """``value`` (nested lists) as an array of exactly ``shape``: numbers (``dtype`` float) or
-    non-negative integers (``dtype`` int). JSON true/false are not numbers here."""
-    try:
-        a = np.array(value, dtype=object)
-    except ValueError:                       # ragged nesting numpy cannot even hold as objects
-        a = np.empty(0, dtype=object)
-    if a.shape != tuple(shape):
-        raise ModelFileError(f"malformed: {where} must be an array of shape {tuple(shape)}, got "
-                             f"{'shape ' + str(a.shape) if a.size else 'a ragged or empty nesting'}")
-    kinds = (int,) if dtype is int else (int, float)
-    if not all(type(v) in kinds for v in a.flat) or (dtype is int and not all(0 <= v < 2**31 for v in a.flat)):
-        raise ModelFileError(f"malformed: {where} must hold "
-                             f"{'non-negative integers (exponents)' if dtype is int else 'numbers'} only")
-    return a.astype(np.int64 if dtype is int else float)

@@ -13,9 +13,10 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import minimize
 from scipy.special import logsumexp
 
-from .fields import eval_fields, monomial_values
+from ..poly import monomial_values
+from .contraction import eval_fields
 from .gmm import PositionMixture
-from .steps import LeastSquaresData
+from .steps import DynamicsStep, LeastSquaresData
 
 
 def _pack(mix: PositionMixture) -> np.ndarray:
@@ -90,24 +91,29 @@ def _well_posed(mix: PositionMixture, max_condition: float = 1e10) -> bool:
     return bool(np.linalg.cond(mix.covariances).max() < max_condition)
 
 
-def refine_mixture(model, dyn, rounds: int = 3, maxiter: int = 40) -> None:
-    """Alternate (mixture | fields fixed) and (fields | mixture, metric fixed); updates model."""
-    Z, Zdot = model._Z, model._Zdot
-    K, n = model.mixture_.n_components, model.dim_
-    Phi = monomial_values(Z, model.field_exps_)
-    for _ in range(rounds):
-        F = eval_fields(model.C_, model.field_exps_, Z)                      # (T, K, n)
+def refine_mixture(Z, Zdot, mixture: PositionMixture, C, fexps, dyn: DynamicsStep, record,
+                   rounds: int = 3, maxiter: int = 40):
+    """Alternate (mixture | fields fixed) and (fields | mixture, metric fixed): ``rounds`` times
+    L-BFGS on the mixture (at most ``maxiter`` iterations), each followed by ``dyn.refit``.
 
-        theta0 = _pack(model.mixture_)
+    Stops early when a round does not lower the cost or gives an ill-posed mixture. Each
+    accepted round is reported as ``record(step, cost, sol=None)``. Returns the new
+    (mixture, C); the arguments are not modified.
+    """
+    K, n = mixture.n_components, Z.shape[1]
+    Phi = monomial_values(Z, fexps)
+    for _ in range(rounds):
+        F = eval_fields(C, fexps, Z)                                          # (T, K, n)
+        theta0 = _pack(mixture)
         before = cost_and_gradient(theta0, Z, Zdot, F)[0]
         res = minimize(cost_and_gradient, theta0, args=(Z, Zdot, F), jac=True, method="L-BFGS-B",
                        options={"maxiter": maxiter})
         candidate = _unpack(res.x, K, n)
         if not np.isfinite(res.fun) or res.fun >= before or not _well_posed(candidate):
             break
-        model.mixture_ = candidate
-        model._record("gmm refinement", res.fun)
-        data = LeastSquaresData(model.mixture_.responsibilities(Z), Phi, Zdot)
+        mixture = candidate
+        record("gmm refinement", res.fun)
+        data = LeastSquaresData(mixture.responsibilities(Z), Phi, Zdot)
         C, sol = dyn.refit(data)
-        model.C_ = C
-        model._record("dynamics", data.cost(C), sol)
+        record("dynamics", data.cost(C), sol)
+    return mixture, C

@@ -12,7 +12,8 @@ from numbers import Number
 import numpy as np
 
 from ..errors import NotSymmetricError, PolynomialError
-from .polynomial import Polynomial, finite_points, real_array, variable_names
+from .checks import finite_points, real_array
+from .polynomial import Polynomial, variable_names
 
 
 def _entry(value, vars=()) -> Polynomial:
@@ -61,8 +62,9 @@ class PolyMatrix:
         return tuple(out)
 
     @property
-    def dec(self) -> np.ndarray:
-        return np.unique(np.concatenate([p.dec for p in self.entries.flat] + [np.zeros(0, dtype=np.int64)]))
+    def ids(self) -> np.ndarray:
+        """Sorted decision ids of all entries."""
+        return np.unique(np.concatenate([p.ids for p in self.entries.flat] + [np.zeros(0, dtype=np.int64)]))
 
     @property
     def degree(self) -> int:
@@ -150,8 +152,8 @@ class PolyMatrix:
         vars = variable_names(vars)
         return self.map(lambda p: p.directional_derivative(list(field), vars))
 
-    def assign(self, dec_ids, values) -> "PolyMatrix":
-        return self.map(lambda p: p.assign(dec_ids, values))
+    def assign(self, ids, values) -> "PolyMatrix":
+        return self.map(lambda p: p.assign(ids, values))
 
     # ------------------------------------------------------------------ evaluation
     def __call__(self, X, vars) -> np.ndarray:

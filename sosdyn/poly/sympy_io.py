@@ -6,6 +6,9 @@ variable names, ``+ - *``, ``/`` by a constant, ``**`` (or ``^``, read as ``**``
 does) to a non-negative integer constant, parentheses. Anything else (calls, attributes,
 names not in ``vars``, complex literals) raises :class:`~sosdyn.errors.PolynomialError`.
 A sympy expression is bounded (degree, number of terms) before sympy expands it.
+
+sympy is imported inside the functions that need it: it takes about a second to import, and
+only these conversions use it (``import sosdyn`` stays fast).
 """
 from __future__ import annotations
 
@@ -32,7 +35,7 @@ def from_sympy(expr, vars) -> Polynomial:
     ``vars`` are sympy Symbols, names, or sosdyn indeterminates; their order fixes the
     polynomial's variable order. A string is parsed, never evaluated (module docstring).
     """
-    import sympy
+    import sympy                    # lazily (1 s to import): see the module docstring
 
     names = tuple(str(v) if isinstance(v, sympy.Symbol) else variable_names([v])[0] for v in vars)
     if isinstance(expr, str):
@@ -62,7 +65,7 @@ def from_sympy(expr, vars) -> Polynomial:
 
 def _real(c) -> float:
     """A sympy coefficient as a float; PolynomialError if it is complex or not a number."""
-    import sympy
+    import sympy                    # lazily (1 s to import): see the module docstring
 
     if c.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
         raise PolynomialError(f"coefficient {c} is not finite. Try: remove nan/oo from the expression")
@@ -85,7 +88,7 @@ def _expansion_bound(expr):
     (None, None) where the expression is not of that form (sympy then decides whether it is
     a polynomial). A degree bound above MAX_DEGREE raises PolynomialError.
     """
-    import sympy
+    import sympy                    # lazily (1 s to import): see the module docstring
 
     stack, bounds = [(expr, False)], {}
     while stack:                                   # post-order walk, no recursion
@@ -206,10 +209,10 @@ def _short(text: str, limit: int = 60) -> str:
 
 def to_sympy(poly: Polynomial):
     """A sympy expression of ``poly``; decision variables become symbols ``d<id>``."""
-    import sympy
+    import sympy                    # lazily (1 s to import): see the module docstring
 
     xs = [sympy.Symbol(v) for v in poly.vars]
-    ds = [sympy.Symbol(f"d{int(i)}") for i in poly.dec]
+    ds = [sympy.Symbol(f"d{int(i)}") for i in poly.ids]
     expr = sympy.Integer(0)
     for i in range(poly.nterms):
         c = sympy.nsimplify(poly.coef[i, 0], rational=False) if poly.coef[i, 0] else 0

@@ -4,31 +4,7 @@
 dict (schema in :mod:`sosdyn.report.html`) into a self-contained ``index.html`` and a PDF.
 """
 
-from .figures import (
-    accuracy_bars,
-    method_color,
-    perturbation_trajectories,
-    robustness_bars,
-    save_figure,
-    scaling_plot,
-    streamline_panel,
-    streamlines,
-    trajectories_3d,
-)
+from . import figures
 from .html import build_report, load_results, render_html, render_pdf
 
-__all__ = [
-    "accuracy_bars",
-    "build_report",
-    "load_results",
-    "method_color",
-    "perturbation_trajectories",
-    "render_html",
-    "render_pdf",
-    "robustness_bars",
-    "save_figure",
-    "scaling_plot",
-    "streamline_panel",
-    "streamlines",
-    "trajectories_3d",
-]
+__all__ = ["figures", "build_report", "load_results", "render_html", "render_pdf"]

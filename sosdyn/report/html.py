@@ -17,7 +17,7 @@ Lengths are in the demonstrations' unit (mm for LASA), times in seconds. A *stat
 
     {"meta": {"sosdyn_version", "git_commit", "created", "python", "platform",
               "packages": {name: version}, "seed", "command"},
-     "findings": [{"title": str, "text": str (trusted HTML), "numbers": {label: value}}],
+     "findings": [{"title": str, "text": str (markup subset), "numbers": {label: value}}],
      "methods": {method: {"description": str, "settings": {name: value}}},
      "accuracy": {shape: {method: {
          "sea": stat, "dtwd_total": stat, "dtwd_per_point": stat,
@@ -36,25 +36,26 @@ Lengths are in the demonstrations' unit (mm for LASA), times in seconds. A *stat
 
 Figure paths are relative to ``base_dir`` (for :func:`build_report`: the folder of
 ``results.json``); SVG is embedded when present and below 2 MB, PNG otherwise.
-``findings[*].text`` is inserted unescaped: it is written by sosdyn's own experiment
-code, never by a user.
+Unless rendered with ``trusted=True`` (the experiments' own results), a figure path that
+leads outside ``base_dir`` (``..``, an absolute path, a symlink out) is refused.
+``findings[*].text`` may use a small markup subset (:func:`markup`: ``<b>``, ``<i>``,
+``<br>`` and character entities); anything else in it is escaped.
 """
 
 from __future__ import annotations
 
 import base64
-import json
 import math
-import os
+import re
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import jinja2
-from markupsafe import escape
+from markupsafe import Markup, escape
 
 from ..errors import InputError, SosdynError
-from ..limits import check_count, check_json_depth, get_limits
+from .results import check_results, load_results
 
 __all__ = ["REPORT_FILES", "build_report", "check_results", "load_results", "render_html", "render_pdf"]
 
@@ -215,8 +216,20 @@ def _methods(section: Mapping) -> list[dict]:
             for name, spec in section.items()]
 
 
+_ALLOWED_TAG = re.compile(r"&lt;(/?(?:b|i)|br)&gt;")
+_ALLOWED_ENTITY = re.compile(r"&amp;(#[0-9]{1,7}|#x[0-9a-fA-F]{1,6}|[a-zA-Z][a-zA-Z0-9]{1,31});")
+
+
+def markup(text: str) -> Markup:
+    """``text`` as HTML: everything escaped except ``<b>``, ``</b>``, ``<i>``, ``</i>``,
+    ``<br>`` and character entities (``&gt;``, ``&#8804;``), the findings' subset."""
+    escaped = str(escape(text))
+    escaped = _ALLOWED_TAG.sub(r"<\1>", escaped)
+    return Markup(_ALLOWED_ENTITY.sub(r"&\1;", escaped))
+
+
 def _findings(section) -> list[dict]:
-    return [{"title": f.get("title", ""), "text": f.get("text", ""),
+    return [{"title": f.get("title", ""), "text": markup(str(f.get("text", ""))),
              "numbers": [(k, fmt(v)) for k, v in (f.get("numbers") or {}).items()]}
             for f in section]
 
@@ -235,12 +248,23 @@ def _bench(text: str) -> str:
     return MarkdownIt("commonmark", {"html": False}).enable("table").render(text)
 
 
-def _figures(section: Mapping, base_dir: Path) -> list[dict]:
-    """Each figure as a data URI: the SVG unless it is over the size limit and a PNG exists."""
+def _inside(path: Path, folder: Path) -> bool:
+    """Does ``path`` (symlinks resolved) lie in ``folder``?"""
+    return path.resolve().is_relative_to(folder.resolve())
+
+
+def _figures(section: Mapping, base_dir: Path, trusted: bool = False) -> list[dict]:
+    """Each figure as a data URI: the SVG unless it is over the size limit and a PNG exists.
+    Untrusted results: InputError for a path outside ``base_dir``, before any file is read."""
     figures = []
     for name, spec in section.items():
         spec = spec or {}
         given = {kind: base_dir / spec[kind] for kind in _MIME_TYPES if spec.get(kind)}
+        outside = [str(spec[kind]) for kind, path in given.items() if not (trusted or _inside(path, base_dir))]
+        if outside:
+            raise InputError(f"figure {name!r}: {', '.join(outside)} lies outside the report folder "
+                             f"{base_dir}; a results file may only embed figures below its own folder. "
+                             "Try: move the figures next to the results file and give relative paths.")
         found = {kind: path for kind, path in given.items() if path.is_file()}
         if "svg" in found and "png" in found and found["svg"].stat().st_size > _MAX_INLINE_SVG:
             del found["svg"]
@@ -259,17 +283,6 @@ _SECTIONS: dict[str, Callable] = {
     "robustness": _robustness, "certificates": _certificates, "timings": _timings,
     "meta": _environment, "bench": _bench,
 }
-_JSON_KINDS = {"object": Mapping, "array": list, "string": str, "boolean": bool, "number": (int, float),
-               "null": type(None)}
-# JSON kind of each top-level value of a results file (null also allowed); the first two are required.
-_SECTION_KINDS = {"meta": "object", "findings": "array", "methods": "object", "accuracy": "object",
-                  "robustness": "object", "certificates": "object", "timings": "object",
-                  "figures": "object", "bench": "string"}
-_REQUIRED_SECTIONS = ("meta", "findings")
-_RESULTS_HINT = ("pass the results.json written by `python -m problems run` (or `make run`), "
-                 "e.g. reports/results.json")
-
-
 # --------------------------------------------------------------------------- public
 
 def _environment_jinja() -> jinja2.Environment:
@@ -279,64 +292,19 @@ def _environment_jinja() -> jinja2.Environment:
     return env
 
 
-def _json_kind(value) -> str:
-    return next(kind for kind, types in _JSON_KINDS.items() if isinstance(value, types))
-
-
-def check_results(results, source: str = "results") -> dict:
-    """``results`` if it is a results dict (module docstring), else InputError naming every
-    missing, unexpected or mistyped top-level key."""
-    if not isinstance(results, Mapping):
-        raise InputError(f"{source} holds a JSON {_json_kind(results)}, expected a JSON object. "
-                         f"Try: {_RESULTS_HINT}.")
-    problems = []
-    missing = [k for k in _REQUIRED_SECTIONS if results.get(k) is None]
-    if missing:
-        problems.append(f"no {' or '.join(map(repr, missing))}")
-    unknown = sorted(set(results) - set(_SECTION_KINDS))
-    if unknown:
-        problems.append(f"unexpected key(s) {', '.join(map(repr, unknown[:8]))}{' ...' if len(unknown) > 8 else ''}")
-    for key, kind in _SECTION_KINDS.items():
-        value = results.get(key)
-        if value is not None and not isinstance(value, _JSON_KINDS[kind]):
-            problems.append(f"{key!r} should be a JSON {kind}, not {_json_kind(value)}")
-    if isinstance(results.get("findings"), list) and not all(isinstance(f, Mapping) for f in results["findings"]):
-        problems.append("'findings' holds non-objects")
-    if problems:
-        raise InputError(f"{source} is not a sosdyn results file ({'; '.join(problems)}). Try: {_RESULTS_HINT}.")
-    return dict(results)
-
-
-def load_results(path: str | Path) -> dict:
-    """Read and check a results JSON (:func:`check_results`): a missing file raises
-    FileNotFoundError; a file over ``max_file_bytes`` or nested deeper than ``max_json_depth``
-    ResourceLimitError (before parsing); bad JSON or a wrong schema InputError."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"results file not found: {path}")
-    size_of = f"the size of {path} in bytes"
-    with path.open("rb") as file:
-        check_count(os.fstat(file.fileno()).st_size, "max_file_bytes", size_of, _RESULTS_HINT)
-        data = file.read(get_limits().max_file_bytes + 1)      # never more, even if it grows
-    check_count(len(data), "max_file_bytes", size_of, _RESULTS_HINT)
-    check_json_depth(data, str(path), _RESULTS_HINT)
-    try:
-        results = json.loads(data.decode("utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path} is not valid JSON ({exc}). Try: re-run the experiment that writes it.") from exc
-    return check_results(results, str(path))
-
-
-def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path | None = None) -> Path:
+def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path | None = None,
+                trusted: bool = False) -> Path:
     """Write ``out_dir/index.html`` for ``results`` (schema: module docstring).
 
-    Figure paths are resolved against ``base_dir`` (default ``out_dir``). Each section
+    Figure paths are resolved against ``base_dir`` (default ``out_dir``) and must stay inside
+    it unless ``trusted`` (InputError, nothing written). Each section
     is built on its own: a missing section renders as "not run", a malformed one as
     "could not be rendered" with the reason, and neither stops the others.
     """
     out_dir = Path(out_dir)
+    figures = _figures(results.get("figures") or {}, Path(base_dir or out_dir), trusted)
     out_dir.mkdir(parents=True, exist_ok=True)
-    context: dict = {"errors": {}}
+    context: dict = {"errors": {}, "figures": figures}
     for key, build in _SECTIONS.items():
         value = results.get(key)
         context[key] = None
@@ -346,7 +314,6 @@ def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path |
             context[key] = build(value)
         except (AttributeError, KeyError, TypeError, ValueError) as exc:
             context["errors"][key] = f"{type(exc).__name__}: {exc}"
-    context["figures"] = _figures(results.get("figures") or {}, Path(base_dir or out_dir))
     context["meta_raw"] = results.get("meta") or {}
     html = _environment_jinja().get_template("report.html.j2").render(**context)
     path = out_dir / REPORT_FILES["html"]
@@ -373,13 +340,15 @@ def render_pdf(html_path: str | Path, pdf_path: str | Path) -> Path:
     return pdf_path
 
 
-def build_report(results_json_path: str | Path, out_dir: str | Path) -> dict[str, Path]:
+def build_report(results_json_path: str | Path, out_dir: str | Path, *,
+                 trusted: bool = False) -> dict[str, Path]:
     """``results.json`` -> ``out_dir/index.html`` and ``out_dir/report.pdf``.
 
-    Figure paths in the results are relative to the folder of ``results.json``.
+    Figure paths in the results are relative to the folder of ``results.json`` and must stay
+    inside it unless ``trusted`` (the experiments' own results).
     Returns ``{"html": path, "pdf": path}``.
     """
     results_json_path = Path(results_json_path)
     results = load_results(results_json_path)
-    html = render_html(results, out_dir, base_dir=results_json_path.parent)
+    html = render_html(results, out_dir, base_dir=results_json_path.parent, trusted=trusted)
     return {"html": html, "pdf": render_pdf(html, Path(out_dir) / REPORT_FILES["pdf"])}

@@ -1,9 +1,23 @@
-"""SOS layer: programs, Gram bases (Newton polytope), lowering to conic form, certificates."""
+"""SOS layer: programs, Gram bases (Newton polytope), lowering to conic form, certificates.
+
+Modules, bottom up: ``gram`` (svec layout, coefficient matching, exact arithmetic),
+``newton`` (Gram bases), ``objective``, ``constraints`` (bases, blocks, rows, constraint
+handles, ``matrix_form``), ``conic`` (the standard conic form), ``verification`` (the
+independent check), ``rigorous`` (proven bounds), ``solution``, ``backends`` (solvers),
+``program`` (``SOSProgram``), ``examples`` (textbook problems with known answers).
+"""
+from .backends import SOLVERS
+from .constraints import (Basis, EqualityMultiplier, FamilySOSConstraint, LinearRows, Multiplier, PsdBlock,
+                          SOSConstraint, matrix_form)
 from .gram import svec_to_matrix
 from .newton import newton_basis
 from .objective import QuadraticForm, sum_squares
-from .program import Basis, Multiplier, SOSConstraint, SOSProgram
-from .solution import Bound, CertificateCheck, Solution, VerificationReport
+from .program import SOSProgram
+from .rigorous import Bound
+from .solution import Solution
+from .verification import CertificateCheck, VerificationReport, check_gram
 
-__all__ = ["SOSProgram", "SOSConstraint", "Multiplier", "Basis", "Solution", "VerificationReport",
-           "CertificateCheck", "Bound", "QuadraticForm", "sum_squares", "newton_basis", "svec_to_matrix"]
+__all__ = ["SOSProgram", "SOSConstraint", "FamilySOSConstraint", "Multiplier", "EqualityMultiplier",
+           "Basis", "PsdBlock", "LinearRows", "matrix_form", "Solution", "VerificationReport",
+           "CertificateCheck", "check_gram", "Bound", "QuadraticForm", "sum_squares", "newton_basis",
+           "svec_to_matrix", "SOLVERS"]

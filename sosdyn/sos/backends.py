@@ -16,16 +16,19 @@ from __future__ import annotations
 
 import time
 
+import clarabel
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError
 from ..limits import check_bytes
-from ..poly.polynomial import MAX_COEFFICIENT
+from ..poly import MAX_COEFFICIENT
 from .conic import check_data, coupled_psd_sizes, cvxpy_block_vars
-from .objective import is_cvxpy
 from .gram import svec_pairs
+from .objective import is_cvxpy
 from .solution import Solution
+
+SOLVERS = ("CLARABEL", "SCS")    # the solvers sosdyn is tested with; any installed cvxpy solver works
 
 _CLARABEL_STATUS = {
     "Solved": "optimal", "AlmostSolved": "optimal_inaccurate",
@@ -50,8 +53,6 @@ _CVXPY_STATUS = {
 
 
 def _clarabel(data, verbose, settings):
-    import clarabel
-
     blocks = [sp.csc_matrix(data.A_eq), -sp.csc_matrix(data.A_ge)]
     rhs = [data.b_eq, -data.b_ge]
     cones = []
@@ -90,7 +91,7 @@ def _svec_to_vec_map(size):
 
 
 def _cvxpy(program, data, solver, verbose, settings):
-    import cvxpy as cp
+    import cvxpy as cp              # lazily: about 3 s to import, only this back end needs it
 
     x = cp.hstack(cvxpy_block_vars(program))
     cons = []
@@ -165,8 +166,24 @@ def _size_hint(solver: str) -> str:
     return hint if solver == "SCS" else hint + ", or solver='SCS' (first order: no dense KKT blocks)"
 
 
-def solve_program(program, solver, backend, scale, verbose, **settings) -> Solution:
-    """Assemble ``program`` (cached) and solve it with the chosen back end."""
+def check_solver(solver: str) -> str:
+    """The solver's name in capitals; InputError unless sosdyn or cvxpy knows it."""
+    solver = solver.upper()
+    if solver not in SOLVERS:
+        import cvxpy as cp          # lazily (3 s): only a solver name outside SOLVERS needs it
+        if solver not in cp.installed_solvers():
+            raise InputError(f"unknown solver {solver!r}; use one of {SOLVERS} "
+                             f"(installed in cvxpy: {cp.installed_solvers()})")
+    return solver
+
+
+def solve_program(program, solver, backend, scale, verbose, build=0.0, **settings) -> Solution:
+    """Assemble ``program`` (its cached conic form) and solve it with the chosen back end.
+
+    ``build`` is the declaration time reported in ``Solution.timings["build"]``. The program
+    is not changed (``program.compile`` only caches its conic form).
+    """
+    solver = check_solver(solver)
     needs_cvxpy = bool(program.cvxpy_constraints) or (
         program.objective is not None and is_cvxpy(program.objective[1]))
     if backend == "auto":
@@ -176,8 +193,6 @@ def solve_program(program, solver, backend, scale, verbose, **settings) -> Solut
                          "objectives; use backend='cvxpy'")
     if backend not in ("direct", "cvxpy"):
         raise InputError(f"unknown backend {backend!r}: use 'auto', 'direct' or 'cvxpy'")
-    build = program.build_seconds - program.build_reported
-    program.build_reported = program.build_seconds
     t0 = time.perf_counter()
     data = program.compile(scale=scale)
     canon = time.perf_counter() - t0

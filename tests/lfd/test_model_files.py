@@ -177,10 +177,12 @@ def test_size_and_depth_limits(saved, tmp_path):
         load_refused(saved, "max_file_bytes")
     deep = tmp_path / "deep.json"
     deep.write_text("[" * 100 + "]" * 100)
-    load_refused(deep, "100 levels deep, over the limit max_json_depth = 64")
+    load_refused(deep, "nesting depth of its JSON text is 100, over the limit max_json_depth=64")
     deeper = tmp_path / "deeper.json"
     deeper.write_text("[" * 200_000 + "]" * 200_000)
-    load_refused(deeper, "deeper than Python's parser allows")    # not a RecursionError
+    load_refused(deeper, r"is 2e\+05, over the limit max_json_depth=64")   # refused before parsing
+    with sd.limits(max_json_depth=10**6):
+        load_refused(deeper, "deeper than Python's parser allows")    # not a RecursionError
     binary = tmp_path / "binary.json"
     binary.write_bytes(b"\xff\xfe{")
     load_refused(binary, "corrupt or truncated")

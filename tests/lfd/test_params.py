@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
-from sosdyn.lfd.cdsp import MAX_SEED, resolve_seed
+from sosdyn.lfd.params import MAX_SEED, check_solver, resolve_seed
 from sosdyn.lfd.data import Demonstration, Demonstrations
 
 
@@ -76,8 +76,9 @@ def test_seeds_from_every_kind_of_random_state():
     assert resolve_seed(5) == 5 and resolve_seed(np.int64(9)) == 9
     assert resolve_seed(np.random.RandomState(3)) == resolve_seed(np.random.RandomState(3))
     assert 0 <= resolve_seed(None) <= MAX_SEED
-    sd.CDSP(random_state=np.random.RandomState(0))._check_params()
-    sd.CDSP(random_state=None, max_samples=None, solver="scs")._check_solver()
+    sd.CDSP(random_state=np.random.RandomState(0)).check_params()
+    sd.CDSP(random_state=None, max_samples=None, solver="scs").check_params()
+    check_solver("scs")
 
 
 def test_subsampling_below_the_mixture_size_is_an_input_error():

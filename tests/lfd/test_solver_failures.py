@@ -6,8 +6,6 @@ import pytest
 import sosdyn as sd
 from sosdyn.sos import backends
 
-from test_cdsp import linear_demos  # noqa: E402  (same folder)
-
 REAL = backends._clarabel
 
 
@@ -33,31 +31,32 @@ def inject(monkeypatch, mode, every=1):
     return calls
 
 
-def fit():
-    return sd.CDSP(n_components=2, gamma=0.5, solver_method="ica", max_iter=5).fit(linear_demos())
+@pytest.fixture
+def fit(linear_demos):
+    return lambda: sd.CDSP(n_components=2, gamma=0.5, solver_method="ica", max_iter=5).fit(linear_demos)
 
 
 @pytest.mark.parametrize("mode", ["solver_error", "raise", "garbage_inaccurate"])
-def test_numerical_failures_fall_back_to_scs_and_say_so(monkeypatch, mode):
+def test_numerical_failures_fall_back_to_scs_and_say_so(monkeypatch, mode, fit):
     inject(monkeypatch, mode, every=3)
     model = fit()
     assert model.certified_ and model.verify().passed
     assert any("fallback" in h for h in model.history_)
 
 
-def test_inaccurate_but_correct_answers_are_accepted(monkeypatch):
+def test_inaccurate_but_correct_answers_are_accepted(monkeypatch, fit):
     inject(monkeypatch, "inaccurate_but_right")
     model = fit()
     assert model.certified_ and all(h.get("status") in (None, "optimal_inaccurate") for h in model.history_)
 
 
-def test_injected_infeasibility_raises_a_clear_error(monkeypatch):
+def test_injected_infeasibility_raises_a_clear_error(monkeypatch, fit):
     inject(monkeypatch, "infeasible")
     with pytest.raises(sd.InfeasibleError, match="infeasible.*Try"):
         fit()
 
 
-def test_garbage_marked_optimal_is_never_returned_certified(monkeypatch):
+def test_garbage_marked_optimal_is_never_returned_certified(monkeypatch, fit):
     inject(monkeypatch, "garbage")
     with pytest.raises(sd.SosdynError):
         model = fit()
@@ -66,7 +65,7 @@ def test_garbage_marked_optimal_is_never_returned_certified(monkeypatch):
         raise AssertionError("unreachable: a garbage model was returned")
 
 
-def test_total_solver_failure_raises_solver_error(monkeypatch):
+def test_total_solver_failure_raises_solver_error(monkeypatch, fit):
     inject(monkeypatch, "solver_error")
     monkeypatch.setattr(backends, "_cvxpy", lambda *a, **k: ("solver_error", np.full(a[1].n, np.nan), "injected", 0.0, {}))
     with pytest.raises(sd.SolverError, match="solver_error"):

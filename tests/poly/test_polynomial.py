@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import sosdyn as sd
-from sosdyn.poly import PolyMatrix, jacobian
+from sosdyn.poly import jacobian
 
 X, Y, Z = sympy.symbols("x y z")
 NAMES = ["x", "y", "z"]
@@ -71,26 +71,11 @@ def test_decision_coefficients_stay_affine_and_assign():
     a, b = prog.new_var(), prog.new_var()
     p = a * x**2 + b * y + 1
     q = x * p                              # numeric * affine is affine
-    assert q.dec.size == 2 and q.degree == 3
+    assert q.ids.size == 2 and q.degree == 3
     with pytest.raises(sd.PolynomialError, match="bilinear"):
         _ = a * b
-    v = q.assign(q.dec, [2.0, -1.0])
+    v = q.assign(q.ids, [2.0, -1.0])
     assert same(v, sympy.expand(X * (2 * X**2 - Y + 1)))
-
-
-def test_polymatrix_algebra_and_symmetry_check():
-    x, y = sd.variables("x y")
-    M = PolyMatrix([[1 + x**2, x * y], [x * y, 2.0]])
-    A = np.array([[0.0, 1.0], [-2.0, -3.0]])
-    G = A.T @ M + M @ A
-    assert G.is_symmetric()
-    vals = G([[0.3, -0.7]], [x, y])[0]
-    Mv = M([[0.3, -0.7]], [x, y])[0]
-    np.testing.assert_allclose(vals, A.T @ Mv + Mv @ A)
-    with pytest.raises(sd.NotSymmetricError, match="differ"):
-        PolyMatrix([[x, y], [x, 1]]).check_symmetric()
-    with pytest.raises(sd.PolynomialError):
-        _ = M @ np.ones((3, 3))
 
 
 def test_mismatched_inputs_raise_clear_errors():

@@ -91,11 +91,19 @@ def test_accuracy_cells_show_mean_std_and_best(tmp_path, results):
     assert "<td>✓</td>" in text and "<td>n/a</td>" in text
 
 
-def test_titles_are_escaped_but_finding_text_is_html(tmp_path, results):
-    results["findings"] = [{"title": "<script>alert(1)</script>", "text": "<b>bold</b>", "numbers": {}}]
+def test_titles_are_escaped_and_finding_text_keeps_only_the_markup_subset(tmp_path, results):
+    results["findings"] = [{"title": "<script>alert(1)</script>",
+                            "text": "<b>bold</b> <i>it</i><br>a &gt; b &#8804; c <img src=x onerror=alert(1)>"
+                                    "<script>x</script> &lt;b&gt;", "numbers": {}}]
     text = H.render_html(results, tmp_path).read_text()
-    assert "<script>alert(1)</script>" not in text
-    assert "&lt;script&gt;" in text and "<b>bold</b>" in text
+    assert "<script>" not in text and "<img src=x" not in text
+    assert "&lt;script&gt;alert(1)" in text and "&lt;img src=x onerror=alert(1)&gt;" in text
+    assert "<b>bold</b> <i>it</i><br>a &gt; b &#8804; c" in text
+    assert "&lt;b&gt;" in text                         # an escaped tag stays text
+
+
+def test_markup_subset():
+    assert H.markup("<b>x</b> & <u>y</u> &amp; <br/>") == "<b>x</b> &amp; &lt;u&gt;y&lt;/u&gt; &amp; &lt;br/&gt;"
 
 
 def test_empty_results_say_not_run(tmp_path):
@@ -133,6 +141,21 @@ def test_figures_resolve_against_base_dir(tmp_path, figure_files, results_factor
     out = tmp_path / "elsewhere"
     text = H.render_html(results_factory(figures=figure_files), out, base_dir=tmp_path).read_text()
     assert len(Tables(text).images) == 2
+
+
+def test_figure_paths_outside_the_report_folder_are_refused(tmp_path, figure_files, results_factory):
+    inside = tmp_path / "report"
+    (inside / "figures").mkdir(parents=True)
+    secret = tmp_path / "secret.png"
+    secret.write_bytes((tmp_path / "figures" / "fig2.png").read_bytes())
+    (inside / "figures" / "link.png").symlink_to(secret)
+    for path in ("../secret.png", str(secret), "figures/link.png"):
+        results = results_factory(figures={"leak": {"png": path, "caption": "c"}})
+        with pytest.raises(InputError, match="lies outside the report folder"):
+            H.render_html(results, inside / "out", base_dir=inside)
+        assert not (inside / "out").exists()
+    text = H.render_html(results, inside / "out", base_dir=inside, trusted=True).read_text()
+    assert len(Tables(text).images) == 1                # the experiments' own results may share
 
 
 @pytest.mark.parametrize("value, text", [

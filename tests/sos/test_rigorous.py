@@ -8,12 +8,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import sosdyn as sd
-from problems import sos_examples
-from sosdyn.sos.gram import (absorb_residual, exact_correction, exactly_psd, gram_form,
-                             matrix_to_svec, positive_definite_int, proven_min_eig)
-from test_soundness import X, floudas, floudas_minimum, forged, matrix_program, random_program
+from sosdyn.sos import examples
+from sosdyn.sos.gram import matrix_to_svec
 
 x, y = sd.variables("x y")
+(X,) = sd.variables("x")
 
 
 def lower_bound(p, **kw):
@@ -34,14 +33,14 @@ def user_basis():
 
 MOTZKIN = x**4 * y**2 + x**2 * y**4 + 1 - 3 * x**2 * y**2
 
-# (program, exact optimum): maximize -> proven <= optimum, minimize -> proven >= optimum
+
 KNOWN = {
-    "chebyshev (5)": (lambda: sos_examples.chebyshev()[0], Fraction(128)),
-    "probability bound (6)": (lambda: sos_examples.probability_bound()[0], Fraction(1, 37)),
+    "chebyshev (5)": (lambda: examples.chebyshev()[0], Fraction(128)),
+    "probability bound (6)": (lambda: examples.probability_bound()[0], Fraction(1, 37)),
     "user basis (11)": (user_basis, Fraction(4)),
     "two global minima": (lambda: lower_bound(X**4 - 3 * X**2 + 2), Fraction(-1, 4)),
     "Motzkin times 1 + x^2 + y^2 (9)": (lambda: lower_bound((x**2 + y**2 + 1) * MOTZKIN), Fraction(0)),
-    "matrix, supremum 2": (lambda: matrix_program()[0], Fraction(2)),
+    "matrix, supremum 2": (lambda: examples.matrix_program()[0], Fraction(2)),
 }
 
 
@@ -61,9 +60,9 @@ def test_proven_bound_is_on_the_right_side_of_the_known_optimum(name):
 
 def test_floudas_degree_8_bound_is_below_the_true_minimum():
     # Clarabel's own answer is above the minimum (not a lower bound); the proven one is below
-    prog, g = floudas(8)
+    prog, g = examples.floudas(8)
     sol = prog.solve(rigorous=True)
-    true_min = floudas_minimum()
+    true_min = examples.floudas_minimum()
     assert sol.bound.solver_value > true_min                  # what the solver says is too high
     assert sol.bound.proven <= true_min
     assert sol.bound.proven >= true_min * (1 + 1e-6)          # within 1e-6 relative
@@ -71,10 +70,10 @@ def test_floudas_degree_8_bound_is_below_the_true_minimum():
     assert sol.timings["rigorous"] < 10
 
 
-def test_a_certificate_that_passes_the_tolerant_check_is_backed_off_to_the_truth():
+def test_a_certificate_that_passes_the_tolerant_check_is_backed_off_to_the_truth(forged):
     # t = 2 + 5e-8 with the Gram's y_i^2 entries at -5e-8: verify() passes (within tolerance),
     # the claim t > 2 is false; the rigorous bound is exactly 2
-    prog, t, con = matrix_program()
+    prog, t, con = examples.matrix_program()
     Q = prog.solve().gram_matrix(con)
     Q[np.abs(Q.diagonal()) < 1e-6, np.abs(Q.diagonal()) < 1e-6] = -5e-8
     sol = forged(prog, [(t, [2 + 5e-8]), (con.psd, matrix_to_svec(Q))])
@@ -82,7 +81,7 @@ def test_a_certificate_that_passes_the_tolerant_check_is_backed_off_to_the_truth
     assert sol.rigorous_bound().proven == 2.0
 
 
-def test_rigorous_bound_refuses_what_it_cannot_prove():
+def test_rigorous_bound_refuses_what_it_cannot_prove(forged):
     prog = sd.SOSProgram()
     a = prog.new_var()
     prog.add_sos(a * x**2 + 1)
@@ -98,14 +97,14 @@ def test_rigorous_bound_refuses_what_it_cannot_prove():
 
 
 def test_feasibility_certificates_are_proven_exactly():
-    sol = sos_examples.moore_greitzer(0.77).solve(rigorous=True)
+    sol = examples.moore_greitzer(0.77).solve(rigorous=True)
     assert sol.bound.proven is None and len(sol.bound.margins) == 2
     assert all(m > 0 for m in sol.bound.margins.values())
 
 
 @settings(max_examples=4, deadline=None, derandomize=True)
 @given(st.integers(0, 10**6), st.sampled_from(["global", "disk"]))
-def test_proven_lower_bounds_hold_at_every_sampled_point(seed, kind):
+def test_proven_lower_bounds_hold_at_every_sampled_point(random_program, seed, kind):
     prog, g, p, disk = random_program(seed, kind)
     bound = prog.solve(rigorous=True).bound
     pts = np.random.default_rng(seed).uniform(-3, 3, size=(20_000, 2))
@@ -116,50 +115,9 @@ def test_proven_lower_bounds_hold_at_every_sampled_point(seed, kind):
     assert vals.min() >= bound.proven - 1e-12 * max(1.0, np.abs(vals).max())
 
 
-# ---------------------------------------------------------------------- the exact machinery
-def test_proven_min_eig():
-    F = np.vectorize(Fraction, otypes=[object])
-    lb = proven_min_eig(F(np.array([[2.0, 1.0], [1.0, 2.0]])))
-    assert 0.99 < lb <= 1.0                                   # lambda_min = 1
-    assert proven_min_eig(F(np.array([[1.0, 1.0], [1.0, 1.0]]))) == 0.0   # singular: exact LDL^T
-    tiny = np.array([[1.0, 1.0], [1.0, 1.0 - 2.0**-50]])     # det < 0 by 2^-50
-    assert proven_min_eig(F(tiny)) is None and not exactly_psd(F(tiny))
-    assert np.linalg.eigvalsh(tiny).min() > -1e-15            # floats alone cannot tell
-    hilbert = np.array([[Fraction(1, i + j + 1) for j in range(8)] for i in range(8)], dtype=object)
-    lb = proven_min_eig(hilbert)                              # lambda_min = 1.1e-10
-    assert lb is not None and 0 < lb <= 1.2e-10
-
-
-def test_positive_definite_int_is_sylvester():
-    assert positive_definite_int(np.array([[2, -1, 0], [-1, 2, -1], [0, -1, 2]]))
-    assert not positive_definite_int(np.array([[1, 2], [2, 1]]))
-    assert not positive_definite_int(np.array([[1, 1], [1, 1]]))
-
-
-def test_absorbed_residual_reproduces_the_polynomial_exactly():
-    basis = np.array([[0], [1], [2]])
-    Q = np.array([[Fraction(1), Fraction(0), Fraction(-1)], [Fraction(0), Fraction(1), Fraction(0)],
-                  [Fraction(-1), Fraction(0), Fraction(2)]], dtype=object)
-    target = {(0,): Fraction(1), (2,): Fraction(-1, 3), (4,): Fraction(2), (3,): Fraction(1, 7)}
-    residual = {m: target.get(m, 0) - gram_form(basis, Q).get(m, 0) for m in set(target) | set(gram_form(basis, Q))}
-    Q2, missing = absorb_residual(basis, Q, residual)
-    assert missing is None
-    assert {m: c for m, c in gram_form(basis, Q2).items() if c} == target
-    assert absorb_residual(basis, Q, {(5,): Fraction(1)}) == (None, (5,))
-
-
-def test_exact_correction_is_the_minimum_norm_solution():
-    rows = [(Fraction(-1), {0: Fraction(1), 1: Fraction(1)})]           # d0 + d1 = 1
-    delta = exact_correction(rows, {0: Fraction(0), 1: Fraction(0)})
-    assert delta == {0: Fraction(1, 2), 1: Fraction(1, 2)}
-    assert exact_correction(rows + rows, {0: Fraction(0), 1: Fraction(0)}) == delta   # dependent rows
-    inconsistent = [(Fraction(-1), {0: Fraction(1)}), (Fraction(-2), {0: Fraction(1)})]
-    assert exact_correction(inconsistent, {0: Fraction(0)}) is None
-
-
 def test_updating_a_putinar_constraint_keeps_its_multipliers_and_the_proof():
     # q >= 1/2 on [4, 5] instead of q >= 1: the optimum halves to 1/74 (the problem is linear in it)
-    prog, (a, b, c) = sos_examples.probability_bound()
+    prog, (a, b, c) = examples.probability_bound()
     con = prog.sos_constraints[1]
     (x_,) = sd.variables("x")
     con.update(a + b * x_ + c * x_**2 - 0.5)

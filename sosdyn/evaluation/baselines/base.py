@@ -3,7 +3,8 @@
 Every baseline follows the scikit-learn conventions: hyper-parameters are set in
 ``__init__`` and only stored there, ``fit(demos)`` learns and returns the model, and the
 learned state lives in attributes whose names end in ``_``.  Inputs are checked once, at
-the public boundary, by the ``check_*`` helpers below; they raise
+the public boundary, by ``check_points`` / ``check_int`` below and the shared
+:func:`~sosdyn.lfd.rollout.as_vector` / :func:`~sosdyn.lfd.rollout.as_positive`; they raise
 :class:`~sosdyn.errors.InputError` (or :class:`~sosdyn.errors.NotFittedError`).
 """
 
@@ -14,7 +15,7 @@ import numpy as np
 
 from sosdyn.errors import InputError, NotFittedError
 from sosdyn.lfd.data import check_demonstrations
-from sosdyn.lfd.rollout import rollout
+from sosdyn.lfd.rollout import as_positive, as_vector, rollout
 
 
 def check_points(X, dim, name="X"):
@@ -31,28 +32,11 @@ def check_points(X, dim, name="X"):
     return arr
 
 
-def check_vector(v, dim, name):
-    """Return ``v`` as a finite float vector of shape (dim,)."""
-    arr = np.asarray(v, dtype=float)
-    if arr.shape != (dim,) or not np.all(np.isfinite(arr)):
-        raise InputError(
-            f"{name} must be a finite vector of length {dim}, got {np.asarray(v).tolist()!r}.")
-    return arr
-
-
 def check_int(value, name, minimum=1):
     """Return ``value`` as an int >= ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
         raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}.")
     return int(value)
-
-
-def check_positive(value, name):
-    """Return ``value`` as a finite float > 0."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-            or not np.isfinite(value) or value <= 0:
-        raise InputError(f"{name} must be a finite number > 0, got {value!r}.")
-    return float(value)
 
 
 class MotionModel(abc.ABC):
@@ -92,13 +76,13 @@ class MotionModel(abc.ABC):
     def _rollout_args(self, x0, duration, dt, goal):
         """Checked (x0, duration, dt, goal) with the defaults of the training frame."""
         self._check_fitted()
-        x0 = check_vector(x0, self.dim_, "x0")
-        duration = check_positive(duration, "duration")
-        dt = self.dt_ if dt is None else check_positive(dt, "dt")
+        x0 = as_vector(x0, self.dim_, "x0")
+        duration = as_positive(duration, "duration")
+        dt = self.dt_ if dt is None else as_positive(dt, "dt")
         if dt > duration:
             raise InputError(f"dt = {dt:g} is larger than duration = {duration:g}; "
                              "pass a longer duration or a smaller dt.")
-        goal = self.goal_.copy() if goal is None else check_vector(goal, self.dim_, "goal")
+        goal = self.goal_.copy() if goal is None else as_vector(goal, self.dim_, "goal")
         return x0, duration, dt, goal
 
 

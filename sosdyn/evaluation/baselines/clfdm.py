@@ -33,8 +33,8 @@ import numpy as np
 from scipy.optimize import minimize
 
 from sosdyn.errors import InputError
-from sosdyn.evaluation.baselines.base import AutonomousModel, check_int, check_points, \
-    check_positive
+from sosdyn.evaluation.baselines.base import AutonomousModel, check_int, check_points
+from sosdyn.lfd.rollout import as_positive
 from sosdyn.evaluation.baselines.gmr import GMR
 
 
@@ -80,7 +80,7 @@ def _unpack(theta, n, L):
     return C, theta[(L + 1) * m:].reshape(L, n)
 
 
-def _objective(theta, Z, V, L, w):
+def wsaqf_objective(theta, Z, V, L, w):
     """J(θ) of the module docstring and its exact gradient (data: unit directions V)."""
     n = Z.shape[1]
     C, mu = _unpack(theta, n, L)
@@ -140,7 +140,7 @@ def fit_wsaqf(X, Xdot, n_asymmetric, w=1e-4, n_init=5, random_state=0, max_iter=
     for _ in range(check_int(n_init, "n_init")):
         theta0 = np.concatenate([   # C_l = I, μ_l at training points
             np.zeros(n_chol), Z[rng.choice(Z.shape[0], size=L, replace=False)].ravel()])
-        result = minimize(_objective, theta0, args=(Z, V, L, w), jac=True, method="L-BFGS-B",
+        result = minimize(wsaqf_objective, theta0, args=(Z, V, L, w), jac=True, method="L-BFGS-B",
                           bounds=bounds, options={"maxiter": max_iter})
         if best is None or result.fun < best.fun:
             best = result
@@ -193,7 +193,7 @@ class CLFDM(AutonomousModel):
         self.max_iter = max_iter
 
     def fit(self, demos):
-        w = check_positive(self.w, "w")
+        w = as_positive(self.w, "w")
         if w >= 1:
             raise InputError(f"w must be a small positive weight below 1 (paper: 1e-4), got {w}.")
         demos = self._learn_frame(demos)
@@ -205,9 +205,9 @@ class CLFDM(AutonomousModel):
                                  max_iter=check_int(self.max_iter, "max_iter"))
         speed = np.linalg.norm(Xdot, axis=1).mean()
         reach = np.max(np.linalg.norm(X, axis=1))
-        self.rho0_ = 0.05 * speed if self.rho0 is None else check_positive(self.rho0, "rho0")
+        self.rho0_ = 0.05 * speed if self.rho0 is None else as_positive(self.rho0, "rho0")
         self.kappa0_ = (15.0 / reach) ** 2 if self.kappa0 is None \
-            else check_positive(self.kappa0, "kappa0")
+            else as_positive(self.kappa0, "kappa0")
         return self
 
     def energy(self, X, goal=None):

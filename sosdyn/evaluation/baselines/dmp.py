@@ -27,8 +27,8 @@ import numpy as np
 from movement_primitives.dmp import DMP as _MPDMP
 
 from sosdyn.errors import InputError
-from sosdyn.evaluation.baselines.base import MotionModel, check_int, check_positive
-from sosdyn.lfd.rollout import Trajectory, _events
+from sosdyn.evaluation.baselines.base import MotionModel, check_int
+from sosdyn.lfd.rollout import Trajectory, as_positive, check_rollout_size, parse_events
 
 
 class DMP(MotionModel):
@@ -63,10 +63,10 @@ class DMP(MotionModel):
 
     def fit(self, demos):
         check_int(self.n_weights_per_dim, "n_weights_per_dim", minimum=2)
-        check_positive(self.alpha_y, "alpha_y")
-        check_positive(self.beta_y, "beta_y")
+        as_positive(self.alpha_y, "alpha_y")
+        as_positive(self.beta_y, "beta_y")
         if self.regularization != 0:
-            check_positive(self.regularization, "regularization")
+            as_positive(self.regularization, "regularization")
         demos = self._learn_frame(demos)
         weights = []
         for demo in demos:
@@ -99,10 +99,8 @@ class DMP(MotionModel):
         if demo >= len(self.durations_):
             raise InputError(f"demo {demo} does not exist; the model has "
                              f"{len(self.durations_)} demonstrations (0..{len(self.durations_) - 1}).")
-        events = sorted(_events(goal_changes, self.dim_, duration, "goal_change")
-                        + _events(perturbations, self.dim_, duration, "push"),
-                        key=lambda e: e[0])
-        grid = np.linspace(0.0, duration, int(round(duration / dt)) + 1)
+        events = parse_events(perturbations, goal_changes, self.dim_, duration)
+        grid = np.linspace(0.0, duration, check_rollout_size(duration, dt, self.dim_))
         primitive = self._primitive(self.durations_[demo], grid[1] - grid[0])
         primitive.set_weights(self.weights_[demo])
         primitive.configure(start_y=x0, goal_y=goal)

@@ -14,8 +14,8 @@ from sklearn.mixture import GaussianMixture
 
 from sosdyn.errors import InputError
 from sosdyn.lfd.gmm import PositionMixture, gmm_linear_maps
-from sosdyn.evaluation.baselines.base import AutonomousModel, check_int, check_points, \
-    check_positive
+from sosdyn.evaluation.baselines.base import AutonomousModel, check_int, check_points
+from sosdyn.lfd.rollout import as_positive
 
 
 def position_responsibilities(gmm, X, n):
@@ -59,7 +59,7 @@ class GMR(AutonomousModel):
                 "use fewer components or more demonstrations.")
         self.gmm_ = GaussianMixture(
             n_components=k, covariance_type="full", random_state=self.random_state,
-            reg_covar=check_positive(self.reg_covar, "reg_covar"),
+            reg_covar=as_positive(self.reg_covar, "reg_covar"),
             max_iter=check_int(self.max_iter, "max_iter")).fit(np.hstack([X, Xdot]))
         self.A_, self.b_ = gmm_linear_maps(self.gmm_, self.dim_)
         self.mixture_ = PositionMixture.from_joint(self.gmm_, self.dim_)   # factors cached once

@@ -1,0 +1,2 @@
+"""The benchmarks: ``learner`` (``make bench``: where the CDSP learner spends its time) and ``sos``
+(``make bench-sos``: the SOS layer against SumOfSquares.py), with their problems and helpers."""

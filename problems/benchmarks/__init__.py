@@ -1,1 +1,0 @@
-"""Helpers of ``python -m problems bench`` / ``bench-sos``: problem definitions, timing, reports."""

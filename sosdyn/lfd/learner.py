@@ -1,0 +1,191 @@
+"""The CDSP learner as functions on arrays: (scaled data, mixture, settings) -> fields C, metric W.
+
+Stages (the estimator :class:`~sosdyn.lfd.cdsp.CDSP` calls :func:`learn`):
+
+A. linear fields f_k = A_k z under a constant metric P: a dynamics step with M = I, then
+   either plain alternation (metric step, dynamics step, ...) or the inner convex
+   approximation (ICA step, dynamics step under the new P, ...), until the cost stalls;
+B. (field_degree > 1 or a learned metric_degree > 0) stage A's certified (C, P) embedded in
+   the larger monomial sets, a dynamics step with the higher-degree terms, and alternation;
+C. (refine_gmm) the mixture refined with the metric fixed (:mod:`~sosdyn.lfd.refine`).
+
+Every row of the fit's history (step, cost, solver status and times) goes through a
+:class:`History`. The compiled steps live only inside :func:`learn`.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ..errors import SolverError, UnverifiedSolutionError
+from ..poly import match_rows, monomial_values
+from .contraction import field_exponents, margin_degree, metric_exponents, state_variables
+from .gmm import PositionMixture
+from .refine import refine_mixture
+from .steps import DynamicsStep, ICAStep, LeastSquaresData, MetricStep
+
+LEARNER_HINT = "a smaller gamma, solver_method='alternating', or fewer components"
+NO_ROOM = 1e-9              # a metric step margin this small: the alternation is at a fixed point
+COST_FLOOR = 1e-12          # the stopping test's relative tolerance never divides by less
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The hyper-parameters the learning stages use (a subset of CDSP's, already checked)."""
+
+    field_degree: int
+    metric_degree: int
+    gamma: float
+    metric: str
+    solver: str
+    solver_method: str
+    max_iter: int
+    tol: float
+    eps: float
+    margin: float
+    refine_gmm: bool
+
+    @classmethod
+    def from_params(cls, params: Mapping) -> "Settings":
+        return cls(**{f.name: params[f.name] for f in fields(cls)})
+
+    @property
+    def learned_metric_degree(self) -> int:
+        """Degree of M(z): ``metric_degree`` for a learned metric, 0 for the identity."""
+        return self.metric_degree if self.metric == "learned" else 0
+
+
+class History:
+    """The rows of a fit, in order; each is also passed to ``progress`` (if given)."""
+
+    def __init__(self, progress=None):
+        self.rows: list = []
+        self.progress = progress
+
+    def record(self, step, cost, sol=None, **extra):
+        row = {"iteration": len(self.rows), "step": step, "cost": float(cost)}
+        if sol is not None:
+            row.update(status=sol.status, solve_s=sol.timings["solve"],
+                       build_s=sol.timings["build"] + sol.timings["canonicalize"])
+            if "fallback" in sol.info:
+                row["fallback"] = sol.info["fallback"]
+        row.update(extra)
+        self.rows.append(row)
+        if self.progress is not None:
+            self.progress(row)
+
+
+def subsample(X, Xdot, max_samples):
+    """Every step-th row, step = ceil(T / max_samples), if there are more than max_samples rows
+    (None: all). Returns (X, Xdot, subsampled)."""
+    if max_samples is None or X.shape[0] <= max_samples:
+        return X, Xdot, False
+    step = int(np.ceil(X.shape[0] / max_samples))
+    return X[::step], Xdot[::step], True
+
+
+def least_squares_data(Z, Zdot, mixture: PositionMixture, fexps) -> LeastSquaresData:
+    """The data term (18) at the scaled samples for the fields' monomials ``fexps``."""
+    return LeastSquaresData(mixture.responsibilities(Z), monomial_values(Z, fexps), Zdot)
+
+
+def stalled(old: float, new: float, tol: float) -> bool:
+    """The stopping test: the cost fell by at most ``tol`` relative to the old cost."""
+    return old - new <= tol * max(old, COST_FLOOR)
+
+
+def embed(coef, exps_from, exps_to):
+    """Coefficients over ``exps_from`` (last axis) re-indexed over the larger monomial set ``exps_to``."""
+    out = np.zeros(coef.shape[:-1] + (exps_to.shape[0],))
+    out[..., match_rows(exps_to, exps_from)] = coef
+    return out
+
+
+def with_learner_hint(exc: SolverError) -> SolverError:
+    """The same error, its message prefixed by "CDSP fit failed" and the learner's advice first."""
+    hint = LEARNER_HINT if not exc.hint else f"{LEARNER_HINT}; or {exc.hint}"
+    message = f"CDSP fit failed: {exc.detail}"
+    if isinstance(exc, UnverifiedSolutionError):
+        return type(exc)(message, exc.status, hint, exc.report)
+    return type(exc)(message, exc.status, hint)
+
+
+def learn(Z, Zdot, mixture: PositionMixture, s: Settings, history: History):
+    """Fields C (K, n, m), metric W (n, n, p) and the mixture (refined if ``s.refine_gmm``),
+    from the scaled samples Z, Zdot (T, n). SolverErrors carry the learner's hint."""
+    try:
+        C, W, dyn = learn_fields(Z, Zdot, mixture, s, history)
+        if s.refine_gmm:
+            mixture, C = refine_mixture(Z, Zdot, mixture, C, field_exponents(Z.shape[1], s.field_degree),
+                                        dyn, history.record)
+    except SolverError as exc:
+        raise with_learner_hint(exc) from exc
+    return C, W, mixture
+
+
+def learn_fields(Z, Zdot, mixture, s: Settings, history: History):
+    """Stages A and B (module docstring): (C, W, the last dynamics step)."""
+    n = Z.shape[1]
+    lin_exps, const_exps = field_exponents(n, 1), metric_exponents(n, 0)
+    C, P, dyn = stage_a(least_squares_data(Z, Zdot, mixture, lin_exps), lin_exps, const_exps, s, history)
+    if s.field_degree == 1 and s.learned_metric_degree == 0:
+        return C, P[:, :, None], dyn
+    fexps, mexps = field_exponents(n, s.field_degree), metric_exponents(n, s.learned_metric_degree)
+    data = least_squares_data(Z, Zdot, mixture, fexps)
+    C = embed(C, lin_exps, fexps)
+    W = embed(P[:, :, None], const_exps, mexps)
+    dyn = DynamicsStep(data, fexps, mexps, state_variables(n), s.gamma, s.margin, s.solver)
+    C, sol = dyn.solve(W)
+    history.record("dynamics (degree %d)" % s.field_degree, data.cost(C), sol)
+    if s.learned_metric_degree > 0:
+        C, W = alternate(data, dyn, C, W, fexps, mexps, s, history)
+    return C, W, dyn
+
+
+def stage_a(data: LeastSquaresData, fexps, mexps, s: Settings, history: History):
+    """Linear fields and a constant metric: (C, P, the dynamics step)."""
+    n = data.shape[1]
+    vars = state_variables(n)
+    dyn = DynamicsStep(data, fexps, mexps, vars, s.gamma, s.margin, s.solver)
+    W = np.eye(n)[:, :, None]
+    C, sol = dyn.solve(W)
+    history.record("dynamics (M = I)", data.cost(C), sol)
+    if s.metric == "identity":
+        return C, np.eye(n), dyn
+    if s.solver_method == "alternating":
+        C, W = alternate(data, dyn, C, W, fexps, mexps, s, history)
+        return C, W[:, :, 0], dyn
+    ica = ICAStep(data, fexps, vars, s.gamma, s.margin, s.eps, s.solver)
+    P = np.eye(n)
+    for _ in range(s.max_iter):
+        old = data.cost(C)
+        C, P, sol = ica.solve(C, P)
+        history.record("ica", data.cost(C), sol)
+        C, sol = dyn.solve(P[:, :, None])          # all coefficients under the new metric
+        cost = data.cost(C)
+        history.record("dynamics", cost, sol)
+        if stalled(old, cost, s.tol):
+            break
+    return C, P, dyn
+
+
+def alternate(data: LeastSquaresData, dyn: DynamicsStep, C, W, fexps, mexps, s: Settings, history: History):
+    """Plain alternation: metric step (max margin) then dynamics step, until no progress: (C, W)."""
+    K, n, _ = data.shape
+    grow = margin_degree(W, mexps, fexps)
+    met = MetricStep(n, K, mexps, fexps, state_variables(n), s.gamma, s.eps, grow_degree=grow,
+                     solver=s.solver)
+    for _ in range(s.max_iter):
+        W_new, t, sol = met.solve(C)
+        history.record("metric", data.cost(C), sol, margin=t)
+        if t <= NO_ROOM:
+            break
+        W, old = W_new, data.cost(C)
+        C, sol = dyn.solve(W, margin=0.5 * t, grow_degree=grow)
+        cost = data.cost(C)
+        history.record("dynamics", cost, sol)
+        if stalled(old, cost, s.tol):
+            break
+    return C, W

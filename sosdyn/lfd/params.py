@@ -1,0 +1,104 @@
+"""The CDSP hyper-parameters: their names, checks and the seed a fit uses.
+
+Every parameter is checked before any optimisation (InputError saying what to try); a model
+file's parameters go through the same checks. Numbers may be Python or numpy scalars
+(np.float32, np.int64); booleans are not numbers here.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from numbers import Integral, Real
+
+import numpy as np
+
+from ..errors import InputError
+from ..sos import SOLVERS
+from .certificate import check_sample_count
+
+METHODS = ("alternating", "ica")
+METRICS = ("learned", "identity")
+MAX_SEED = 2**32 - 1            # numpy's and sklearn's bound on an integer seed
+PARAMS = ("n_components", "metric_degree", "field_degree", "gamma", "metric", "solver",
+          "solver_method", "max_iter", "tol", "eps", "margin", "refine_gmm", "max_samples",
+          "random_state", "verify_samples", "allow_uncertified")      # what get_params and a file hold
+
+
+def check_params(p: Mapping, defaults: Mapping) -> None:
+    """Types and ranges of every parameter in ``p`` (PARAMS, and ``progress`` if present);
+    ``defaults`` are suggested in the messages. No solver is touched (see :func:`check_solver`)."""
+    def fail(name, want):
+        raise InputError(f"{name} must be {want}, got {p[name]!r}. "
+                         f"Try: the default, {name}={defaults[name]!r}.")
+
+    def integer(name, lo):
+        v = p[name]
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, Integral) or v < lo:
+            fail(name, f"an integer >= {lo}")
+
+    def positive(name):
+        v = p[name]
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, Real) or not np.isfinite(v) or v <= 0:
+            fail(name, "a positive finite number")
+
+    def choice(name, options):
+        if not isinstance(p[name], str) or p[name] not in options:
+            fail(name, f"one of {options}")
+
+    if not (isinstance(p["n_components"], str) and p["n_components"] == "bic"):
+        if isinstance(p["n_components"], str):
+            fail("n_components", 'an integer >= 1 or "bic"')
+        integer("n_components", 1)
+    integer("metric_degree", 0)
+    integer("field_degree", 1)
+    integer("max_iter", 0)
+    if p["metric_degree"] % 2:
+        raise InputError(f"metric_degree={p['metric_degree']} is odd: a polynomial metric of odd "
+                         "degree cannot be positive definite for all x; use 0, 2 or 4")
+    if p["field_degree"] % 2 == 0:
+        raise InputError(
+            f"field_degree={p['field_degree']} is even: the contraction condition then has odd "
+            f"degree {p['metric_degree'] + p['field_degree'] - 1} in x and its leading part cannot "
+            "be negative definite, so no certificate exists; use field_degree 1 or 3")
+    for name in ("gamma", "eps", "tol", "margin"):
+        positive(name)
+    choice("metric", METRICS)
+    choice("solver_method", METHODS)
+    if not isinstance(p["solver"], str) or not p["solver"]:
+        fail("solver", f"the name of a conic solver, e.g. one of {SOLVERS}")
+    if p["max_samples"] is not None:
+        integer("max_samples", 1)
+    check_sample_count(p["verify_samples"], "verify_samples")
+    rs = p["random_state"]
+    if not (rs is None or isinstance(rs, (np.random.Generator, np.random.RandomState))):
+        if isinstance(rs, (bool, np.bool_)) or not isinstance(rs, Integral) or not 0 <= rs <= MAX_SEED:
+            fail("random_state", f"None, an integer in [0, {MAX_SEED}], a np.random.Generator or a "
+                 "np.random.RandomState")
+    for name in ("refine_gmm", "allow_uncertified"):
+        if not isinstance(p[name], (bool, np.bool_)):
+            fail(name, "True or False")
+    if p.get("progress") is not None and not callable(p["progress"]):
+        fail("progress", "None or a function called with each history row")
+    if p["solver_method"] == "ica" and p["metric"] == "identity":
+        raise InputError("solver_method='ica' learns the metric; with metric='identity' there is "
+                         "nothing to alternate: use solver_method='alternating'")
+
+
+def check_solver(solver: str) -> None:
+    """The solver is one sosdyn drives directly or one installed in cvxpy."""
+    if solver.upper() in SOLVERS:
+        return
+    import cvxpy as cp              # lazy: importing cvxpy takes seconds; only other solvers need it
+    installed = cp.installed_solvers()
+    if solver.upper() not in installed:
+        raise InputError(f"unknown solver {solver!r}; use one of {SOLVERS} or a conic solver "
+                         f"installed in cvxpy ({', '.join(installed)}). Try: solver='CLARABEL'.")
+
+
+def resolve_seed(random_state) -> int:
+    """The integer seed a fit uses: the integer itself, one drawn from a Generator/RandomState
+    (advancing it, as sklearn does), or a fresh one for None."""
+    if isinstance(random_state, np.random.RandomState):
+        return int(random_state.randint(0, MAX_SEED, dtype=np.int64))
+    if random_state is None or isinstance(random_state, np.random.Generator):
+        return int(np.random.default_rng(random_state).integers(0, MAX_SEED))
+    return int(random_state)

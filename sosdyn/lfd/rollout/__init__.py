@@ -1,0 +1,26 @@
+"""Every integrator of sosdyn, in one place.
+
+* :func:`rollout`: one trajectory of ``xdot = field(x, goal)`` with pushes and goal changes
+  (adaptive, LSODA by default; used by ``CDSP.rollout`` and the baselines);
+* :func:`final_states`: ``x(horizon)`` from many starts as one batched ODE (grid convergence);
+* :func:`run_with_budget` / :class:`BudgetRollout`: the call-budget policy, LSODA then BDF;
+* :func:`euler_until_rest`: explicit Euler with the ds-opt stop rule.
+
+Sizes are checked against :mod:`sosdyn.limits` before anything is allocated; a trajectory
+whose state or velocity stops being finite raises :class:`~sosdyn.errors.SolverError`, so
+no integrator returns NaN or inf.
+"""
+
+from sosdyn.lfd.rollout.adaptive import BATCH_INTEGRATORS, INTEGRATORS, final_states, rollout
+from sosdyn.lfd.rollout.budget import (GRID_BUDGETS, ROLLOUT_BUDGETS, BudgetExceeded, BudgetRollout,
+                                       CountedField, run_with_budget)
+from sosdyn.lfd.rollout.euler import euler_until_rest
+from sosdyn.lfd.rollout.events import (Field, Trajectory, as_positive, as_vector, check_rollout_size,
+                                       parse_events)
+
+__all__ = [
+    "BATCH_INTEGRATORS", "INTEGRATORS", "final_states", "rollout",
+    "GRID_BUDGETS", "ROLLOUT_BUDGETS", "BudgetExceeded", "BudgetRollout", "CountedField", "run_with_budget",
+    "euler_until_rest", "Field", "Trajectory", "as_positive", "as_vector", "check_rollout_size",
+    "parse_events",
+]

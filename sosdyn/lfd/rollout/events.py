@@ -1,0 +1,102 @@
+"""What every integrator shares: the trajectory record, input checks, grid size and events.
+
+Events are pairs ``(time, vector)``: a push ``(time, dx)`` makes the state jump
+``x -> x + dx``; a goal change ``(time, new_goal)`` makes the field use ``new_goal`` from
+``time`` on. :func:`parse_events` validates both lists and orders them by time, goal
+changes before pushes at equal times.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from sosdyn.errors import InputError
+from sosdyn.limits import check_bytes, check_count
+
+Field = Callable[[np.ndarray, np.ndarray], np.ndarray]  # field(X (m, n), goal (n,)) -> Xdot (m, n)
+
+SIZE_HINT = "a larger dt or a shorter duration"
+
+
+@dataclass
+class Trajectory:
+    """A rollout sampled on a uniform grid.
+
+    ``t`` (T,) s from 0 to the duration; ``pos`` (T, n); ``goal_history`` (T, n) the goal in
+    effect at each sample; ``events``: one dict per applied event, in time order, with keys
+    ``kind`` ("push" or "goal_change"), ``time`` and ``before`` / ``after`` (the state for
+    a push, the goal for a goal change).
+    """
+
+    t: np.ndarray
+    pos: np.ndarray
+    goal_history: np.ndarray
+    events: list[dict] = field(default_factory=list)
+
+
+def as_vector(value, n: int | None, what: str) -> np.ndarray:
+    """``value`` as a finite float vector (of shape (n,) unless n is None); InputError otherwise."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{what} must be a numeric vector ({exc}).") from exc
+    if arr.ndim != 1 or (n is not None and arr.shape != (n,)):
+        expected = "a 1-D vector" if n is None else f"shape ({n},)"
+        raise InputError(f"{what} has shape {arr.shape}; expected {expected}.")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{what} contains NaN or inf: {arr}.")
+    return arr
+
+
+def as_positive(value, what: str) -> float:
+    """``value`` as a float in (0, inf); bools, None and strings are refused (InputError)."""
+    real = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if not real or not 0 < value < np.inf:
+        raise InputError(f"{what} must be a finite number > 0 (not a bool, not None), got {value!r}.")
+    return float(value)
+
+
+def check_rollout_size(duration: float, dt: float, dim: int, starts: int = 1) -> int:
+    """Samples per rollout, round(duration / dt) + 1, after checking it against the limits.
+
+    Counted: ``starts`` rollouts of that many samples against ``max_rollout_steps``; their
+    arrays -- time grid and solver output times (2 per sample), positions, goal history and
+    solver output ((3 dim) per sample), 8 bytes each -- against ``max_bytes``. Raises
+    :class:`~sosdyn.errors.ResourceLimitError` before anything is allocated.
+    """
+    samples = duration / dt + 1.0          # a float: inf when the ratio overflows, no int overflow
+    times = f" x {starts} starts" if starts > 1 else ""
+    what = f"the rollout grid (duration {duration:g} s / dt {dt:g} s{times})"
+    check_count(samples * starts, "max_rollout_steps", f"{what} sample count", SIZE_HINT)
+    check_bytes(samples * starts * (3 * dim + 2) * 8.0, f"{what} arrays", SIZE_HINT)
+    return int(round(duration / dt)) + 1
+
+
+def _event_list(items, n: int, duration: float, kind: str) -> list[tuple[float, str, np.ndarray]]:
+    """Validate ``[(time, vector)]`` into ``[(time, kind, vector)]``."""
+    if isinstance(items, (str, bytes, dict)) or not hasattr(items, "__iter__"):
+        raise InputError(f"{kind} events must be a list of pairs (time, vector), got {type(items).__name__}.")
+    out = []
+    for i, item in enumerate(items):
+        try:
+            time, vector = item
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{kind} {i} must be a pair (time, vector), got {item!r}.") from exc
+        is_number = isinstance(time, (int, float, np.number)) and not isinstance(time, bool)
+        if not is_number or not 0 <= time <= duration:
+            raise InputError(f"{kind} {i} time {time!r} is not inside [0, duration = {duration:g}].")
+        out.append((float(time), kind, as_vector(vector, n, f"{kind} {i} vector")))
+    return out
+
+
+def parse_events(perturbations, goal_changes, n: int, duration: float) -> list[tuple[float, str, np.ndarray]]:
+    """Pushes ``[(time, dx)]`` and goal changes ``[(time, new_goal)]`` as one time-ordered list
+    of ``(time, kind, vector)``, kind "push" or "goal_change"; at equal times goal changes
+    come first (a stable sort). Times must lie in [0, duration], vectors have shape (n,) and
+    are finite; InputError otherwise."""
+    events = _event_list(goal_changes, n, duration, "goal_change") + _event_list(perturbations, n, duration, "push")
+    events.sort(key=lambda e: e[0])
+    return events

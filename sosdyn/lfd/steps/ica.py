@@ -1,0 +1,119 @@
+"""The ICA step: constant metric P and the fields' linear part together, by an inner convex
+approximation of the BMI (Dinh, Gumussoy, Michiels & Diehl 2012).
+
+With dJ = J - J0, dP = P - P0 the exact identity
+    J^T P + P J = J^T P0 + P0 J + J0^T P + P J0 - J0^T P0 - P0 J0 + dJ^T dP + dP dJ
+and Young's inequality dJ^T dP + dP dJ <= a dJ^T dJ + dP^2 / a give the sufficient
+condition, by a Schur complement,
+    [[-(L + gamma P) - delta g I, dJ^T, dP], [dJ, I/a, 0], [dP, 0, a I]]  SOS matrix,
+convex in (J, P) and satisfied at (J0, P0): every iterate stays certified and the cost
+cannot increase. g(z) = (1 + |z|^2)^(d/2), d the degree of G for a constant metric.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...poly import PolyMatrix, Polynomial, jacobian
+from ...sos import SOSProgram
+from ..contraction import (contraction_degree, degree, margin_matrix, metric_exponents, symmetric_pairs,
+                           unit_fields, unit_metrics)
+from .common import LeastSquaresData, TermTable, proximal, solve_with_fallback
+
+
+def _blocks(n, parts):
+    """A symmetric 3n x 3n PolyMatrix with the given (row, col) blocks and their transposes."""
+    out = np.empty((3 * n, 3 * n), dtype=object)
+    zero = PolyMatrix(np.zeros((n, n)))
+    for r in range(3):
+        for c in range(3):
+            block = parts.get((r, c)) or (parts[(c, r)].T if (c, r) in parts else zero)
+            out[r * n:(r + 1) * n, c * n:(c + 1) * n] = block.entries
+    return PolyMatrix(out)
+
+
+class ICAStep:
+    """Constant metric P and the fields' linear part together, by the ICA (module docstring).
+
+    Higher-degree field coefficients are held at their current values inside this step: their
+    Jacobian grows with |z|, so the Young term a dJ^T dJ would dominate every SOS condition at
+    infinity and forbid any move. The learner follows each ICA step by a dynamics step that
+    moves all coefficients under the new P.
+
+    Terms of component k (J = J_k of the decision fields, J_c the unit Jacobians, E_ab the
+    unit constant metrics), and their weights at the iterate (C0, P0):
+
+    ==========================  ==========================================  ==============
+    name                        term                                        weight
+    ==========================  ==========================================  ==============
+    "own"                       blocks (0,0) -gamma P, (1,0) J, (2,0) P     1
+    "margin"                    block (0,0) -g(z) I                         delta
+    ("J P0", ab)                block (0,0) -(J^T E_ab + E_ab J)            P0_ab
+    ("J0 P", c)                 block (0,0) -(J_c^T P + P J_c)              C0_c
+    ("J0 P0", c, ab)            block (0,0) J_c^T E_ab + E_ab J_c           C0_c P0_ab
+    ("J0", c)                   block (1,0) -J_c (linear c only)            C0_c
+    ("P0", ab)                  block (2,0) -E_ab                           P0_ab
+    "1/a", "a"                  blocks (1,1) I, (2,2) I                     1/a, a
+    ==========================  ==========================================  ==============
+    """
+
+    def __init__(self, data: LeastSquaresData, fexps, vars, gamma, margin, eps, solver="CLARABEL"):
+        K, n, m = data.shape
+        self.solver, self.data, self.n = solver, data, n
+        self.linear = fexps.sum(axis=1) == 1
+        self.free = np.broadcast_to(self.linear, (K, n, m))
+        self.prog = SOSProgram("ICA step")
+        self.ids = self.prog.new_ids(int(self.free.sum()), name="linear fields")
+        P = self.prog.new_psd(n, name="P")
+        self.P, self.P_ids = P, P.ids
+        self.prog.add_sos_matrix(P - eps * PolyMatrix.identity(n), name="metric positive")
+        self.prog.add_eq(sum(P[a, a] for a in range(n)), float(n), name="trace P = n")
+        E = {(a, b): E for (a, b, _), E in unit_metrics(metric_exponents(n, 0), n, vars)}
+        self.pairs = symmetric_pairs(n)
+        units = unit_fields(fexps, n, vars)
+        Ju = [jacobian(u, vars) for _, u in units]                      # unit Jacobians (numeric)
+        self.lin_units = [c for c, ((_, j), _) in enumerate(units) if self.linear[j]]
+        I = PolyMatrix.identity(n)
+        grow = margin_matrix(vars, n, contraction_degree(0, degree(fexps)))
+        margin_term = _blocks(n, {(0, 0): -grow})
+        shared = {("J0 P", c): _blocks(n, {(0, 0): -(Jc.T @ P + P @ Jc)}) for c, Jc in enumerate(Ju)}
+        shared.update({("J0 P0", c, ab): _blocks(n, {(0, 0): Ju[c].T @ E[ab] + E[ab] @ Ju[c]})
+                       for c in self.lin_units for ab in self.pairs})
+        shared.update({("J0", c): _blocks(n, {(1, 0): -Ju[c]}) for c in self.lin_units})
+        shared.update({("P0", ab): _blocks(n, {(2, 0): -E[ab]}) for ab in self.pairs})
+        shared.update({"1/a": _blocks(n, {(1, 1): I}), "a": _blocks(n, {(2, 2): I})})
+        self.tables, self.cons = [], []
+        lin_ids = self.ids.reshape(K, n, -1)
+        for k in range(K):
+            f_lin = [Polynomial(vars, fexps[self.linear], np.hstack([np.zeros((n, 1)), np.eye(n)]), lin_ids[k, i])
+                     for i in range(n)]
+            J = jacobian(f_lin, vars)
+            own = _blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P})
+            own_p0 = {("J P0", ab): _blocks(n, {(0, 0): -(J.T @ E[ab] + E[ab] @ J)}) for ab in self.pairs}
+            table = TermTable({"own": own, "margin": margin_term, **own_p0, **shared})
+            self.tables.append(table)
+            self.cons.append(table.add(self.prog, f"ica[{k}]"))
+        self.margin = margin
+
+    def weights(self, c0, P0, alpha) -> dict:
+        """The family weights by name at the iterate (fields c0 = C0[k].ravel(), metric P0)."""
+        p0 = {ab: P0[ab] for ab in self.pairs}
+        out = {"own": 1.0, "margin": self.margin, "1/a": 1.0 / alpha, "a": alpha}
+        out.update({("J P0", ab): p0[ab] for ab in self.pairs})
+        out.update({("J0 P", c): c0[c] for c in range(c0.size)})
+        out.update({("J0 P0", c, ab): c0[c] * p0[ab] for c in self.lin_units for ab in self.pairs})
+        out.update({("J0", c): c0[c] for c in self.lin_units})
+        out.update({("P0", ab): p0[ab] for ab in self.pairs})
+        return out
+
+    def solve(self, C0, P0, alpha=1.0, prox=1e-4):
+        """One ICA iterate from the certified (C0, P0); returns (C, P, Solution)."""
+        for k, (table, con) in enumerate(zip(self.tables, self.cons)):
+            con.set_weights(table.weights(self.weights(C0[k].ravel(), P0, alpha)))
+        sv = np.array([P0[a, b] * (1.0 if a == b else np.sqrt(2.0)) for b in range(self.n) for a in range(b + 1)])
+        obj = self.data.partial_form(self.ids, self.free, C0) + proximal(self.ids, C0[self.free], prox) \
+            + proximal(np.sort(self.P_ids), sv[np.argsort(self.P_ids)], prox)
+        self.prog.minimize(obj)
+        sol = solve_with_fallback(self.prog, self.solver)
+        C = C0.copy()
+        C[self.free] = sol.values_of(self.ids)
+        return C, sol.value(self.P), sol

@@ -1,0 +1,26 @@
+"""Publication figures for sosdyn reports (matplotlib, no pyplot state).
+
+``style`` holds what every figure shares (rcParams, method colours, saving, data boxes);
+``streamlines``, ``trajectories`` and ``bars`` draw the figures. See :mod:`.style` for the
+conventions.
+"""
+from .bars import accuracy_bars, robustness_bars, scaling_plot
+from .streamlines import streamline_panel, streamlines
+from .style import GOAL_STYLE, METRIC_LABELS, STYLE, data_bounds, method_color, save_figure
+from .trajectories import perturbation_trajectories, trajectories_3d
+
+__all__ = [
+    "GOAL_STYLE",
+    "METRIC_LABELS",
+    "STYLE",
+    "accuracy_bars",
+    "data_bounds",
+    "method_color",
+    "perturbation_trajectories",
+    "robustness_bars",
+    "save_figure",
+    "scaling_plot",
+    "streamline_panel",
+    "streamlines",
+    "trajectories_3d",
+]

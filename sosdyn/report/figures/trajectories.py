@@ -1,0 +1,113 @@
+"""State-space trajectories: perturbed runs of every method (paper Fig. 4) and 3-D reproductions."""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import FancyArrowPatch
+from matplotlib.ticker import MaxNLocator
+
+from .style import (DEMO_COLOR, GOAL_STYLE, REPRO_COLOR, as_xy, data_bounds, finish_state_axes, method_color,
+                    new_figure, stream_legend_handles, styled)
+
+
+@styled
+def perturbation_trajectories(ax, demo, runs: Mapping[str, np.ndarray],
+                              events: Sequence[Mapping] | Mapping[str, Sequence[Mapping]] = (),
+                              goal_history=None,
+                              title: str | None = None, *, units: str = "mm") -> Figure:
+    """Paper Fig. 4: each method's reproduction under a push or a goal change.
+
+    ``demo`` (T, 2) is drawn as a wide light-gray band, each entry of ``runs``
+    (method -> (T, 2) positions) in its method colour. Pushes are arrows from the state
+    before to the state after, taken from ``events`` in the format of
+    ``Trajectory.events`` (dicts with ``kind``, ``before``, ``after``; only
+    ``kind == "push"`` is drawn): either one list (arrows in black, or in the colour of
+    an optional ``"method"`` key) or a dict method -> that method's events, e.g.
+    ``{m: traj.events for m, traj in trajs.items()}``. ``goal_history`` ((T, 2), the
+    goal in force at each step) gives the goal markers: the first goal hollow ("old
+    goal") and every later distinct goal filled ("new goal"); a constant history is
+    one "goal" star.
+
+    With ``ax=None`` a new figure with the legend underneath is returned, otherwise
+    ``ax.figure``.
+    """
+    own_figure = ax is None
+    if own_figure:
+        fig = new_figure(4.6, 5.2)
+        ax = fig.add_subplot()
+    demo = as_xy(demo)
+    methods = list(runs)
+    handles = [Line2D([], [], color="0.75", lw=5, alpha=0.8, solid_capstyle="round",
+                      label="demonstration")]
+    ax.plot(demo[:, 0], demo[:, 1], color="0.75", lw=5, alpha=0.8, solid_capstyle="round", zorder=1)
+    for method, pos in runs.items():
+        pos = as_xy(pos)
+        (line,) = ax.plot(pos[:, 0], pos[:, 1], color=method_color(method, methods), lw=1.6,
+                          zorder=3, label=method)
+        handles.append(line)
+
+    tagged = ([{"method": m, **e} for m, evs in events.items() for e in evs]
+              if isinstance(events, Mapping) else list(events))
+    pushes = [e for e in tagged if e.get("kind") == "push"]
+    for e in pushes:
+        color = method_color(e["method"], methods) if e.get("method") else "black"
+        ax.add_patch(FancyArrowPatch(np.asarray(e["before"], dtype=float)[:2],
+                                     np.asarray(e["after"], dtype=float)[:2], arrowstyle="-|>",
+                                     mutation_scale=12, color=color, lw=1.4, zorder=5))
+    if pushes:
+        handles.append(Line2D([], [], color="black", lw=1.4, marker=">", markersize=5,
+                              label="push"))
+
+    all_pts = [demo, *(as_xy(p) for p in runs.values())]
+    if goal_history is not None:
+        goals = np.asarray(goal_history, dtype=float)[:, :2]
+        distinct = goals[np.r_[True, np.any(np.diff(goals, axis=0) != 0, axis=1)]]
+        all_pts.append(distinct)
+        if len(distinct) == 1:
+            ax.plot(*distinct[0], **GOAL_STYLE)
+            handles.append(Line2D([], [], label="goal", **GOAL_STYLE))
+        else:
+            hollow = {**GOAL_STYLE, "markerfacecolor": "white", "markeredgecolor": "black"}
+            ax.plot(*distinct[0], **hollow)
+            ax.plot(distinct[1:, 0], distinct[1:, 1], **GOAL_STYLE)
+            handles += [Line2D([], [], label="old goal", **hollow),
+                        Line2D([], [], label="new goal", **GOAL_STYLE)]
+
+    return finish_state_axes(ax, data_bounds(all_pts, pad=0.06, square=True), units, title,
+                             handles if own_figure else None, ncols=min(len(handles), 4))
+
+
+@styled
+def trajectories_3d(demos: Sequence[np.ndarray], reproductions: Sequence[np.ndarray], goal,
+                    title: str | None = None, *, units: str = "mm") -> Figure:
+    """3-D demonstrations (solid red) and reproductions (dashed blue) with the goal.
+
+    The box follows the data ranges (true proportions), except that no side is drawn
+    shorter than 35 % of the longest, so a nearly planar motion keeps readable ticks.
+    """
+    fig = new_figure(5.4, 5.0)
+    ax = fig.add_subplot(projection="3d")
+    arrays = [np.asarray(a, dtype=float)[:, :3] for a in (*demos, *reproductions)]
+    for d in demos:
+        d = np.asarray(d, dtype=float)
+        ax.plot(d[:, 0], d[:, 1], d[:, 2], color=DEMO_COLOR, lw=1.5)
+    for r in reproductions:
+        r = np.asarray(r, dtype=float)
+        ax.plot(r[:, 0], r[:, 1], r[:, 2], color=REPRO_COLOR, lw=1.5, ls=(0, (4, 2.5)))
+    goal = np.asarray(goal, dtype=float)[:3]
+    ax.plot([goal[0]], [goal[1]], [goal[2]], **GOAL_STYLE)
+    ranges = np.ptp(np.vstack([*arrays, goal[None, :]]), axis=0)
+    ax.set_box_aspect(np.maximum(ranges, 0.35 * ranges.max() + 1e-9), zoom=0.88)
+    for axis, name in zip((ax.xaxis, ax.yaxis, ax.zaxis), ("x_1", "x_2", "x_3")):
+        axis.set_major_locator(MaxNLocator(4))
+        axis.set_label_text(f"${name}$ ({units})")
+    if title:
+        ax.set_title(title)
+    fig.legend(handles=stream_legend_handles()[1:], loc="outside lower center", ncols=3)
+    return fig
+
+
+# -------------------------------------------------------------------------- bar charts

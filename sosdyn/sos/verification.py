@@ -1,0 +1,189 @@
+"""The independent check of a certificate: numbers, not the solver's own matching matrix.
+
+For every SOS constraint, :func:`verify_certificate` rebuilds z^T Q z from the basis by
+polynomial arithmetic and compares it with the constraint's polynomial at the decision values
+(:func:`check_gram`); it checks every Gram block -- SOS constraints, SOS-matrix constraints,
+families, the multipliers of ``add_nonneg_on``, ``new_sos`` and ``new_psd`` blocks -- for
+Q >= 0 (smallest eigenvalue) or, for DSOS blocks, diagonal dominance Q_ii >= sum_j |Q_ij| as
+numbers (:func:`check_block`); and every linear equality and inequality (:func:`check_linear`)
+and cvxpy constraint. With e = p - z^T Q z and every monomial of e in the Gram monomial set,
+p = z^T (Q + E) z with ||E||_2 <= sqrt(2) ||e||_2, so lambda_min(Q) >= sqrt(2) ||e||_2 proves
+p SOS (up to floating point) -- ``strict``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..poly import MAX_COEFFICIENT, Polynomial, match_rows
+from .conic import assign_at, cvxpy_block_vars, positions
+from .gram import svec_to_matrix
+
+
+@dataclass
+class CertificateCheck:
+    """Numbers that say whether one block of a certificate holds.
+
+    ``kind``: the constraint kind ("sos", "sos_matrix", "nonneg_on") for a Gram block with a
+    coefficient identity; "multiplier", "sos_var", "psd_var" for a block that must only be
+    in its cone; "eq", "ge", "cvxpy" for linear or cvxpy constraints (``basis_size`` is then
+    the number of rows, ``residual`` the largest violation, ``rel_residual`` relative to the
+    row's scale). ``reason`` says what failed and by how much.
+    """
+
+    name: str
+    kind: str
+    basis_size: int
+    min_eig: float
+    residual: float          # max |coefficient| of p - z^T Q z (or max row violation)
+    rel_residual: float      # residual / max |coefficient of p| (or per-row scale)
+    strict: bool             # lambda_min(Q) >= sqrt2 ||e||_2 with e representable
+    passed: bool
+    cone: str = "psd"
+    dd_margin: float = math.nan   # min_i Q_ii - sum_{j != i} |Q_ij| (DSOS blocks)
+    reason: str = ""
+
+
+def _cone_check(Q, cone, eig_tol):
+    """(min eig, dd margin, ok, reason) of a Gram block in its cone."""
+    min_eig = float(np.linalg.eigvalsh(Q).min()) if Q.size else 0.0
+    tol = eig_tol * max(1.0, float(np.abs(Q).max(initial=0.0)))
+    if cone == "dsos":
+        dd = float((np.diag(Q) - (np.abs(Q).sum(axis=1) - np.abs(np.diag(Q)))).min()) if Q.size else 0.0
+        ok = dd >= -tol
+        reason = "" if ok else f"diagonal dominance violated by {-dd:.2e} (tolerance {tol:.1e})"
+        return min_eig, dd, ok, reason
+    ok = min_eig >= -tol
+    reason = "" if ok else f"min eigenvalue {min_eig:.3e} below -{tol:.1e}"
+    return min_eig, math.nan, ok, reason
+
+
+def check_gram(name, kind, p, basis_exps, Q, eig_tol=1e-7, rel_tol=1e-6, cone="psd") -> CertificateCheck:
+    """Check p = z^T Q z and Q in its cone for a numeric polynomial p and basis exponents."""
+    min_eig, dd, cone_ok, reason = _cone_check(Q, cone, eig_tol)
+    B = basis_exps
+    zQz = Polynomial(p.vars, (B[:, None, :] + B[None, :, :]).reshape(-1, B.shape[1]), Q.ravel())
+    e = p - zQz
+    scale = max(1.0, float(np.abs(p.coef).max(initial=0.0)))
+    res = float(np.abs(e.coef).max(initial=0.0))
+    representable = bool((match_rows(zQz.exps, e.exps) >= 0).all()) if e.nterms else True
+    strict = representable and min_eig >= np.sqrt(2.0) * float(np.linalg.norm(e.coef))
+    res_ok = res <= rel_tol * scale
+    if not res_ok:
+        reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
+                                       f"{rel_tol:.0e} x {scale:.3g}") if r)
+    return CertificateCheck(name, kind, B.shape[0], min_eig, res, res / scale, bool(strict),
+                            bool(cone_ok and res_ok), cone, dd, reason)
+
+
+def check_block(name, kind, Q, cone="psd", eig_tol=1e-7) -> CertificateCheck:
+    """Check a block that must only lie in its cone (multipliers, new_sos, new_psd)."""
+    min_eig, dd, ok, reason = _cone_check(Q, cone, eig_tol)
+    return CertificateCheck(name, kind, Q.shape[0], min_eig, 0.0, 0.0, bool(min_eig > 0), bool(ok),
+                            cone, dd, reason)
+
+
+def check_linear(rows, ids, x, tol) -> CertificateCheck:
+    """Check ``rows`` (a LinearRows) at the values x of ``ids``: violation <= tol x row scale."""
+    n = rows.rhs.size
+    terms = rows.vals * x[positions(ids, rows.ids, f"constraint {rows.name!r}")]
+    lhs = np.bincount(rows.rows, weights=terms, minlength=n)
+    size = np.bincount(rows.rows, weights=np.abs(terms), minlength=n)
+    r = lhs - rows.rhs
+    viol = np.abs(r) if rows.kind == "eq" else np.maximum(-r, 0.0)
+    rel = viol / np.maximum(1.0, np.maximum(np.abs(rows.rhs), size))
+    worst = float(rel.max(initial=0.0))
+    ok = worst <= tol
+    reason = "" if ok else (f"row {int(rel.argmax())} violated by {float(viol.max()):.2e} "
+                            f"(relative {worst:.2e} above {tol:.0e})")
+    return CertificateCheck(rows.name, rows.kind, n, math.nan, float(viol.max(initial=0.0)), worst,
+                            False, bool(ok), "", math.nan, reason)
+
+
+@dataclass
+class VerificationReport:
+    """Independent check of every block of a solution's certificate (module docstring)."""
+
+    checks: list
+    linear_residual: float
+    passed: bool
+
+    @property
+    def failures(self) -> list:
+        return [c for c in self.checks if not c.passed]
+
+    @property
+    def min_eig(self) -> float:
+        return min((c.min_eig for c in self.checks if not math.isnan(c.min_eig)), default=np.inf)
+
+    @property
+    def max_residual(self) -> float:
+        return max((c.residual for c in self.checks if c.kind not in ("eq", "ge", "cvxpy")), default=0.0)
+
+    def summary(self) -> str:
+        """One line per failing block: its name, kind and by how much it fails."""
+        if self.passed:
+            return "every block passes"
+        return "; ".join(f"{c.kind} {c.name!r}: {c.reason}" for c in self.failures)
+
+    def as_dict(self) -> dict:
+        return {"passed": self.passed, "min_eig": self.min_eig, "max_residual": self.max_residual,
+                "linear_residual": self.linear_residual, "checks": [asdict(c) for c in self.checks]}
+
+    def __str__(self) -> str:
+        lines = [f"{'block':<20} {'kind':<10} {'size':>5} {'min eig':>11} {'residual':>10} ok"]
+        for c in self.checks:
+            eig = "-" if math.isnan(c.min_eig) else f"{c.min_eig:.3e}"
+            lines.append(f"{c.name:<20} {c.kind:<10} {c.basis_size:>5} {eig:>11} "
+                         f"{c.residual:>10.2e} {'yes' if c.passed else 'NO: ' + c.reason}")
+        lines.append(f"linear constraints residual {self.linear_residual:.2e}; "
+                     f"{'PASSED' if self.passed else 'FAILED'}")
+        return "\n".join(lines)
+
+
+def check_cvxpy(program, ids, x, tol) -> list:
+    """The program's cvxpy constraints, evaluated at the values x of decision ``ids``."""
+    if not program.cvxpy_constraints:
+        return []
+    for b, var in zip(program.blocks, cvxpy_block_vars(program)):
+        var.value = x[positions(ids, b.ids)]
+    out = []
+    for k, c in enumerate(program.cvxpy_constraints):
+        viol = float(np.max(c.violation()))
+        scale = max([1.0] + [float(np.abs(a.value).max()) for a in c.args if a.value is not None])
+        ok = viol <= tol * scale
+        out.append(CertificateCheck(f"cvxpy[{k}]", "cvxpy", int(np.size(c.violation())), math.nan, viol,
+                                    viol / scale, False, bool(ok), "", math.nan,
+                                    "" if ok else f"violated by {viol:.2e}"))
+    return out
+
+
+def verify_certificate(program, ids, x, eig_tol=1e-7, rel_tol=1e-6) -> VerificationReport:
+    """Check every block of ``program``'s certificate at the values x of decision ``ids``.
+
+    Gram identities within ``rel_tol`` (relative), cones within ``eig_tol``, linear rows and
+    cvxpy constraints within 10 x ``rel_tol`` relative to each row's scale (module docstring).
+    """
+    if not np.abs(x).max(initial=0.0) <= MAX_COEFFICIENT:     # polynomials refuse such numbers
+        bad = CertificateCheck("solution", "vector", int(x.size), math.nan, math.inf, math.inf,
+                               False, False, "", math.nan, "non-finite entries (or entries above "
+                               f"{MAX_COEFFICIENT:.0e}) in the solution")
+        return VerificationReport([bad], math.inf, False)
+    at = lambda block_ids: x[positions(ids, block_ids)]  # noqa: E731
+    checks, owned = [], set()
+    for con in program.sos_constraints:
+        owned.add(id(con.psd))
+        Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
+        p = assign_at(con.poly.with_vars(con.basis.vars), ids, x)
+        checks.append(check_gram(con.name, con.kind, p, con.basis.exps, Q, eig_tol, rel_tol, con.psd.cone))
+    for b in program.blocks:
+        if b.psd is not None and id(b.psd) not in owned:
+            Q = svec_to_matrix(at(b.psd.ids), b.psd.size)
+            checks.append(check_block(b.name, b.psd.role, Q, b.psd.cone, eig_tol))
+    linear = [check_linear(rows, ids, x, 10 * rel_tol) for rows in program.linear if rows.role == "user"]
+    linear += check_cvxpy(program, ids, x, 10 * rel_tol)
+    checks += linear
+    lin = max((c.residual for c in linear), default=0.0)
+    return VerificationReport(checks, lin, all(c.passed for c in checks))

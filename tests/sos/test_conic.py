@@ -1,0 +1,44 @@
+"""The conic form: coupled PSD groups and the conditioning rule of the data (sosdyn.sos.conic)."""
+import pytest
+
+import sosdyn as sd
+from sosdyn.sos.conic import coupled_psd_sizes
+
+x, y = sd.variables("x y")
+
+
+def test_blocks_sharing_equality_rows_are_estimated_as_one_dense_group():
+    prog = sd.SOSProgram()
+    g = prog.new_var()
+    prog.add_nonneg_on(x**4 + y**4 - g, ineqs=[1 - x**2 - y**2], degree=4)   # Gram 6 + multiplier 3
+    prog.add_sos(x**2 + y**2 + 1 - g)                                        # Gram 3, own rows
+    prog.new_psd(2)                                                           # no rows at all
+    prog.maximize(g)
+    D = sorted(coupled_psd_sizes(prog.compile()))
+    # 21 + 6 svec entries and the 15 monomials of degree <= 4; 6 + the 6 of degree <= 2; 3
+    assert D == [3, 12, 42]
+
+
+# ---------------------------------------------------------------- conditioning of the data
+@pytest.mark.parametrize("make", [
+    lambda g: 1e100 * x**4 + 1 - g,          # was reported infeasible
+    lambda g: x**4 + 3e9 * x**2 + 1 - g,     # was reported infeasible (answer: g = 1)
+    lambda g: 1e12 * x**4 + 1 - g,           # was reported optimal with g = -15.7
+])
+def test_badly_scaled_programs_raise_instead_of_a_wrong_status(no_solver, make):
+    prog = sd.SOSProgram()
+    g = prog.new_var()
+    prog.add_sos(make(g), name="scaled")
+    prog.maximize(g)
+    with pytest.raises(sd.InputError, match=r"'scaled'.*above 1e\+08.*Try: rescale the variables"):
+        prog.solve()
+
+
+def test_moderately_scaled_programs_still_solve():
+    prog = sd.SOSProgram()
+    g = prog.new_var()
+    prog.add_sos(1e6 * (x**4 + 1) - g)
+    prog.maximize(g)
+    sol = prog.solve()
+    assert sol.status == "optimal" and sol.value(g) == pytest.approx(1e6, rel=1e-6)
+    assert prog.compile().rhs_ratio == pytest.approx(1e6)
