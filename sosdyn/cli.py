@@ -3,12 +3,15 @@
     sosdyn fit demo1.csv demo2.csv --out model.json [--components K ...]
     sosdyn fit lasa:Leaf_1 --out leaf.json
     sosdyn rollout model.json --from 10,-5 [--duration T --dt DT --out traj.csv]
+    sosdyn export model.json --to python|cpp --out field.py|field.hpp   # standalone evaluator
+    sosdyn plot model.json [--demos a.csv --demos b.csv | --demos lasa:NAME] --out fig.png|svg
     sosdyn experiment fig1 [--repo DIR] [--quick ...]   # python -m problems fig1, in DIR
     sosdyn report [--results reports/results.json --out reports]   # render a results file
     sosdyn lasa list
 
 Global options ``--quiet`` (no progress or summaries) and ``--debug`` (full
-tracebacks, debug logging; also ``SOSDYN_DEBUG=1``) go before the command.
+tracebacks, debug logging; also ``SOSDYN_DEBUG=1``) go before the command;
+``sosdyn --version`` prints the version.
 
 Every ``--out`` is checked before any work: its folder exists and is writable, it is not a
 folder, and it is not one of the command's inputs (same resolved path or same file, so
@@ -69,11 +72,21 @@ class SolverMethod(str, enum.Enum):
     ica = "ica"
 
 
+def _print_version(value: bool) -> None:
+    """Option callback of --version: print ``sosdyn X.Y.Z`` and exit."""
+    if value:
+        from . import __version__
+        out.print(f"sosdyn {__version__}", highlight=False)
+        raise typer.Exit()
+
+
 @app.callback()
 def _global_options(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Print results only: no progress, no summaries.")] = False,
     debug: Annotated[bool, typer.Option("--debug", envvar="SOSDYN_DEBUG",
                                         help="Show full tracebacks and debug logs.")] = False,
+    version: Annotated[bool, typer.Option("--version", is_eager=True, callback=_print_version,
+                                          help="Print the sosdyn version and exit.")] = False,
 ) -> None:
     _State.quiet, _State.debug = quiet, debug
     if debug:
@@ -292,6 +305,109 @@ def report(
     with _status("rendering the report ..."):
         paths = build_report(results, out_dir)
     _info(f"[green]wrote[/] {escape(str(paths['html']))} and {escape(str(paths['pdf']))}")
+
+
+class ExportTarget(str, enum.Enum):
+    python = "python"
+    cpp = "cpp"
+
+
+@app.command("export")
+def export_model(
+    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
+    target: Annotated[ExportTarget, typer.Option("--to", help="python: one numpy-only module; cpp: a "
+                                                "header-only C++17 evaluator.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="The file to write (.py or .hpp).",
+                                           show_default=False)],
+) -> None:
+    """Write a standalone evaluator of a saved model (no sosdyn needed to run it): Python
+    `predict(X) -> Xdot` with numpy only, or C++17 `bool predict(const double* x, double* xdot)`."""
+    import sosdyn as sd
+
+    from .lfd.export import export as generate
+    from .lfd.model_io import replace_atomically
+
+    _existing(model_path, "model file")
+    check_output(out_path, [model_path], "model file")
+    check_folder(out_path.parent)
+    source = generate(sd.load_model(model_path), target.value)
+    replace_atomically(out_path, source.encode("utf-8"))
+    _info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
+
+
+PLOT_FORMATS = (".png", ".svg")
+
+
+@app.command()
+def plot(
+    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="The figure (.png or .svg).", show_default=False)],
+    demos: Annotated[list[str] | None, typer.Option(
+        "--demos", help="Demonstrations to draw (CSV/NPY files, or lasa:NAME); repeat the option for "
+                        "several files. Reproductions start from their first states.", show_default=False)] = None,
+    duration: Annotated[float | None, typer.Option(callback=_positive, help="Seconds per reproduction; "
+                                                   "default: the demonstrations' longest (10 s without).")] = None,
+) -> None:
+    """Plot a saved model: streamlines (n = 2), 3-D trajectories (n = 3), or each dimension of
+    the reproductions over time (n > 3). Without --demos the reproductions start at the
+    mixture's means."""
+    import matplotlib as mpl
+
+    import sosdyn as sd
+
+    from .report.figures import STYLE, streamlines, trajectories_3d
+
+    if out_path.suffix.lower() not in PLOT_FORMATS:
+        raise InputError(f"--out {out_path} must end in .png or .svg. Try: --out {out_path.with_suffix('.png')}.")
+    demos = demos or []
+    lasa = len(demos) == 1 and demos[0].startswith("lasa:")
+    paths = [] if lasa else [_existing(Path(p), "demonstration file") for p in demos]
+    _existing(model_path, "model file")
+    check_output(out_path, [model_path, *paths], "input")
+    check_folder(out_path.parent)
+    model = sd.load_model(model_path)
+    data = (sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(paths)) if demos else None
+    if data is not None and data.dim != model.dim_:
+        raise InputError(f"the demonstrations are {data.dim}-D but the model is {model.dim_}-D. "
+                         "Try: the demonstrations the model was fitted to.")
+    demo_pos = [d.pos for d in data] if data is not None else []
+    starts = [p[0] for p in demo_pos] or list(model.goal_ + model.scale_ * model.mixture_.means)
+    horizon = duration or (max(float(d.t[-1] - d.t[0]) for d in data) if data is not None else 10.0)
+    with _status(f"rolling out {len(starts)} reproductions ..."):
+        runs = [model.rollout(x0, horizon) for x0 in starts]
+    title = model_path.stem
+    if model.dim_ == 2:
+        fig = streamlines(None, model.predict, demo_pos, [r.pos for r in runs], model.goal_, title=title,
+                          units=model.units_)
+    elif model.dim_ == 3:
+        fig = trajectories_3d(demo_pos, [r.pos for r in runs], model.goal_, title=title, units=model.units_)
+    else:
+        fig = rollout_time_series(runs, model.goal_, model.units_, title)
+    with mpl.rc_context(STYLE):
+        fig.savefig(out_path, format=out_path.suffix.lower()[1:], dpi=150, metadata=_no_date(out_path))
+    _info(f"[green]wrote[/] {escape(str(out_path))}  ({model.dim_}-D model, {len(runs)} reproductions)")
+
+
+def _no_date(path: Path) -> dict:
+    """savefig metadata: no creation date in an SVG, so equal inputs give equal files."""
+    return {"Date": None} if path.suffix.lower() == ".svg" else {}
+
+
+def rollout_time_series(runs, goal, units: str, title: str):
+    """One panel per dimension: x_i(t) of every reproduction, the goal's x_i dotted."""
+    from matplotlib.figure import Figure
+
+    n = len(goal)
+    fig = Figure(figsize=(6.0, 1.6 * n + 0.6), layout="constrained")
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    for i, ax in enumerate(axes):
+        for r in runs:
+            ax.plot(r.t, r.pos[:, i], lw=1.2)
+        ax.axhline(goal[i], color="black", ls=":", lw=1.0)
+        ax.set_ylabel(f"$x_{{{i + 1}}}$ ({units})")
+    axes[-1].set_xlabel("t (s)")
+    axes[0].set_title(title)
+    return fig
 
 
 @lasa_app.command("list")

@@ -109,9 +109,15 @@ def repo(tmp_path, monkeypatch):
     (tmp_path / "elsewhere").mkdir()
     monkeypatch.chdir(tmp_path / "elsewhere")
     monkeypatch.setattr(sys, "path", list(sys.path))
-    for name in [m for m in sys.modules if m == "problems" or m.startswith("problems.")]:
+    for name in _problems_modules():
         monkeypatch.delitem(sys.modules, name)
-    return tmp_path / "repo"
+    yield tmp_path / "repo"
+    for name in _problems_modules():        # the throw-away package must not outlive the test
+        sys.modules.pop(name)               # (monkeypatch then restores the real one, if any)
+
+
+def _problems_modules() -> list:
+    return [m for m in sys.modules if m == "problems" or m.startswith("problems.")]
 
 
 def test_experiment_runs_main_from_any_folder(capsys, repo):

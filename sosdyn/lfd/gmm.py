@@ -84,7 +84,7 @@ class PositionMixture:
     def n_components(self) -> int:
         return self.weights.size
 
-    def _factors(self):
+    def factors(self):
         """Inverse Cholesky factors and log normalisers, computed once per mixture."""
         if getattr(self, "_cache", None) is None:
             n = self.means.shape[1]
@@ -101,7 +101,7 @@ class PositionMixture:
         Far from the data the quadratic form overflows and an entry is -inf (NaN when
         ``x - mu_k`` itself overflows); :meth:`responsibilities` handles both.
         """
-        inv, lognorm = self._factors()
+        inv, lognorm = self.factors()
         with np.errstate(over="ignore", invalid="ignore"):
             z = np.einsum("kij,mkj->mki", inv, X[:, None, :] - self.means[None])
             return lognorm[None, :] - 0.5 * np.einsum("mki,mki->mk", z, z)
@@ -112,7 +112,7 @@ class PositionMixture:
         Each row is divided by c = max(1, max_i |x_i|) before the triangular solve, so
         nothing overflows: log d_k(x) = log c + 1/2 log ||L_k^-1 (x/c - mu_k/c)||^2.
         """
-        inv, _ = self._factors()
+        inv, _ = self.factors()
         c = np.maximum(np.abs(X).max(axis=1), 1.0)[:, None, None]
         z = np.einsum("kij,mkj->mki", inv, X[:, None, :] / c - self.means[None] / c)
         with np.errstate(divide="ignore"):

@@ -228,8 +228,13 @@ class Polynomial:
         return result
 
     # ------------------------------------------------------------------ calculus
-    def diff(self, var: str) -> "Polynomial":
-        """Partial derivative with respect to the indeterminate ``var``."""
+    def diff(self, var) -> "Polynomial":
+        """Partial derivative with respect to the indeterminate ``var`` (a name or a variable).
+
+        A variable absent from ``self.vars`` gives the zero polynomial; anything that is not an
+        indeterminate (``2*x``, ``x + 1``, a number) is a PolynomialError, never a silent zero.
+        """
+        (var,) = variable_names([var])
         if var not in self.vars:
             return Polynomial(self.vars, np.zeros((0, self.nvars)), np.zeros((0, 1 + self.ids.size)), self.ids)
         j = self.vars.index(var)
@@ -245,7 +250,7 @@ class Polynomial:
 
     def directional_derivative(self, field, vars=None) -> "Polynomial":
         """dp(x)[v(x)] = sum_i (dp/dx_i) v_i(x) for a polynomial vector field v."""
-        vars = self.vars if vars is None else tuple(vars)
+        vars = self.vars if vars is None else variable_names(vars)
         if len(field) != len(vars):
             raise PolynomialError(f"field has {len(field)} components for {len(vars)} variables")
         return sum((self.diff(v) * f for v, f in zip(vars, field)), Polynomial.constant(0.0, vars))

@@ -64,6 +64,10 @@ def _clarabel(data, verbose, settings):
         blocks.append(sp.csc_matrix((-np.ones(pos.size), (np.arange(pos.size), pos)), shape=(pos.size, data.n)))
         rhs.append(np.zeros(pos.size))
         cones.append(clarabel.PSDTriangleConeT(size))
+    if data.n_soc:                          # s = G x in each 3-dim second-order cone
+        blocks.append(-data.soc)
+        rhs.append(np.zeros(data.soc.shape[0]))
+        cones += [clarabel.SecondOrderConeT(3)] * data.n_soc
     A = sp.vstack(blocks).tocsc()
     P = sp.triu(2.0 * data.P).tocsc() if data.P is not None else sp.csc_matrix((data.n, data.n))
     opts = clarabel.DefaultSettings()
@@ -102,6 +106,9 @@ def _cvxpy(program, data, solver, verbose, settings):
     for pos, size in data.psd:
         Q = cp.Variable((size, size), PSD=True)
         cons.append(_svec_to_vec_map(size) @ x[pos] == cp.vec(Q, order="F"))
+    if data.n_soc:
+        s = cp.reshape(data.soc @ x, (3, data.n_soc), order="F")
+        cons.append(cp.SOC(s[0], s[1:], axis=0))
     cons += program.cvxpy_constraints
     expr = program.objective[1] if program.objective else None
     if isinstance(expr, cp.Expression):
@@ -147,9 +154,9 @@ def solver_bytes(data, solver: str, backend: str) -> float:
     """
     b = np.array([size for _, size in data.psd], dtype=float)
     s = b * (b + 1) / 2
-    nnz_a = data.A_eq.nnz + data.A_ge.nnz
+    nnz_a = data.A_eq.nnz + data.A_ge.nnz + (data.soc.nnz if data.soc is not None else 0)
     nnz = nnz_a + s.sum() + (data.P.nnz if data.P is not None else 0)
-    dim = data.n + data.A_eq.shape[0] + data.A_ge.shape[0] + s.sum()
+    dim = data.n + data.A_eq.shape[0] + data.A_ge.shape[0] + 3 * data.n_soc + s.sum()
     total = BASE_BYTES + SPARSE_BYTES * (nnz + dim)
     if solver == "SCS":
         total += SCS_CONE_BYTES * (b**2).sum()
@@ -162,7 +169,7 @@ def solver_bytes(data, solver: str, backend: str) -> float:
 
 def _size_hint(solver: str) -> str:
     hint = ("lower the degree (a smaller Gram basis), exploit sparsity (fewer monomials), or use "
-            "cone='dsos' in add_sos (an LP: no dense blocks)")
+            "cone='dsos' (an LP) or cone='sdsos' (second-order cones) in add_sos: no dense blocks")
     return hint if solver == "SCS" else hint + ", or solver='SCS' (first order: no dense KKT blocks)"
 
 

@@ -1,7 +1,8 @@
 """Lowering an SOSProgram to one standard-form conic problem.
 
     minimise    x^T P x + q^T x + c
-    subject to  A_eq x = b_eq,   A_ge x >= b_ge,   svec^-1(x[block]) >= 0 for each PSD block
+    subject to  A_eq x = b_eq,   A_ge x >= b_ge,   svec^-1(x[block]) >= 0 for each PSD block,
+                (G x)[3k] >= ||(G x)[3k+1 : 3k+3]||_2 for each second-order cone k (SDSOS blocks)
 
 x stacks every decision id of the program (free scalars and Gram svec entries) in
 creation order. With ``scale`` each row of A_eq / A_ge is divided by its largest entry,
@@ -50,6 +51,12 @@ class ConicData:
     seconds: float
     rhs_ratio: float = 0.0      # largest |b_i| / max_j |A_ij| over the equality rows
     rhs_source: str = ""        # the constraint that owns that row
+    soc: sp.csc_matrix | None = None   # G: rows 3k..3k+2 of G x in the k-th 3-dim second-order cone
+
+    @property
+    def n_soc(self) -> int:
+        """Number of (3-dimensional) second-order cones."""
+        return 0 if self.soc is None else self.soc.shape[0] // 3
 
     @property
     def n(self) -> int:
@@ -58,7 +65,8 @@ class ConicData:
     def sizes(self) -> dict:
         return {"variables": int(self.n), "equalities": int(self.A_eq.shape[0]),
                 "inequalities": int(self.A_ge.shape[0]),
-                "psd_blocks": [int(b) for _, b in self.psd], "nnz": int(self.A_eq.nnz + self.A_ge.nnz)}
+                "psd_blocks": [int(b) for _, b in self.psd], "second_order_cones": self.n_soc,
+                "nnz": int(self.A_eq.nnz + self.A_ge.nnz + (self.soc.nnz if self.soc is not None else 0))}
 
 
 def positions(ids: np.ndarray, wanted: np.ndarray, what: str = "expression") -> np.ndarray:
@@ -83,7 +91,11 @@ def objective_value(data: "ConicData", x: np.ndarray) -> float:
 
 
 def _stack(ids, parts, kind, scale):
-    """Rows of one kind stacked: (A, b, largest |b_i| / max_j |A_ij|, its constraint's name)."""
+    """Rows of one kind stacked: (A, b, largest |b_i| / max_j |A_ij|, its constraint's name).
+
+    ``scale`` divides each row by its largest entry (never for "soc" rows: a cone is not
+    invariant under scaling its coordinates separately).
+    """
     parts = [p for p in parts if p.kind == kind]
     n_rows, r, c, v, rhs, starts = 0, [], [], [], [], []
     for p in parts:
@@ -109,7 +121,7 @@ def _stack(ids, parts, kind, scale):
         worst = int(np.argmax(np.where(np.isnan(rel), np.inf, rel)))
         ratio = float(rel[worst])
         source = parts[int(np.searchsorted(starts, owner[has][worst], side="right")) - 1].name
-    if scale and A.nnz:
+    if scale and A.nnz and kind != "soc":
         norms = np.where(has, norms, 1.0)
         A = sp.diags(1.0 / norms) @ A
         b = b / norms
@@ -142,11 +154,13 @@ def assemble(program, scale: bool = True) -> ConicData:
     rows = [c.rows for c in program.sos_constraints] + list(program.linear)
     A_eq, b_eq, ratio, source = _stack(ids, rows, "eq", scale)
     A_ge, b_ge, _, _ = _stack(ids, rows, "ge", scale)
+    G = _stack(ids, rows, "soc", False)[0]
     psd = [(positions(ids, b.ids), b.size) for b in program.psd_blocks]
     P, q, c, sense = _objective(program, ids)
     reasons = [c.infeasible_reason for c in program.sos_constraints if c.infeasible_reason]
     return ConicData(ids, A_eq, b_eq, A_ge, b_ge, psd, P, q, c, sense, scale,
-                     reasons[0] if reasons else None, time.perf_counter() - t0, ratio, source)
+                     reasons[0] if reasons else None, time.perf_counter() - t0, ratio, source,
+                     G if G.shape[0] else None)
 
 
 def check_data(data: ConicData) -> None:

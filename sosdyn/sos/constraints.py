@@ -9,8 +9,19 @@
   :class:`Multiplier` / :class:`EqualityMultiplier` -- the multipliers of ``add_nonneg_on``;
 * functions on arrays: :func:`matrix_form` (y^T P(x) y and its multipartite basis),
   :func:`gram_polynomial` (z^T Q z as a decision polynomial), :func:`dsos_rows` (diagonal
-  dominance as linear rows), :func:`face_rows` (a tightened block), :func:`basis_exponents`
-  (a user's basis).
+  dominance as linear rows), :func:`sdsos_rows` (scaled diagonal dominance as linear rows
+  and 3-dimensional second-order cones), :func:`face_rows` (a tightened block),
+  :func:`basis_exponents` (a user's basis).
+
+The cone of a Gram block (``cone=`` of every SOS-type declaration, :data:`CONES`), from the
+smallest feasible set to the largest (Ahmadi & Majumdar 2019, "DSOS and SDSOS optimization"):
+
+    dsos   Q_ii >= sum_{j != i} |Q_ij|                          (an LP)
+    sdsos  Q = sum_{i<j} M^ij, M^ij >= 0 a 2x2 block at (i, j)   (an SOCP)
+    psd    Q >= 0                                                (an SDP)
+
+dsos is inside sdsos (a diagonally dominant Q splits into 2x2 blocks [[|Q_ij|, Q_ij],
+[Q_ij, |Q_ij|]] plus a nonnegative diagonal), and sdsos inside psd (a sum of PSD blocks).
 
 A handle reads numbers only from a solution it is given: ``con.gram_matrix(sol)`` is
 ``sol.gram_matrix(con)``; the program never stores a solution.
@@ -27,6 +38,16 @@ from .gram import SQRT2, gram_matching, svec_pairs
 from .newton import newton_basis
 
 NO_SOLUTION_HINT = "pass the solution: sol.gram_matrix(con)"
+CONES = ("psd", "sdsos", "dsos")
+
+
+def check_cone(cone, what: str = "cone") -> str:
+    """``cone`` if it is one of :data:`CONES`; InputError otherwise."""
+    if cone not in CONES:
+        raise InputError(f"unknown {what} {cone!r}. Try: 'psd' (SOS, an SDP block), 'sdsos' "
+                         "(scaled diagonally dominant, second-order cones) or 'dsos' (diagonally "
+                         "dominant, an LP)")
+    return cone
 
 
 @dataclass
@@ -51,15 +72,19 @@ class Basis:
 
 @dataclass
 class LinearRows:
-    """Rows ``A d (= or >=) b`` over decision ids, as COO triplets."""
+    """Rows ``A d (= or >=) b`` over decision ids, as COO triplets.
+
+    ``kind`` "soc": rows 3k, 3k+1, 3k+2 of ``A d - b`` are (t, u, v) of one second-order cone
+    t >= ||(u, v)||_2 (b = 0; these rows are never rescaled).
+    """
 
     name: str
-    kind: str            # "eq" or "ge"
+    kind: str            # "eq", "ge" or "soc"
     rows: np.ndarray
     ids: np.ndarray
     vals: np.ndarray
     rhs: np.ndarray
-    role: str = "user"   # "user" (add_eq/add_ge), "dsos" (auxiliary rows of a DSOS block)
+    role: str = "user"   # "user" (add_eq/add_ge), "dsos"/"sdsos" (auxiliary rows of such a block)
 
     @classmethod
     def from_affine(cls, name, kind, coef, ids, offset_rows=None):
@@ -73,8 +98,9 @@ class LinearRows:
 class PsdBlock:
     """A Gram (or LMI) block: decision ids of svec(Q), Q of size ``size``.
 
-    ``cone`` "psd" (Q >= 0, an SDP block) or "dsos" (Q diagonally dominant with a
-    nonnegative diagonal: linear inequalities only, an LP inner approximation of "psd").
+    ``cone`` "psd" (Q >= 0, an SDP block), "sdsos" (Q scaled diagonally dominant: linear
+    rows and 3-dimensional second-order cones, :func:`sdsos_rows`) or "dsos" (Q diagonally
+    dominant with a nonnegative diagonal: linear inequalities only); see the module docstring.
     ``role`` says who owns it: "gram" (an SOS constraint's Gram matrix), "multiplier" (an
     SOS multiplier of add_nonneg_on), "sos_var" (new_sos) or "psd_var" (new_psd). Every
     block is checked by ``Solution.verify()``. Off the diagonal, Q_ij = s_k * SQRT2 / 2
@@ -337,6 +363,36 @@ def dsos_rows(psd: PsdBlock, t: np.ndarray) -> LinearRows:
         vals += [1.0] + [-1.0] * len(touching)
     return LinearRows(f"{psd.name} (dsos)", "ge", np.array(rows, dtype=np.int64),
                       np.array(ids, dtype=np.int64), np.array(vals), np.zeros(base + psd.size), role="dsos")
+
+
+def sdsos_rows(psd: PsdBlock, a: np.ndarray, c: np.ndarray) -> list:
+    """Q = sum_{i<j} M^ij + D, M^ij = [[a_ij, Q_ij], [Q_ij, c_ij]] >= 0, D >= 0 diagonal (SDSOS).
+
+    ``a``, ``c``: ids of two auxiliary variables per off-diagonal svec entry of ``psd`` (the
+    share of the pair (i, j) in Q_ii and Q_jj). Rows: Q_dd - sum of the shares of d >= 0;
+    and for each pair the second-order cone (a + c, 2 Q_ij, a - c), since a 2x2 matrix
+    [[a, b], [b, c]] is PSD iff a + c >= ||(2b, a - c)||_2. Returns [ge rows, soc rows].
+    """
+    i, j = svec_pairs(psd.size)
+    off = np.flatnonzero(i != j)
+    r = np.arange(off.size)
+    soc = LinearRows(f"{psd.name} (sdsos cones)", "soc",
+                     np.concatenate([3 * r, 3 * r, 3 * r + 1, 3 * r + 2, 3 * r + 2]),
+                     np.concatenate([a, c, psd.ids[off], a, c]),
+                     np.concatenate([np.ones(off.size), np.ones(off.size), np.full(off.size, SQRT2),
+                                     np.ones(off.size), -np.ones(off.size)]),
+                     np.zeros(3 * off.size), role="sdsos")
+    rows, ids, vals = [], [], []
+    for d in range(psd.size):                   # Q_dd - sum of the pair shares of d >= 0
+        k_diag = np.flatnonzero((i == d) & (j == d))[0]
+        first = np.flatnonzero(i[off] == d)     # pairs (d, j): d's share is a
+        second = np.flatnonzero(j[off] == d)    # pairs (i, d): d's share is c
+        rows += [d] * (1 + first.size + second.size)
+        ids += [psd.ids[k_diag]] + list(a[first]) + list(c[second])
+        vals += [1.0] + [-1.0] * (first.size + second.size)
+    ge = LinearRows(f"{psd.name} (sdsos)", "ge", np.array(rows, dtype=np.int64),
+                    np.array(ids, dtype=np.int64), np.array(vals), np.zeros(psd.size), role="sdsos")
+    return [ge, soc]
 
 
 def face_rows(psd: PsdBlock, K: np.ndarray, inner: PsdBlock | None, margin: float) -> list:

@@ -8,6 +8,12 @@ it was (it caches its conic form; ``version`` counts declarations, so a Solution
 whether the program it checks against is still the one it solved).
 
     p is SOS   <=>   p = z(x)^T Q z(x),  Q >= 0   (coefficient matching: G svec(Q) = coef(p))
+
+Every SOS-type declaration (add_sos, add_sos_matrix, add_sos_matrix_family, add_nonneg_on
+and its multipliers, new_sos) takes ``cone=`` "psd" (the default), "sdsos" or "dsos": the
+cone its Gram matrices lie in (:mod:`.constraints`; docs/sos-cones.md). "dsos" and "sdsos"
+are inner approximations, so a bound they give is valid but weaker:
+max over dsos <= max over sdsos <= max over psd.
 """
 from __future__ import annotations
 
@@ -22,7 +28,7 @@ from . import conic
 from .backends import solve_program
 from .constraints import (Basis, Block, EqualityMultiplier, FamilySOSConstraint, LinearRows, Multiplier,
                           PsdBlock, SOSConstraint, as_sos_polynomial, basis_exponents, basis_variables,
-                          dsos_rows, face_rows, gram_polynomial, matrix_form)
+                          check_cone, dsos_rows, face_rows, gram_polynomial, matrix_form, sdsos_rows)
 from .gram import SQRT2, svec_pairs, svec_size
 from .newton import newton_basis
 from .objective import QuadraticForm, is_cvxpy
@@ -50,6 +56,7 @@ class SOSProgram:
         self._counter = 0
         self._depth = 0
         self._forms: dict = {}
+        self._cone_parts: dict = {}    # id(PsdBlock) -> (auxiliary Block, its rows) of a dsos/sdsos block
 
     # ------------------------------------------------------------------ naming / caching
     def _name(self, prefix, name):
@@ -84,9 +91,30 @@ class SOSProgram:
         return block
 
     def replace_gram_block(self, psd: PsdBlock, size: int) -> PsdBlock:
-        """Swap a Gram block for a new one of another size (blocks stay in id order)."""
-        self.blocks = [b for b in self.blocks if b.psd is not psd]
-        return self._block(psd.name, svec_size(size), size, psd.role).psd
+        """Swap a Gram block for a new one of another size in the same cone (blocks stay in id order)."""
+        aux, rows = self._cone_parts.pop(id(psd), (None, []))
+        self.blocks = [b for b in self.blocks if b.psd is not psd and b is not aux]
+        self.linear = [r for r in self.linear if not any(r is q for q in rows)]
+        new = self._block(psd.name, svec_size(size), size, psd.role).psd
+        self._in_cone(new, psd.cone)
+        return new
+
+    def _in_cone(self, psd: PsdBlock, cone: str):
+        """Put ``psd`` in ``cone``: nothing for "psd"; the auxiliary variables and rows of
+        :func:`.constraints.dsos_rows` or :func:`.constraints.sdsos_rows` otherwise."""
+        psd.cone = check_cone(cone)
+        if cone == "psd":
+            return
+        i, j = svec_pairs(psd.size)
+        n_off = int((i != j).sum())
+        if cone == "dsos":
+            aux = self._block(f"{psd.name}.t", n_off)
+            rows = [dsos_rows(psd, aux.ids)]
+        else:
+            aux = self._block(f"{psd.name}.ac", 2 * n_off)
+            rows = sdsos_rows(psd, aux.ids[:n_off], aux.ids[n_off:])
+        self.linear += rows
+        self._cone_parts[id(psd)] = (aux, rows)
 
     @_timed
     def new_var(self, shape=(), name=None):
@@ -116,19 +144,21 @@ class SOSProgram:
         ids = self._block(self._name("poly", name), exps.shape[0]).ids
         return Polynomial(names, exps, np.hstack([np.zeros((len(ids), 1)), np.eye(len(ids))]), ids)
 
-    def _sos_block(self, vars, degree: int, name, role):
-        """(z^T Q z, z, block of Q) for a new Gram block, z all monomials up to degree/2."""
+    def _sos_block(self, vars, degree: int, name, role, cone="psd"):
+        """(z^T Q z, z, block of Q) for a new Gram block in ``cone``, z all monomials up to degree/2."""
         if degree < 0 or degree % 2:
             raise PolynomialError(f"an SOS polynomial has even degree, got {degree}")
         names = variable_names(vars)
         basis = Basis(names, monomials_up_to(len(names), degree // 2))
         psd = self._block(name, svec_size(len(basis)), len(basis), role).psd
+        self._in_cone(psd, cone)
         return gram_polynomial(basis, psd), basis, psd
 
     @_timed
-    def new_sos(self, vars, degree: int, name=None) -> Polynomial:
-        """An SOS polynomial z^T Q z, Q >= 0 a new Gram block, z all monomials up to degree/2."""
-        return self._sos_block(vars, degree, self._name("sos", name), "sos_var")[0]
+    def new_sos(self, vars, degree: int, name=None, cone="psd") -> Polynomial:
+        """An SOS polynomial z^T Q z, Q a new Gram block in ``cone``, z all monomials up to degree/2."""
+        check_cone(cone)
+        return self._sos_block(vars, degree, self._name("sos", name), "sos_var", cone)[0]
 
     @_timed
     def new_psd(self, n: int, name=None) -> PolyMatrix:
@@ -143,20 +173,10 @@ class SOSProgram:
     # ------------------------------------------------------------------ constraints
     def _register(self, name, kind, poly, basis_exps, cone="psd", **handles):
         psd = self._block(name, svec_size(basis_exps.shape[0]), basis_exps.shape[0]).psd
-        if cone == "dsos":
-            psd.cone = "dsos"
-            self._diagonally_dominant(psd)
-        elif cone != "psd":
-            raise InputError(f"unknown cone {cone!r}: use 'psd' (SOS) or 'dsos' (diagonally dominant SOS)")
+        self._in_cone(psd, cone)
         con = SOSConstraint(self, name, kind, poly, Basis(poly.vars, basis_exps), psd, **handles)
         self.sos_constraints.append(con)
         return con
-
-    def _diagonally_dominant(self, psd: PsdBlock):
-        """DSOS rows for ``psd``, over one new auxiliary variable per off-diagonal entry."""
-        i, j = svec_pairs(psd.size)
-        t = self._block(f"{psd.name}.t", int((i != j).sum())).ids
-        self.linear.append(dsos_rows(psd, t))
 
     @_timed
     def add_sos(self, expr, basis=None, name=None, cone="psd") -> SOSConstraint:
@@ -165,8 +185,10 @@ class SOSProgram:
         The Gram basis comes from the Newton polytope of ``expr``'s support unless ``basis``
         (monomial Polynomials or an exponent array) is given, in which case it is honoured.
         ``cone="dsos"`` asks for a diagonally dominant Gram matrix instead (an LP; a
-        stronger condition, so a smaller feasible set, that scales to large bases).
+        stronger condition, so a smaller feasible set, that scales to large bases),
+        ``cone="sdsos"`` for a scaled diagonally dominant one (second-order cones; between).
         """
+        check_cone(cone)
         p = as_sos_polynomial(expr)
         name = self._name("sos", name)
         if basis is None:
@@ -184,13 +206,15 @@ class SOSProgram:
         return self._forms[key][1]
 
     @_timed
-    def add_sos_matrix_family(self, terms, weights, name=None) -> "FamilySOSConstraint":
+    def add_sos_matrix_family(self, terms, weights, name=None, cone="psd") -> "FamilySOSConstraint":
         """sum_t weights[t] * terms[t] is an SOS matrix; the weights can change between solves.
 
         This is the compile-once path for parametrised problems (cvxpy's Parameters): each
         term is expanded and matched once; ``con.set_weights(w)`` re-solves with new numbers
         at the cost of one dense contraction. The Gram basis covers every term's support.
+        ``cone``: the cone of the Gram matrix, as in :meth:`add_sos`.
         """
+        check_cone(cone)
         terms = [t if isinstance(t, PolyMatrix) else PolyMatrix(t) for t in terms]
         if not terms or len({t.shape for t in terms}) != 1:
             raise PolynomialError("add_sos_matrix_family needs a non-empty list of equal-shape matrices")
@@ -198,30 +222,38 @@ class SOSProgram:
         q0, exps = matrix_form(terms[0], basis_from=terms)
         qs = [q0] + [self._cached_form(t) for t in terms[1:]]
         psd = self._block(name, svec_size(exps.shape[0]), exps.shape[0]).psd
+        self._in_cone(psd, cone)
         vars = qs[0].vars
         con = FamilySOSConstraint(self, name, [q.with_vars(vars) for q in qs], Basis(vars, exps), psd, weights)
         self.sos_constraints.append(con)
         return con
 
     @_timed
-    def add_sos_matrix(self, P, name=None) -> SOSConstraint:
+    def add_sos_matrix(self, P, name=None, cone="psd") -> SOSConstraint:
         """Constrain the symmetric polynomial matrix P(x) to be an SOS matrix.
 
         Equivalent to y^T P(x) y being SOS in (x, y), with the multipartite Gram basis
         y_i * z_i(x), z_i from the Newton polytope of P_ii (never a dense basis in (x, y)).
-        A constant P gives a plain LMI P >= 0.
+        A constant P gives a plain LMI P >= 0. ``cone``: the cone of the Gram matrix, as in
+        :meth:`add_sos` (for "dsos"/"sdsos" a stronger condition than P being an SOS matrix).
         """
+        check_cone(cone)
         name = self._name("sosmat", name)
         q, exps = matrix_form(P)
-        return self._register(name, "sos_matrix", q, exps)
+        return self._register(name, "sos_matrix", q, exps, cone=cone)
 
     @_timed
-    def add_nonneg_on(self, expr, ineqs=(), eqs=(), degree=None, name=None) -> SOSConstraint:
+    def add_nonneg_on(self, expr, ineqs=(), eqs=(), degree=None, name=None, cone="psd",
+                      multiplier_cone=None) -> SOSConstraint:
         """expr >= 0 on {g_i >= 0, h_j = 0} via Putinar/S-procedure multipliers.
 
         expr - sum_i sigma_i g_i - sum_j lambda_j h_j is SOS, sigma_i SOS and lambda_j free,
         each multiplier of the largest degree with deg(multiplier * constraint) <= degree.
+        ``cone`` is the cone of the main Gram matrix and, unless ``multiplier_cone`` is given,
+        of the multipliers' Gram matrices (as in :meth:`add_sos`).
         """
+        check_cone(cone)
+        multiplier_cone = check_cone(cone if multiplier_cone is None else multiplier_cone, "multiplier_cone")
         p = as_sos_polynomial(expr)
         ineqs, eqs = list(ineqs), list(eqs)
         allv = p.vars
@@ -237,7 +269,7 @@ class SOSProgram:
             if d < 0:
                 raise PolynomialError(f"degree {degree} is below the degree of constraint g{k} ({g.degree})")
             g = g.with_vars(allv)
-            sigma, basis, psd = self._sos_block(allv, d, f"{name}.sigma{k}", "multiplier")
+            sigma, basis, psd = self._sos_block(allv, d, f"{name}.sigma{k}", "multiplier", multiplier_cone)
             mults.append(Multiplier(g, sigma, basis, psd))
             rest = rest - sigma * g
         for k, h in enumerate(eqs):
@@ -248,7 +280,7 @@ class SOSProgram:
             lam = self.new_poly(allv, d, name=f"{name}.lambda{k}")
             eq_mults.append(EqualityMultiplier(h, lam))
             rest = rest - lam * h
-        return self._register(name, "nonneg_on", rest, newton_basis(rest.exps), multipliers=mults,
+        return self._register(name, "nonneg_on", rest, newton_basis(rest.exps), cone=cone, multipliers=mults,
                               eq_multipliers=eq_mults, source=source)
 
     @staticmethod
@@ -341,7 +373,7 @@ class SOSProgram:
         """A copy whose Gram blocks are tightened: Q[K, K] >= eps I and Q = 0 outside K.
 
         ``kept`` maps id(PsdBlock) to the kept indices K (default all), ``margins`` to eps
-        (default 0). Each block (PSD or DSOS) becomes Q[K, K] = P + eps I with P a new block
+        (default 0). Each block (in any cone) becomes Q[K, K] = P + eps I with P a new block
         in the same cone; its other rows and columns are fixed to zero (the face a solution
         of this program lies on). Objective, constraints and decision ids are shared with
         this program. Used by rigorous bounds (``Solution.rigorous_bound``).
@@ -352,6 +384,7 @@ class SOSProgram:
                         for b in self.blocks]
         clone.linear, clone.sos_constraints = list(self.linear), list(self.sos_constraints)
         clone._compiled, clone._forms, clone.cvxpy_vars = None, {}, {}
+        clone._cone_parts = dict(self._cone_parts)
         for b in self.blocks:
             if b.psd is None or not b.psd.size:
                 continue
@@ -359,9 +392,7 @@ class SOSProgram:
             inner = None
             if K.size:
                 inner = clone._block(f"{b.name}.interior", svec_size(K.size), K.size, b.psd.role).psd
-                if b.psd.cone == "dsos":
-                    inner.cone = "dsos"
-                    clone._diagonally_dominant(inner)
+                clone._in_cone(inner, b.psd.cone)
             rows = face_rows(b.psd, K, inner, float(margins.get(id(b.psd), 0.0)))
             clone.linear += rows
         return clone

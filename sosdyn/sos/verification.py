@@ -5,7 +5,8 @@ polynomial arithmetic and compares it with the constraint's polynomial at the de
 (:func:`check_gram`); it checks every Gram block -- SOS constraints, SOS-matrix constraints,
 families, the multipliers of ``add_nonneg_on``, ``new_sos`` and ``new_psd`` blocks -- for
 Q >= 0 (smallest eigenvalue) or, for DSOS blocks, diagonal dominance Q_ii >= sum_j |Q_ij| as
-numbers (:func:`check_block`); and every linear equality and inequality (:func:`check_linear`)
+numbers (:func:`check_block`; an SDSOS block is checked for Q >= 0 like a PSD one: that is
+what the certificate needs, and the solver's split into 2x2 blocks is never trusted); and every linear equality and inequality (:func:`check_linear`)
 and cvxpy constraint. With e = p - z^T Q z and every monomial of e in the Gram monomial set,
 p = z^T (Q + E) z with ||E||_2 <= sqrt(2) ||e||_2, so lambda_min(Q) >= sqrt(2) ||e||_2 proves
 p SOS (up to floating point) -- ``strict``.
@@ -47,7 +48,7 @@ class CertificateCheck:
 
 
 def _cone_check(Q, cone, eig_tol):
-    """(min eig, dd margin, ok, reason) of a Gram block in its cone."""
+    """(min eig, dd margin, ok, reason) of a Gram block in its cone ("psd" and "sdsos": Q >= 0)."""
     min_eig = float(np.linalg.eigvalsh(Q).min()) if Q.size else 0.0
     tol = eig_tol * max(1.0, float(np.abs(Q).max(initial=0.0)))
     if cone == "dsos":

@@ -58,6 +58,16 @@ def test_directional_derivative_and_jacobian():
     np.testing.assert_allclose(J([[1.0, 2.0]], [x, y])[0], [[0, -1], [1, -12]])
 
 
+def test_derivatives_take_variables_as_well_as_names():
+    """d/dx by the variable object equals d/dx by name; a non-indeterminate is an error, never 0."""
+    x, y = sd.variables("x y")
+    V = x**2 * y + 3 * y
+    assert same(V.diff(x), 2 * X * Y) and same(V.diff("x"), 2 * X * Y)
+    assert same(V.directional_derivative([y, x], [x, y]), sympy.expand(2 * X * Y * Y + (X**2 + 3) * X))
+    with pytest.raises(sd.PolynomialError, match="not an indeterminate"):
+        V.diff(2 * x)
+
+
 def test_substitution_with_numbers_and_polynomials():
     x, y = sd.variables("x y")
     p = x**2 * y + 2 * y
