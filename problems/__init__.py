@@ -16,6 +16,7 @@ EXPERIMENTS = {
     "report": "report",                # make report: results.json + report from the cache (no fits)
     "fig1": "fig1", "fig2": "fig2", "fig3": "fig3", "fig4": "fig4",
     "lasa-all": "lasa_all",
+    "lasa-dsopt": "lasa_dsopt",        # CDSP variants on the LPV-DS (ds-opt) LASA protocol
     "demo3d": "demo3d",
     "learner-table": "learner_table",
     "bench": "bench.learner",          # where the CDSP learner spends its time

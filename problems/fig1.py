@@ -25,7 +25,7 @@ def figure(entries: dict, ctx: Context, methods=METHODS) -> dict:
     fig = streamline_panel(panels, ncols=min(len(ctx.shapes), 4))
     paths = save_figure(fig, Path(ctx.fig_dir) / "fig1_streamlines")
     shown = [m for m in methods if any(p["title"].endswith(m) for p in panels)]
-    caption = ("Fig. 1 — learned models of the LASA shapes, one row per method ("
+    caption = ("Learned models of the LASA shapes, one row per method ("
                + ", ".join(shown) + "): streamlines of the field (gray), the demonstrations (solid "
                "red), and the reproductions from the demonstrations' starts (dashed blue).")
     return figure_spec("fig1", paths, ctx.out_dir, caption)

@@ -1,4 +1,4 @@
-"""Fig. 2: reproduction accuracy (SEA and DTWD, mean ± std over the demonstrations), all methods."""
+"""Fig. 2: reproduction accuracy (SEA and DTWD, median and interquartile range over the demonstrations), all methods."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -18,11 +18,13 @@ def figure(entries: dict, ctx: Context) -> dict:
     fig = accuracy_bars(table, metrics=("sea", "dtwd_total"))
     paths = save_figure(fig, Path(ctx.fig_dir) / "fig2_accuracy")
     n = max(len(e["sea"]["per_demo"]) for per in table.values() for e in per.values())
-    caption = (f"Fig. 2 — swept error area (SEA) and dynamic time warping distance (DTWD) between "
-               f"the {n} demonstrations and their reproductions, mean ± one standard deviation, "
-               "per shape and method (log axis where the values span more than two decades).")
+    caption = (f"Swept error area (SEA) and dynamic time warping distance (DTWD) between the {n} "
+               "demonstrations and their reproductions, per shape and method: the point is the median "
+               "over the demonstrations, the whisker the interquartile range (25th to 75th "
+               "percentile); log axis where the medians span more than two decades. The tables give "
+               "mean ± standard deviation.")
     return figure_spec("fig2", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    return figure_main(argv, "Fig. 2: accuracy bars (SEA, DTWD) for all methods", figure)
+    return figure_main(argv, "Fig. 2: accuracy (SEA, DTWD) for all methods, median and IQR", figure)

@@ -22,14 +22,15 @@ def figure(entries: dict, ctx: Context) -> dict:
     fig = robustness_bars(table, metric="dtwd_total")
     paths = save_figure(fig, Path(ctx.fig_dir) / "fig3_robustness")
     cfg = ctx.config
-    caption = (f"Fig. 3 — DTWD between the reproductions and the demonstrations after a push "
+    caption = (f"DTWD between the reproductions and the demonstrations after a push "
                f"(top; {100 * cfg.push_amp:.0f} % of the data's bounding-box diagonal) and after a goal "
                f"change (bottom; {100 * cfg.goal_amp:.0f} %, reference shifted with the goal), both at "
                f"{100 * cfg.at_frac:.0f} % of each demonstration, same seeded events for every method; "
-               f"rollouts last {cfg.duration_factor:g}x the demonstration. Mean ± one std over the "
-               "demonstrations; hatched: not every run ended within 1 mm of its goal.")
+               f"rollouts last {cfg.duration_factor:g}x the demonstration. Point: median over the "
+               "demonstrations; whisker: interquartile range (25th to 75th percentile); hollow "
+               "point: not every run ended within 1 mm of its goal.")
     return figure_spec("fig3", paths, ctx.out_dir, caption)
 
 
 def main(argv=None):
-    return figure_main(argv, "Fig. 3: robustness bars after pushes and goal changes", figure)
+    return figure_main(argv, "Fig. 3: robustness after pushes and goal changes, median and IQR", figure)

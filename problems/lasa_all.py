@@ -1,10 +1,11 @@
-"""All 30 LASA shapes x all methods (K = 6 everywhere): a table and a grid of streamline plots.
+"""All 30 LASA shapes x all methods (K = 6 everywhere): a table and pages of streamline plots.
 
 Slow (about 30 x the per-shape cost of ``make run``): ``make lasa-all``. Results are cached
 per (shape, method) in ``reports/cache/lasa_all`` (apart from the main run's cache: the
 entries differ, e.g. no Fig. 4 exemplars); the report goes to
-``reports/lasa_all/`` (index.html, report.pdf) and the grid figure to
-``reports/figures/lasa_all.png``, which the main report includes when present.
+``reports/lasa_all/`` (index.html, report.pdf) and the streamline figures, ``PER_PAGE``
+shapes each (readable on A4), to ``reports/figures/lasa_all.png``, ``lasa_all_2.png``, ...,
+which the main report includes when present.
 """
 from __future__ import annotations
 
@@ -24,6 +25,42 @@ from .results import assemble, relpath
 from .settings import METHOD_ORDER, METHODS, REPORTS, EvalConfig, shape
 
 FIELD_METHOD = "CDSP-cubic"
+#: Streamline panels per figure (3 columns x 2 rows fills an A4 page width).
+PER_PAGE = 6
+
+
+def page_names(n_panels: int, per_page: int = PER_PAGE) -> list[str]:
+    """Figure names of the pages: ``lasa_all``, ``lasa_all_2``, ``lasa_all_3``, ..."""
+    return ["lasa_all" if k == 0 else f"lasa_all_{k + 1}" for k in range(-(-n_panels // per_page))]
+
+
+def _title(name: str, entry) -> str:
+    """Panel title: the shape and its mean DTWD over the demonstrations (as in the table)."""
+    dtwd = (((entry or {}).get("accuracy") or {}).get("dtwd_total") or {}).get("mean")
+    return name if dtwd is None else f"{name} (DTWD {dtwd:.0f} mm)"
+
+
+def draw_pages(panels: list, out_dir: Path, sub: Path, field_method: str, K: int) -> dict:
+    """The streamline panels ``PER_PAGE`` to a figure; stale pages of an earlier, longer run
+    are removed. Returns the figure specs (paths relative to ``sub``)."""
+    fig_dir = out_dir / "figures"
+    names = page_names(len(panels))
+    for old in fig_dir.glob("lasa_all_*"):
+        if old.name.split(".")[0] not in names:
+            old.unlink()
+    figures = {}
+    for k, name in enumerate(names):
+        chunk = panels[k * PER_PAGE:(k + 1) * PER_PAGE]
+        fig = streamline_panel(chunk, ncols=3, panel_size=3.1)
+        paths = save_figure(fig, fig_dir / name, dpi=130)
+        first, last = k * PER_PAGE + 1, k * PER_PAGE + len(chunk)
+        caption = (f"LASA shapes {first}-{last} of {len(panels)}, {field_method} (K = {K}): "
+                   "streamlines, demonstrations (red) and reproductions (dashed blue); the panel title gives the mean DTWD over the demonstrations. "
+                   "Full table: reports/lasa_all/index.html.")
+        (fig_dir / f"{name}.caption.txt").write_text(caption)
+        figures[name] = {"svg": relpath(paths["svg"], sub), "png": relpath(paths["png"], sub),
+                         "caption": caption}
+    return figures
 
 
 def run(names, methods, config: EvalConfig, out_dir=REPORTS, *, n_jobs=2, K=6,
@@ -34,20 +71,11 @@ def run(names, methods, config: EvalConfig, out_dir=REPORTS, *, n_jobs=2, K=6,
                            cache_dir=cache_dir or out_dir / "cache" / "lasa_all", force=force)
     field_method = field_method if field_method in methods else next(
         (m for m in methods if METHODS[m].plot_field), None)
-    panels = [field_panel(entries[s.name].get(field_method), s, config, s.name) for s in shapes]
+    panels = [field_panel(entries[s.name].get(field_method), s, config,
+                          _title(s.name, entries[s.name].get(field_method))) for s in shapes]
     panels = [p for p in panels if p]
-    figures = {}
     sub = out_dir / "lasa_all"
-    if panels:
-        fig = streamline_panel(panels, ncols=6 if len(panels) > 8 else min(len(panels), 4),
-                               panel_size=2.3)
-        paths = save_figure(fig, out_dir / "figures" / "lasa_all", dpi=110)
-        caption = (f"All {len(panels)} LASA shapes, {field_method} (K = {K}): streamlines, "
-                   "demonstrations (red) and reproductions (dashed blue). Full table: "
-                   "reports/lasa_all/index.html.")
-        (out_dir / "figures" / "lasa_all.caption.txt").write_text(caption)
-        figures["lasa_all"] = {"svg": relpath(paths["svg"], sub), "png": relpath(paths["png"], sub),
-                               "caption": caption}
+    figures = draw_pages(panels, out_dir, sub, field_method, K) if panels else {}
     figures.update(fig2(entries, Context(shapes=shapes, config=config, out_dir=sub, methods=methods)))
     results = assemble(entries, shapes, methods, config, figures, bench=False,
                        meta_extra={"n_shapes": len(shapes), "K": K})

@@ -18,7 +18,8 @@ from .plumbing import Context, context_from_args, parse_args
 from .jsonio import write_json
 from .results import assemble, relpath
 
-#: Figures other experiments write (lasa-all, demo3d), included when present.
+#: Figures other experiments write (lasa-all, demo3d), included when present; each may
+#: have further pages ``<name>_2``, ``<name>_3``, ...
 EXTRA_FIGURES = ("lasa_all", "demo3d")
 
 
@@ -28,10 +29,17 @@ def draw_figures(entries: dict, ctx: Context) -> dict:
     for mod in (fig1, fig2, fig3, fig4):
         figures.update(mod.figure(entries, ctx))
     for extra in EXTRA_FIGURES:
-        spec = _existing_figure(ctx, extra)
-        if spec:
-            figures[extra] = spec
+        for name in _pages(ctx, extra):
+            spec = _existing_figure(ctx, name)
+            if spec:
+                figures[name] = spec
     return figures
+
+
+def _pages(ctx, name):
+    """``name`` and its further pages ``name_2``, ``name_3``, ... found on disk, in order."""
+    rest = [p.stem[len(name) + 1:] for p in Path(ctx.fig_dir).glob(f"{name}_*.png")]
+    return [name, *(f"{name}_{k}" for k in sorted(int(r) for r in rest if r.isdigit()))]
 
 
 def _existing_figure(ctx, name):

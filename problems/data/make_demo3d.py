@@ -1,10 +1,10 @@
-"""Generate the hand-made 3-D "kinesthetic" demonstrations in ``problems/data/demo3d/``.
+"""Generate the synthetic 3-D demonstrations in ``problems/data/demo3d/``.
 
-Four demonstrations of a reach that lifts over an obstacle and swings sideways before
-settling on the goal (distance to the goal is not monotone), 50 Hz, about 5 s each,
-minimum-jerk timing, with sensor noise (1 mm) and a slow hand tremor (3 mm): the kind of
-data a robot records when a person guides its arm. Fixed seed; run once, the CSVs are
-committed::
+Four generated (not recorded) demonstrations of a reach that lifts over an obstacle and
+swings sideways before settling on the goal (distance to the goal is not monotone), 50 Hz,
+about 5 s each, minimum-jerk timing, with added Gaussian noise (1 mm) and a slow sinusoidal
+wobble (3 mm) imitating the imperfections of demonstrations recorded by guiding a robot
+arm. Fixed seed; run once, the CSVs are committed::
 
     .venv/bin/python problems/data/make_demo3d.py
 """

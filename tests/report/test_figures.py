@@ -76,33 +76,63 @@ def test_streamline_panel_needs_panels():
         F.streamline_panel([])
 
 
-def test_accuracy_bars_one_bar_per_shape_and_method(tmp_path, results):
+def points(ax):
+    """(x, median, q1, q3, hollow) of each point-with-interval of ``ax``."""
+    out = []
+    for c in ax.containers:
+        line, _, (bars,) = c.lines
+        (x,), (y,) = line.get_data()
+        (lo, hi), = [seg[:, 1] for seg in bars.get_segments()]
+        out.append((x, y, lo, hi, line.get_markerfacecolor() == "white"))
+    return out
+
+
+def test_median_iqr_of_metric_entries():
+    assert F.median_iqr({"mean": 9.0, "per_demo": [1.0, 2.0, 3.0, 4.0, 100.0]}) == (3.0, 2.0, 4.0)
+    assert F.median_iqr({"mean": 5.0}) == (5.0, 5.0, 5.0)
+    assert F.median_iqr(7) == (7.0, 7.0, 7.0)
+    assert all(np.isnan(F.median_iqr(None)))
+
+
+def test_accuracy_points_one_per_shape_and_method_with_iqr(tmp_path, results):
     table = results["accuracy"]
     del table["Leaf_2"]["DMP"]                          # not run: a gap, not a crash
     fig = F.accuracy_bars(table, metrics=("sea", "dtwd_total", "vel_rmse"), log=False)
     assert len(fig.axes) == 3
-    assert all(len(bars(ax)) == 3 * 4 - 1 for ax in fig.axes)
+    assert all(len(points(ax)) == 3 * 4 - 1 for ax in fig.axes)
+    assert not any(bars(ax) for ax in fig.axes)          # no bars at all
     assert fig.axes[0].get_ylabel() == "SEA (mm²)"
     assert fig.axes[2].get_ylabel() == "velocity RMSE (mm/s)"
-    cdsp_bar = bars(fig.axes[0])[0]
-    assert cdsp_bar.get_height() == pytest.approx(table["BendedLine"]["CDSP"]["sea"]["mean"])
+    _, med, lo, hi, _ = points(fig.axes[0])[0]
+    per_demo = table["BendedLine"]["CDSP"]["sea"]["per_demo"]
+    assert med == pytest.approx(np.median(per_demo))
+    assert (lo, hi) == pytest.approx(tuple(np.percentile(per_demo, [25, 75])))
     assert_saved_and_not_blank(fig, tmp_path)
 
 
-def test_accuracy_bars_chooses_log_scale_for_wide_ranges(results):
+def test_accuracy_points_choose_log_scale_for_wide_ranges(results):
     table = results["accuracy"]
-    table["Leaf_1"]["DMP"]["sea"]["mean"] = 1e7
+    table["Leaf_1"]["DMP"]["sea"]["per_demo"] = [1e7, 1e7, 1e7]
     assert F.accuracy_bars(table, metrics=("sea",)).axes[0].get_yscale() == "log"
     assert F.accuracy_bars(results["accuracy"], metrics=("dtwd_total",)).axes[0].get_yscale() == "linear"
 
 
-def test_robustness_bars_hatch_runs_that_did_not_converge(tmp_path, results):
-    fig = F.robustness_bars(results["robustness"])
+def test_robustness_points_stay_positive_and_mark_unconverged(tmp_path, results):
+    for per in results["robustness"].values():         # a spread whose mean - std < 0
+        per["DMP"]["push"]["dtwd_total"] = {"mean": 1000.0, "std": 1300.0,
+                                            "per_demo": [10.0, 20.0, 40.0, 3000.0]}
+    fig = F.robustness_bars(results["robustness"], log=False)
     push_ax, goal_ax = fig.axes
     assert push_ax.get_title(loc="left") == "after pushes"
-    hatched = [b for b in bars(push_ax) if b.get_hatch()]
-    assert len(hatched) == 3                             # GMR (converged 0.57) on 3 shapes
+    assert goal_ax.get_title(loc="left") == "after goal changes"
+    pts = points(push_ax)
+    assert sum(p[4] for p in pts) == 3                  # GMR (converged 0.57) on 3 shapes
+    assert min(p[2] for p in pts) == pytest.approx(17.5)  # first quartile, not 1000 - 1300
+    assert push_ax.get_ylim()[0] == 0.0
     assert "not all runs converged" in [t.get_text() for t in fig.legends[0].get_texts()]
+    fig.canvas.draw()                                    # the legend lies inside the figure
+    box = fig.legends[0].get_window_extent()
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.width and box.y1 <= fig.bbox.height
     assert_saved_and_not_blank(fig, tmp_path)
 
 
@@ -138,6 +168,16 @@ def test_perturbation_trajectories_constant_goal_into_given_axes(demos_factory):
     (arrow,) = [p for p in ax.patches if isinstance(p, FancyArrowPatch)]
     assert arrow.get_edgecolor()[:3] == (0.0, 0.0, 0.0)
     assert [line.get_marker() for line in ax.lines][-1] == "*"
+
+
+def test_perturbation_trajectories_colour_follows_the_full_method_list(demos_factory):
+    from matplotlib.figure import Figure
+
+    demo = demos_factory(1)[0]
+    ax = Figure().add_subplot()
+    F.perturbation_trajectories(ax, demo, {"SEDS-like": demo}, methods=("CDSP-ICA", "SEDS-like"))
+    assert ax.lines[-1].get_color() == F.method_color("SEDS-like", ("CDSP-ICA", "SEDS-like"))
+    assert ax.lines[-1].get_color() != F.method_color("SEDS-like", ("SEDS-like",))
 
 
 def test_scaling_plot_reports_log_log_slope(tmp_path):

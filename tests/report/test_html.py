@@ -78,6 +78,9 @@ def test_full_report_has_every_row(tmp_path, results_factory, figure_files):
     assert 'src="figures/' not in text
     # bench markdown became a table
     assert "<table>" in text and "<td>0.90</td>" in text
+    # every table scrolls sideways in its own box instead of running off the page
+    assert text.count('<div class="table-wrap"><table id=') == len(tables.rows) - 1  # - bench
+    assert ".table-wrap { overflow-x: auto;" in text
 
 
 def test_accuracy_cells_show_mean_std_and_best(tmp_path, results):

@@ -6,7 +6,7 @@ conventions.
 """
 from .bars import accuracy_bars, robustness_bars, scaling_plot
 from .streamlines import streamline_panel, streamlines
-from .style import GOAL_STYLE, METRIC_LABELS, STYLE, data_bounds, method_color, save_figure
+from .style import GOAL_STYLE, METRIC_LABELS, STYLE, data_bounds, median_iqr, method_color, save_figure
 from .trajectories import perturbation_trajectories, trajectories_3d
 
 __all__ = [
@@ -15,6 +15,7 @@ __all__ = [
     "STYLE",
     "accuracy_bars",
     "data_bounds",
+    "median_iqr",
     "method_color",
     "perturbation_trajectories",
     "robustness_bars",

@@ -1,83 +1,96 @@
-"""Bar charts of the results tables (accuracy, robustness) and log-log scaling plots."""
+"""Point-and-interval charts of the results tables (accuracy, robustness) and log-log scaling plots."""
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.patches import Patch
+from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter
 
-from .style import METRIC_LABELS, mean_std, method_color, new_figure, ordered_methods, styled
+from .style import METRIC_LABELS, median_iqr, method_color, new_figure, ordered_methods, styled
+
+#: Most legend entries in one row; longer legends wrap instead of running off the figure.
+LEGEND_COLUMNS = 4
 
 
-def _grouped_bars(ax, shapes: Sequence[str], methods: Sequence[str],
-                  value: Callable[[str, str], tuple[float, float]],
-                  flagged: Callable[[str, str], bool], log: bool | None) -> bool:
-    """One group of bars per shape, one bar per method, std as error bars.
+def _interval_points(ax, shapes: Sequence[str], methods: Sequence[str],
+                     value: Callable[[str, str], tuple[float, float, float]],
+                     flagged: Callable[[str, str], bool], log: bool | None) -> bool:
+    """One group per shape, one point per method: the median with the interquartile range.
 
-    ``value(shape, method)`` gives (mean, std), NaN for "not run" (no bar);
-    ``flagged(shape, method)`` hatches the bar. ``log=None`` picks a log axis when
-    the positive means span more than two decades. Returns whether the axis is log.
-    On a log axis the lower whisker is clipped at 10 % of the mean, since a
-    mean - std <= 0 has no place on it.
+    ``value(shape, method)`` gives (median, q1, q3), NaN for "not run" (no point);
+    ``flagged(shape, method)`` draws the point hollow. Since q1 <= median <= q3 and the
+    metrics are non-negative, no whisker crosses zero. ``log=None`` picks a log axis when
+    the positive medians span more than two decades. Returns whether the axis is log.
     """
     stats = np.array([[value(s, m) for m in methods] for s in shapes], dtype=float)
-    means, stds = stats[..., 0], stats[..., 1]
-    positive = means[np.isfinite(means) & (means > 0)]
+    med, q1, q3 = stats[..., 0], stats[..., 1], stats[..., 2]
+    positive = med[np.isfinite(med) & (med > 0)]
     if log is None:
         log = positive.size > 1 and positive.max() / positive.min() > 100
     width = 0.8 / max(len(methods), 1)
     x = np.arange(len(shapes))
     for j, method in enumerate(methods):
-        ok = np.isfinite(means[:, j])
-        lower = np.minimum(stds[:, j], 0.9 * means[:, j]) if log else stds[:, j]
-        bars = ax.bar(x[ok] + (j - (len(methods) - 1) / 2) * width, means[ok, j], width * 0.92,
-                      yerr=np.vstack([lower[ok], stds[ok, j]]), color=method_color(method, methods),
-                      edgecolor="white", linewidth=0.4, label=method, zorder=2,
-                      error_kw=dict(ecolor="0.2", elinewidth=0.8, capsize=1.8, capthick=0.8))
-        for bar, shape in zip(bars, np.asarray(shapes)[ok]):
-            if flagged(shape, method):
-                bar.set_hatch("////")
-                bar.set_edgecolor("black")
+        color = method_color(method, methods)
+        for i, shape in enumerate(shapes):
+            if not np.isfinite(med[i, j]):
+                continue
+            hollow = flagged(shape, method)
+            ax.errorbar(x[i] + (j - (len(methods) - 1) / 2) * width, med[i, j],
+                        yerr=[[med[i, j] - q1[i, j]], [q3[i, j] - med[i, j]]], fmt="o",
+                        color=color, markersize=4.5, markerfacecolor="white" if hollow else color,
+                        markeredgewidth=1.1, elinewidth=1.3, capsize=2, capthick=1.0, zorder=3,
+                        label=method)
     if log:
         ax.set_yscale("log")
+    else:
+        ax.set_ylim(bottom=0)
+    for k in range(1, len(shapes)):
+        ax.axvline(k - 0.5, color="0.88", lw=0.6, zorder=0)
     ax.set_xticks(x, shapes, rotation=40 if len(shapes) > 5 else 0,
                   ha="right" if len(shapes) > 5 else "center", rotation_mode="anchor")
-    ax.set_xlim(-0.6, len(shapes) - 0.4)
-    ax.grid(axis="y", color="0.9", lw=0.6, zorder=0)
+    ax.set_xlim(-0.5, len(shapes) - 0.5)
+    ax.grid(axis="y", color="0.92", lw=0.6, zorder=0)
     ax.set_axisbelow(True)
     return log
 
 
-def _bar_figure(n_shapes: int, n_methods: int, n_rows: int) -> Figure:
-    width = float(np.clip(1.6 + n_shapes * (0.22 * n_methods + 0.35), 5.5, 16.0))
-    return new_figure(width, 2.5 * n_rows + 0.9)
+def _method_handles(methods: Sequence[str]) -> list:
+    return [Line2D([], [], color=method_color(m, methods), marker="o", markersize=4.5, lw=1.3,
+                   label=m) for m in methods]
+
+
+def _interval_figure(n_shapes: int, n_methods: int, n_rows: int, n_legend: int) -> Figure:
+    width = float(np.clip(1.6 + n_shapes * (0.22 * n_methods + 0.35), 6.0, 16.0))
+    legend_rows = -(-n_legend // LEGEND_COLUMNS)
+    return new_figure(width, 2.5 * n_rows + 0.5 + 0.25 * legend_rows)
 
 
 @styled
 def accuracy_bars(table: Mapping[str, Mapping[str, Mapping]],
                   metrics: Sequence[str] = ("sea", "dtwd_total"), *,
                   log: bool | None = None, units: str = "mm") -> Figure:
-    """Paper Fig. 2: reproduction accuracy per shape and method.
+    """Paper Fig. 2: reproduction accuracy per shape and method, as points with intervals.
 
-    ``table`` is ``results["accuracy"]`` (shape -> method -> metric -> {mean, std}).
-    One panel per metric (stacked, sharing the shape axis); in each, one group of bars
-    per shape and one bar per method, with one standard deviation over the
-    demonstrations as error bars. ``log``: True/False, or None to choose per panel.
-    A method missing for a shape leaves a gap.
+    ``table`` is ``results["accuracy"]`` (shape -> method -> metric -> {mean, std,
+    per_demo}). One panel per metric (stacked, sharing the shape axis); in each, one
+    group per shape and one point per method: the median over the demonstrations with
+    the interquartile range (:func:`~.style.median_iqr`). ``log``: True/False, or None to
+    choose per panel. A method missing for a shape leaves a gap.
     """
     shapes, methods = list(table), ordered_methods(table)
-    fig = _bar_figure(len(shapes), len(methods), len(metrics))
+    fig = _interval_figure(len(shapes), len(methods), len(metrics), len(methods))
     axes = fig.subplots(len(metrics), 1, sharex=True, squeeze=False)[:, 0]
     for ax, metric in zip(axes, metrics):
-        is_log = _grouped_bars(ax, shapes, methods,
-                               lambda s, m: mean_std(table[s].get(m, {}).get(metric)),
-                               lambda s, m: False, log)
+        def value(s, m, metric=metric):
+            return median_iqr(table[s].get(m, {}).get(metric))
+
+        is_log = _interval_points(ax, shapes, methods, value, lambda s, m: False, log)
         label = METRIC_LABELS.get(metric, metric).format(u=units)
         ax.set_ylabel(label + (" [log]" if is_log else ""))
-    fig.legend(handles=[Patch(color=method_color(m, methods), label=m) for m in methods],
-               loc="outside upper center", ncols=len(methods))
+    fig.legend(handles=_method_handles(methods), loc="outside upper center",
+               ncols=min(len(methods), LEGEND_COLUMNS))
     return fig
 
 
@@ -87,37 +100,36 @@ def robustness_bars(table: Mapping[str, Mapping[str, Mapping]], metric: str = "d
     """Paper Fig. 3: DTWD to the demonstrations after pushes and after goal changes.
 
     ``table`` is ``results["robustness"]`` (shape -> method -> {"push", "goal_change"}
-    -> {metric: {mean, std}, "converged": fraction}). Top panel: reproductions pushed
-    mid-way; bottom panel: goal moved mid-way. Bars are the mean over demonstrations
-    with one std; a hatched bar marks a method whose runs did not all converge to the
-    (new) goal.
+    -> {metric: {mean, std, per_demo}, "converged": fraction}). Top panel: reproductions
+    pushed mid-way; bottom panel: goal moved mid-way. Each point is the median over the
+    demonstrations with the interquartile range; a hollow point marks a method whose runs
+    did not all converge to the (new) goal.
     """
     shapes, methods = list(table), ordered_methods(table)
     scenarios = [("push", "after pushes"), ("goal_change", "after goal changes")]
-    fig = _bar_figure(len(shapes), len(methods), len(scenarios))
-    axes = fig.subplots(len(scenarios), 1, sharex=True, squeeze=False)[:, 0]
 
     def scenario(shape, method, key):
         return table[shape].get(method, {}).get(key) or {}
 
-    any_flag = False
-    for ax, (key, label) in zip(axes, scenarios):
-        def flagged(s, m, key=key):
-            conv = scenario(s, m, key).get("converged")
-            return conv is not None and conv < 1.0
+    def flagged(s, m, key):
+        conv = scenario(s, m, key).get("converged")
+        return conv is not None and conv < 1.0
 
-        any_flag |= any(flagged(s, m) for s in shapes for m in methods)
-        is_log = _grouped_bars(ax, shapes, methods,
-                               lambda s, m, key=key: mean_std(scenario(s, m, key).get(metric)),
-                               flagged, log)
+    any_flag = any(flagged(s, m, k) for s in shapes for m in methods for k, _ in scenarios)
+    fig = _interval_figure(len(shapes), len(methods), len(scenarios), len(methods) + any_flag)
+    axes = fig.subplots(len(scenarios), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, (key, label) in zip(axes, scenarios):
+        is_log = _interval_points(ax, shapes, methods,
+                                  lambda s, m, key=key: median_iqr(scenario(s, m, key).get(metric)),
+                                  lambda s, m, key=key: flagged(s, m, key), log)
         unit_label = METRIC_LABELS.get(metric, metric).format(u=units)
         ax.set_ylabel(f"{unit_label}{' [log]' if is_log else ''}")
         ax.set_title(label, loc="left")
-    handles = [Patch(color=method_color(m, methods), label=m) for m in methods]
+    handles = _method_handles(methods)
     if any_flag:
-        handles.append(Patch(facecolor="white", edgecolor="black", hatch="////",
-                             label="not all runs converged"))
-    fig.legend(handles=handles, loc="outside upper center", ncols=len(handles))
+        handles.append(Line2D([], [], color="0.3", marker="o", markersize=4.5, lw=1.3,
+                              markerfacecolor="white", label="not all runs converged"))
+    fig.legend(handles=handles, loc="outside upper center", ncols=min(len(handles), LEGEND_COLUMNS))
     return fig
 
 

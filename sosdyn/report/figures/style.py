@@ -161,14 +161,26 @@ def finish_state_axes(ax, bounds, units: str, title: str | None, legend_handles=
     return ax.figure
 
 
-def mean_std(entry) -> tuple[float, float]:
-    """(mean, std) of a metric entry: ``{"mean", "std"}``, a bare number, or missing."""
+def median_iqr(entry) -> tuple[float, float, float]:
+    """(median, first quartile, third quartile) of a metric entry over its demonstrations.
+
+    ``{"per_demo": [...]}`` gives the sample quantiles (NaN values ignored); an entry
+    without ``per_demo`` (``{"mean"}`` or a bare number) gives its value three times (no
+    spread); a missing entry gives NaNs ("not run").
+    """
     if entry is None:
-        return np.nan, np.nan
+        return np.nan, np.nan, np.nan
     if isinstance(entry, Mapping):
-        mean, std = entry.get("mean"), entry.get("std")
-        return (np.nan if mean is None else float(mean)), (0.0 if std is None else float(std))
-    return float(entry), 0.0
+        values = np.asarray(entry.get("per_demo") or [], dtype=float)
+        values = values[np.isfinite(values)]
+        if values.size:
+            q1, med, q3 = np.percentile(values, [25, 50, 75])
+            return float(med), float(q1), float(q3)
+        mean = entry.get("mean")
+        value = np.nan if mean is None else float(mean)
+    else:
+        value = float(entry)
+    return value, value, value
 
 
 def ordered_methods(table: Mapping[str, Mapping[str, object]]) -> list[str]:

@@ -17,7 +17,8 @@ from .style import (DEMO_COLOR, GOAL_STYLE, REPRO_COLOR, as_xy, data_bounds, fin
 def perturbation_trajectories(ax, demo, runs: Mapping[str, np.ndarray],
                               events: Sequence[Mapping] | Mapping[str, Sequence[Mapping]] = (),
                               goal_history=None,
-                              title: str | None = None, *, units: str = "mm") -> Figure:
+                              title: str | None = None, *, units: str = "mm",
+                              methods: Sequence[str] = ()) -> Figure:
     """Paper Fig. 4: each method's reproduction under a push or a goal change.
 
     ``demo`` (T, 2) is drawn as a wide light-gray band, each entry of ``runs``
@@ -29,7 +30,9 @@ def perturbation_trajectories(ax, demo, runs: Mapping[str, np.ndarray],
     ``{m: traj.events for m, traj in trajs.items()}``. ``goal_history`` ((T, 2), the
     goal in force at each step) gives the goal markers: the first goal hollow ("old
     goal") and every later distinct goal filled ("new goal"); a constant history is
-    one "goal" star.
+    one "goal" star. ``methods``: the report's full method list, so that a panel showing
+    only some of them colours each as the other figures do (:func:`~.style.method_color`);
+    default: the keys of ``runs``.
 
     With ``ax=None`` a new figure with the legend underneath is returned, otherwise
     ``ax.figure``.
@@ -39,7 +42,7 @@ def perturbation_trajectories(ax, demo, runs: Mapping[str, np.ndarray],
         fig = new_figure(4.6, 5.2)
         ax = fig.add_subplot()
     demo = as_xy(demo)
-    methods = list(runs)
+    methods = list(methods) or list(runs)
     handles = [Line2D([], [], color="0.75", lw=5, alpha=0.8, solid_capstyle="round",
                       label="demonstration")]
     ax.plot(demo[:, 0], demo[:, 1], color="0.75", lw=5, alpha=0.8, solid_capstyle="round", zorder=1)

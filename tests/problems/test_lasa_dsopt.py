@@ -1,0 +1,92 @@
+"""problems.lasa_dsopt: the ds-opt LASA protocol as an experiment (results schema, cache, seeds)."""
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from problems import lasa_dsopt
+
+DEFAULT = "CDSP default"
+ENTRY_KEYS = {"dtwd_test_mean", "dtwd_test_std", "dtwd_test", "dtwd_train_mean", "ratio_to_nearest",
+              "fit_s", "certified", "n_seeds", "n_ok", "errors"}
+
+
+def _check(res: dict, shapes, variants, seeds: int) -> None:
+    assert list(res["shapes"]) == list(shapes) and res["meta"]["variants"] == list(variants)
+    assert res["meta"]["seeds"] == seeds
+    assert res["reference"]["LPV-DS (EM GMM)"] == 1990 and res["reference"]["SEDS"] == 3954
+    for s in shapes:
+        row = res["shapes"][s]
+        assert math.isfinite(row["nearest_demo"]) and row["nearest_demo"] > 0
+        for v in variants:
+            e = row["variants"][v]
+            assert ENTRY_KEYS <= set(e) and e["n_ok"] == seeds and e["certified"] and not e["errors"]
+            assert len(e["dtwd_test"]) == 3
+            for x in (e["dtwd_test_mean"], e["dtwd_train_mean"], e["ratio_to_nearest"], e["fit_s"], *e["dtwd_test"]):
+                assert math.isfinite(x) and x > 0
+            assert e["ratio_to_nearest"] == pytest.approx(e["dtwd_test_mean"] / row["nearest_demo"])
+    for v in variants:
+        sm = res["summary"][v]
+        assert sm["n_ok"] == sm["n_certified"] == len(shapes) and sm["worst_shape"] in shapes
+        means = [res["shapes"][s]["variants"][v]["dtwd_test_mean"] for s in shapes]
+        assert sm["dtwd_test_mean"] == pytest.approx(sum(means) / len(means))
+
+
+def test_two_shapes_default_variant(tmp_path):
+    shapes = ("Line", "Angle")
+    paths = lasa_dsopt.run(shapes, (DEFAULT,), out_dir=tmp_path, n_jobs=1,
+                           seds_path=tmp_path / "missing.csv")
+    res = json.loads(paths["results"].read_text())
+    _check(res, shapes, (DEFAULT,), 1)
+    # Known answers of the protocol (measured, notes/dsopt/baseline.md): nearest-demo score and
+    # CDSP()'s test DTWD on Line 507 / 149 mm, Angle 841 / 695 mm.
+    assert res["shapes"]["Line"]["nearest_demo"] == pytest.approx(507, abs=1)
+    assert res["shapes"]["Angle"]["nearest_demo"] == pytest.approx(841, abs=1)
+    assert res["shapes"]["Line"]["variants"][DEFAULT]["dtwd_test_mean"] == pytest.approx(149, rel=0.05)
+    assert res["shapes"]["Angle"]["variants"][DEFAULT]["dtwd_test_mean"] == pytest.approx(695, rel=0.05)
+    assert res["summary"][DEFAULT]["worst_shape"] == "Angle"
+    # No SEDS table: the column is left out, not filled with zeros.
+    assert res["meta"]["seds_source"] is None and res["shapes"]["Line"]["seds_published"] is None
+    assert "n_better_than_seds" not in res["summary"][DEFAULT]
+    assert paths["png"].is_file() and paths["svg"].is_file()
+    page = paths["html"].read_text()
+    assert "figures/lasa_dsopt.png" in page and "SEDS (pub.)" not in page
+    # Second run: every job from the cache, same numbers.
+    cached = [lasa_dsopt.run_job(s, DEFAULT, 0, False, tmp_path / "cache", False) for s in shapes]
+    assert all(e["from_cache"] for e in cached)
+    assert [e["dtwd_test_mean"] for e in cached] == [
+        res["shapes"][s]["variants"][DEFAULT]["dtwd_test_mean"] for s in shapes]
+
+
+def test_seeds_give_mean_and_std(tmp_path):
+    paths = lasa_dsopt.run(("Line",), (DEFAULT,), seeds=2, out_dir=tmp_path, n_jobs=1,
+                           seds_path=tmp_path / "missing.csv")
+    res = json.loads(paths["results"].read_text())
+    _check(res, ("Line",), (DEFAULT,), 2)
+    runs = [json.loads(lasa_dsopt.cache_file(tmp_path / "cache", "Line", DEFAULT, k, False).read_text())
+            for k in (0, 1)]
+    assert [r["seed"] for r in runs] == [0, 1]
+    e = res["shapes"]["Line"]["variants"][DEFAULT]
+    a, b = (r["dtwd_test_mean"] for r in runs)
+    assert e["dtwd_test_mean"] == pytest.approx((a + b) / 2)
+    assert e["dtwd_test_std"] == pytest.approx(abs(a - b) / 2)
+
+
+def test_bad_arguments_are_refused():
+    with pytest.raises(SystemExit):
+        lasa_dsopt.parse_args(["--seeds", "0"])
+    with pytest.raises(SystemExit):
+        lasa_dsopt.parse_args(["--variants", "CDSP-quintic"])
+
+
+@pytest.mark.slow
+def test_three_shapes_all_variants(tmp_path):
+    shapes = ("Line", "Angle", "LShape")
+    paths = lasa_dsopt.main(["--shapes", *shapes, "--jobs", "2", "--out", str(tmp_path)])
+    assert paths == 0
+    res = json.loads((tmp_path / "results.json").read_text())
+    _check(res, shapes, tuple(lasa_dsopt.VARIANTS), 1)
+    if res["meta"]["seds_source"]:
+        assert 0 <= res["summary"]["CDSP-cubic"]["n_better_than_seds"] <= 3
