@@ -12,7 +12,7 @@ import sys
 import pytest
 
 import sosdyn as sd
-from sosdyn import cli
+from sosdyn.cli import paths as cli_paths
 from sosdyn.cli import error_line, main
 from sosdyn.errors import DemonstrationError, InputError, ModelFileError
 from sosdyn.lfd.model_io import FORMAT, VERSION
@@ -112,7 +112,7 @@ def test_fit_out_in_a_folder_without_write_permission(capsys, monkeypatch, tmp_p
     locked = tmp_path / "locked"
     locked.mkdir()
     real_access = os.access
-    monkeypatch.setattr(cli.os, "access", lambda p, mode: False if str(p) == str(locked) else real_access(p, mode))
+    monkeypatch.setattr(cli_paths.os, "access", lambda p, mode: False if str(p) == str(locked) else real_access(p, mode))
     code, _, err = run(capsys, "fit", *demos[0], "--out", locked / "m.json")
     assert_one_error_line(code, err, f"cannot write in the folder {locked}")
     assert never_called == [] and list(locked.iterdir()) == []
@@ -122,7 +122,7 @@ def test_fit_out_is_a_read_only_file(capsys, monkeypatch, tmp_path, demos, never
     old = tmp_path / "old.json"
     old.write_bytes(b"previous model")
     real_access = os.access
-    monkeypatch.setattr(cli.os, "access",
+    monkeypatch.setattr(cli_paths.os, "access",
                         lambda p, mode: False if str(p) == str(old) and mode & os.W_OK else real_access(p, mode))
     code, _, err = run(capsys, "fit", *demos[0], "--out", old)
     assert_one_error_line(code, err, f"--out {old} exists and is read-only")

@@ -9,11 +9,8 @@ whether the program it checks against is still the one it solved).
 
     p is SOS   <=>   p = z(x)^T Q z(x),  Q >= 0   (coefficient matching: G svec(Q) = coef(p))
 
-Every SOS-type declaration (add_sos, add_sos_matrix, add_sos_matrix_family, add_nonneg_on
-and its multipliers, new_sos) takes ``cone=`` "psd" (the default), "sdsos" or "dsos": the
-cone its Gram matrices lie in (:mod:`.constraints`; docs/sos-cones.md). "dsos" and "sdsos"
-are inner approximations, so a bound they give is valid but weaker:
-max over dsos <= max over sdsos <= max over psd.
+Every SOS-type declaration takes ``cone=`` "psd" (default), "sdsos" or "dsos" for its Gram
+blocks: inner approximations, valid but weaker bounds (:mod:`.cones`; docs/sos-cones.md).
 """
 from __future__ import annotations
 
@@ -26,9 +23,10 @@ from ..errors import InputError, PolynomialError, UnverifiedSolutionError
 from ..poly import PolyMatrix, Polynomial, allocate, monomials_up_to, variable_names
 from . import conic
 from .backends import solve_program
+from .cones import auxiliary_count, check_cone, cone_rows, face_rows
 from .constraints import (Basis, Block, EqualityMultiplier, FamilySOSConstraint, LinearRows, Multiplier,
                           PsdBlock, SOSConstraint, as_sos_polynomial, basis_exponents, basis_variables,
-                          check_cone, dsos_rows, face_rows, gram_polynomial, matrix_form, sdsos_rows)
+                          affine_items, affine_rows, gram_polynomial, matrix_form)
 from .gram import SQRT2, svec_pairs, svec_size
 from .newton import newton_basis
 from .objective import QuadraticForm, is_cvxpy
@@ -100,19 +98,12 @@ class SOSProgram:
         return new
 
     def _in_cone(self, psd: PsdBlock, cone: str):
-        """Put ``psd`` in ``cone``: nothing for "psd"; the auxiliary variables and rows of
-        :func:`.constraints.dsos_rows` or :func:`.constraints.sdsos_rows` otherwise."""
+        """Put ``psd`` in ``cone``: the auxiliary variables and rows of :func:`.cones.cone_rows`."""
         psd.cone = check_cone(cone)
         if cone == "psd":
             return
-        i, j = svec_pairs(psd.size)
-        n_off = int((i != j).sum())
-        if cone == "dsos":
-            aux = self._block(f"{psd.name}.t", n_off)
-            rows = [dsos_rows(psd, aux.ids)]
-        else:
-            aux = self._block(f"{psd.name}.ac", 2 * n_off)
-            rows = sdsos_rows(psd, aux.ids[:n_off], aux.ids[n_off:])
+        aux = self._block(f"{psd.name}.{'t' if cone == 'dsos' else 'ac'}", auxiliary_count(psd, cone))
+        rows = cone_rows(psd, cone, aux.ids)
         self.linear += rows
         self._cone_parts[id(psd)] = (aux, rows)
 
@@ -283,40 +274,21 @@ class SOSProgram:
         return self._register(name, "nonneg_on", rest, newton_basis(rest.exps), cone=cone, multipliers=mults,
                               eq_multipliers=eq_mults, source=source)
 
-    @staticmethod
-    def _affine_items(lhs, rhs):
-        diff = lhs - rhs
-        if isinstance(diff, PolyMatrix):
-            return list(diff.entries.flat)
-        if isinstance(diff, Polynomial):
-            return [diff]
-        raise PolynomialError(f"cannot constrain an expression of type {type(diff).__name__}")
-
-    def _add_linear(self, name, kind, items) -> LinearRows:
-        """One row per coefficient of every affine polynomial in ``items`` (= 0 or >= 0)."""
-        parts, offset = [], 0
-        for p in items:
-            parts.append(LinearRows.from_affine(name, kind, p.coef, p.ids, offset + np.arange(p.nterms)))
-            offset += p.nterms
-        cat = lambda field, dtype: np.concatenate([getattr(q, field) for q in parts] + [np.zeros(0, dtype)])  # noqa: E731
-        con = LinearRows(name, kind, cat("rows", np.int64), cat("ids", np.int64), cat("vals", float),
-                         cat("rhs", float))
-        self.linear.append(con)
-        return con
-
     @_timed
     def add_eq(self, lhs, rhs=0.0, name=None) -> LinearRows:
         """lhs == rhs, coefficient by coefficient (polynomials or polynomial matrices)."""
-        return self._add_linear(self._name("eq", name), "eq", self._affine_items(lhs, rhs))
+        self.linear.append(affine_rows(self._name("eq", name), "eq", affine_items(lhs, rhs)))
+        return self.linear[-1]
 
     @_timed
     def add_ge(self, lhs, rhs=0.0, name=None) -> LinearRows:
         """lhs >= rhs for degree-0 affine expressions (element-wise for matrices)."""
-        items = self._affine_items(lhs, rhs)
+        items = affine_items(lhs, rhs)
         if any(not p.is_constant for p in items):
             raise PolynomialError("add_ge takes constant affine expressions; use add_sos or "
                                   "add_nonneg_on for polynomial inequalities")
-        return self._add_linear(self._name("ge", name), "ge", items)
+        self.linear.append(affine_rows(self._name("ge", name), "ge", items))
+        return self.linear[-1]
 
     def add_constraint(self, constraint):
         """Add a cvxpy constraint written with :meth:`expr`; solves then go through cvxpy."""

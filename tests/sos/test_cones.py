@@ -9,7 +9,7 @@ import pytest
 
 import sosdyn as sd
 from sosdyn.poly import PolyMatrix
-from sosdyn.sos.constraints import CONES
+from sosdyn.sos.cones import CONES
 from sosdyn.sos.gram import matrix_to_svec
 
 (X,) = sd.variables("x")

@@ -7,7 +7,7 @@ conventions.
 from .bars import accuracy_bars, robustness_bars, scaling_plot
 from .streamlines import streamline_panel, streamlines
 from .style import GOAL_STYLE, METRIC_LABELS, STYLE, data_bounds, median_iqr, method_color, save_figure
-from .trajectories import perturbation_trajectories, trajectories_3d
+from .trajectories import perturbation_trajectories, time_series, trajectories_3d
 
 __all__ = [
     "GOAL_STYLE",
@@ -23,5 +23,6 @@ __all__ = [
     "scaling_plot",
     "streamline_panel",
     "streamlines",
+    "time_series",
     "trajectories_3d",
 ]

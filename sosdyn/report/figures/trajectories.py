@@ -114,3 +114,22 @@ def trajectories_3d(demos: Sequence[np.ndarray], reproductions: Sequence[np.ndar
 
 
 # -------------------------------------------------------------------------- bar charts
+
+
+@styled
+def time_series(runs: Sequence[tuple[np.ndarray, np.ndarray]], goal, units: str = "mm",
+                title: str | None = None) -> Figure:
+    """One panel per dimension: x_i(t) of every run ``(t, pos)``, the goal's x_i dotted
+    (the view of a model in more than three dimensions)."""
+    n = len(goal)
+    fig = new_figure(6.0, 1.6 * n + 0.6)
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    for i, ax in enumerate(axes):
+        for t, pos in runs:
+            ax.plot(t, pos[:, i], lw=1.2)
+        ax.axhline(goal[i], color="black", ls=":", lw=1.0)
+        ax.set_ylabel(f"$x_{{{i + 1}}}$ ({units})")
+    axes[-1].set_xlabel("t (s)")
+    if title:
+        axes[0].set_title(title)
+    return fig

@@ -13,21 +13,17 @@ Global options ``--quiet`` (no progress or summaries) and ``--debug`` (full
 tracebacks, debug logging; also ``SOSDYN_DEBUG=1``) go before the command;
 ``sosdyn --version`` prints the version.
 
-Every ``--out`` is checked before any work: its folder exists and is writable, it is not a
-folder, and it is not one of the command's inputs (same resolved path or same file, so
-symlinks and hard links count). Any sosdyn error, OS error, bad value or over-deep input
-ends the command with one line ``error: ... Try: ...`` on stderr and exit status 1; a
-malformed option (wrong type, out of range) is a usage error with exit status 2.
+Every ``--out`` is checked before any work (:mod:`.paths`). Any sosdyn error, OS error, bad
+value or over-deep input ends the command with one line ``error: ... Try: ...`` on stderr and
+exit status 1; a malformed option is a usage error with exit status 2.
 
 The experiments live in the repository's ``problems/`` folder, not in the package:
 ``sosdyn experiment`` finds them in ``--repo DIR``, by default in the source tree the
 installed sosdyn comes from (an editable install), and says so when there is none.
 ``sosdyn report`` only renders an existing results file; ``make report`` (``python -m
 problems report``) rebuilds the results file and the figures from the cached experiment
-entries first.
-
-sosdyn itself and its solvers are imported inside the commands, so ``sosdyn --help``
-is quick.
+entries first. sosdyn itself and its solvers are imported inside the commands, so
+``sosdyn --help`` is quick.
 """
 
 from __future__ import annotations
@@ -35,10 +31,8 @@ from __future__ import annotations
 import enum
 import importlib
 import logging
-import os
 import sys
 import time
-from collections.abc import Sequence
 from contextlib import nullcontext
 from pathlib import Path
 from typing import Annotated
@@ -49,7 +43,8 @@ from rich.console import Console
 from rich.logging import RichHandler
 from rich.markup import escape
 
-from .errors import InputError, SosdynError
+from ..errors import InputError, SosdynError
+from .paths import check_folder, check_output, existing
 
 app = typer.Typer(name="sosdyn", no_args_is_help=True, add_completion=False,
                   help="SOS programming and provably convergent motion learning (CDSP).")
@@ -75,7 +70,7 @@ class SolverMethod(str, enum.Enum):
 def _print_version(value: bool) -> None:
     """Option callback of --version: print ``sosdyn X.Y.Z`` and exit."""
     if value:
-        from . import __version__
+        from .. import __version__
         out.print(f"sosdyn {__version__}", highlight=False)
         raise typer.Exit()
 
@@ -104,57 +99,11 @@ def _status(message: str):
     return nullcontext() if _State.quiet else err.status(message)
 
 
-def _existing(path: Path, what: str) -> Path:
-    """``path``, or FileNotFoundError naming ``what`` (checked before sosdyn is asked)."""
-    if path.is_dir():
-        raise InputError(f"{what} {path} is a folder. Try: give the file inside it.")
-    if not path.is_file():
-        raise FileNotFoundError(f"{what} not found: {path}")
-    return path
-
-
 def _positive(value: float | None) -> float | None:
     """Option callback: a finite number > 0 (or not given)."""
     if value is not None and not 0 < value < float("inf"):
         raise typer.BadParameter(f"must be a finite number > 0, got {value}.")
     return value
-
-
-def same_file(a: Path, b: Path) -> bool:
-    """Do ``a`` and ``b`` name one file: equal after resolving symlinks, or (both existing)
-    the same inode, as for hard links."""
-    try:
-        return a.resolve() == b.resolve() or os.path.samefile(a, b)
-    except (OSError, RuntimeError):   # one of them does not exist, or a symlink loop
-        return False
-
-
-def check_output(path: Path, inputs: Sequence[Path] = (), what: str = "input") -> None:
-    """InputError unless ``path`` may be (over)written: not a folder, writable if it exists,
-    and not the same file as any of ``inputs`` (each described as ``what``)."""
-    if path.is_dir():
-        raise InputError(f"--out {path} is a folder. Try: give a file path inside it.")
-    for source in inputs:
-        if same_file(path, source):
-            raise InputError(f"--out {path} is the {what} {source}: writing it would destroy the input. "
-                             "Try: choose another --out.")
-    if path.exists() and not os.access(path, os.W_OK):
-        raise InputError(f"--out {path} exists and is read-only. Try: choose another --out.")
-
-
-def check_folder(folder: Path, *, create: bool = False) -> None:
-    """InputError unless files can be written in ``folder``; with ``create`` it may also be
-    a new folder whose parent exists and is writable."""
-    target = folder
-    if not folder.is_dir():
-        if folder.exists():
-            raise InputError(f"{folder} is a file, not a folder. Try: choose another --out.")
-        if not (create and folder.parent.is_dir()):
-            raise InputError(f"the folder {folder} does not exist. Try: create it (mkdir -p {folder}) "
-                             "or choose another --out.")
-        target = folder.parent
-    if not os.access(target, os.W_OK | os.X_OK):
-        raise InputError(f"cannot write in the folder {target} (permission denied). Try: choose another --out.")
 
 
 def _parse_point(text: str) -> np.ndarray:
@@ -190,7 +139,7 @@ def fit(
     import sosdyn as sd
 
     lasa = len(demos) == 1 and demos[0].startswith("lasa:")
-    paths = [] if lasa else [_existing(Path(p), "demonstration file") for p in demos]
+    paths = [] if lasa else [existing(Path(p), "demonstration file") for p in demos]
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(paths)
@@ -229,7 +178,7 @@ def rollout(
     import sosdyn as sd
 
     x0 = _parse_point(start)
-    _existing(model_path, "model file")
+    existing(model_path, "model file")
     if out_path is not None:
         check_output(out_path, [model_path], "model file")
         check_folder(out_path.parent)
@@ -245,7 +194,7 @@ def rollout(
 
 
 #: The source tree this sosdyn was imported from (the repository, for an editable install).
-SOURCE_TREE = Path(__file__).resolve().parents[1]
+SOURCE_TREE = Path(__file__).resolve().parents[2]
 
 
 def experiments_package(repo: Path | None = None):
@@ -296,9 +245,9 @@ def report(
 
     This only renders. `make report` (python -m problems report) rebuilds the results file and
     its figures from the cached experiment entries first."""
-    from .report.html import REPORT_FILES, build_report
+    from ..report.html import REPORT_FILES, build_report
 
-    _existing(results, "results file")
+    existing(results, "results file")
     check_folder(out_dir, create=True)
     for name in REPORT_FILES.values():
         check_output(out_dir / name, [results], "results file")
@@ -324,10 +273,10 @@ def export_model(
     `predict(X) -> Xdot` with numpy only, or C++17 `bool predict(const double* x, double* xdot)`."""
     import sosdyn as sd
 
-    from .lfd.export import export as generate
-    from .lfd.model_io import replace_atomically
+    from ..lfd.export import export as generate
+    from ..lfd.model_io import replace_atomically
 
-    _existing(model_path, "model file")
+    existing(model_path, "model file")
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
     source = generate(sd.load_model(model_path), target.value)
@@ -355,14 +304,14 @@ def plot(
 
     import sosdyn as sd
 
-    from .report.figures import STYLE, streamlines, trajectories_3d
+    from ..report.figures import STYLE, streamlines, time_series, trajectories_3d
 
     if out_path.suffix.lower() not in PLOT_FORMATS:
         raise InputError(f"--out {out_path} must end in .png or .svg. Try: --out {out_path.with_suffix('.png')}.")
     demos = demos or []
     lasa = len(demos) == 1 and demos[0].startswith("lasa:")
-    paths = [] if lasa else [_existing(Path(p), "demonstration file") for p in demos]
-    _existing(model_path, "model file")
+    paths = [] if lasa else [existing(Path(p), "demonstration file") for p in demos]
+    existing(model_path, "model file")
     check_output(out_path, [model_path, *paths], "input")
     check_folder(out_path.parent)
     model = sd.load_model(model_path)
@@ -382,7 +331,7 @@ def plot(
     elif model.dim_ == 3:
         fig = trajectories_3d(demo_pos, [r.pos for r in runs], model.goal_, title=title, units=model.units_)
     else:
-        fig = rollout_time_series(runs, model.goal_, model.units_, title)
+        fig = time_series([(r.t, r.pos) for r in runs], model.goal_, model.units_, title)
     with mpl.rc_context(STYLE):
         fig.savefig(out_path, format=out_path.suffix.lower()[1:], dpi=150, metadata=_no_date(out_path))
     _info(f"[green]wrote[/] {escape(str(out_path))}  ({model.dim_}-D model, {len(runs)} reproductions)")
@@ -391,23 +340,6 @@ def plot(
 def _no_date(path: Path) -> dict:
     """savefig metadata: no creation date in an SVG, so equal inputs give equal files."""
     return {"Date": None} if path.suffix.lower() == ".svg" else {}
-
-
-def rollout_time_series(runs, goal, units: str, title: str):
-    """One panel per dimension: x_i(t) of every reproduction, the goal's x_i dotted."""
-    from matplotlib.figure import Figure
-
-    n = len(goal)
-    fig = Figure(figsize=(6.0, 1.6 * n + 0.6), layout="constrained")
-    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
-    for i, ax in enumerate(axes):
-        for r in runs:
-            ax.plot(r.t, r.pos[:, i], lw=1.2)
-        ax.axhline(goal[i], color="black", ls=":", lw=1.0)
-        ax.set_ylabel(f"$x_{{{i + 1}}}$ ({units})")
-    axes[-1].set_xlabel("t (s)")
-    axes[0].set_title(title)
-    return fig
 
 
 @lasa_app.command("list")
@@ -466,7 +398,3 @@ def main(argv: list[str] | None = None) -> None:
     except KeyboardInterrupt:
         err.print("[red]interrupted[/]")
         raise SystemExit(130) from None
-
-
-if __name__ == "__main__":
-    main()

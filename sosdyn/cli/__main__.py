@@ -1,0 +1,4 @@
+"""``python -m sosdyn.cli``: the ``sosdyn`` command."""
+from . import main
+
+main()
