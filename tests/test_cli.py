@@ -15,26 +15,7 @@ import sosdyn as sd
 from sosdyn.cli import main
 from sosdyn.errors import DemonstrationError
 
-
-def run(capsys, *argv):
-    """Run the CLI in-process; return (exit code, stdout, stderr)."""
-    try:
-        main(list(argv))
-        code = 0
-    except SystemExit as exc:
-        code = exc.code or 0
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
-def assert_one_error_line(code, err, *fragments):
-    assert code == 1
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("error: ")
-    assert "Traceback" not in err
-    for fragment in fragments:
-        assert fragment in lines[0]
+from cli_support import assert_one_error_line, run
 
 
 # ------------------------------------------------------------------------ error paths

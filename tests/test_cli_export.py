@@ -7,19 +7,9 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
-from sosdyn.cli import main
 from sosdyn.lfd.data import Demonstration, Demonstrations
 
-
-def run(capsys, *argv):
-    """Run the CLI in-process; return (exit code, stdout, stderr)."""
-    try:
-        main(list(argv))
-        code = 0
-    except SystemExit as exc:
-        code = exc.code or 0
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
+from cli_support import run
 
 
 def line_demos(starts, T=60, duration=2.0):

@@ -4,6 +4,7 @@ the learner would be called, and stand-ins record that it never was."""
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import subprocess
@@ -11,6 +12,7 @@ import sys
 
 import pytest
 
+import cli_support
 import sosdyn as sd
 from sosdyn.cli import paths as cli_paths
 from sosdyn.cli import error_line, main
@@ -19,26 +21,8 @@ from sosdyn.lfd.model_io import FORMAT, VERSION
 from sosdyn.limits import json_text_depth
 
 TRY_RESULTS = "Try: pass the results.json"
-
-
-def run(capsys, *argv):
-    """Run the CLI in-process; return (exit code, stdout, stderr)."""
-    try:
-        main([str(a) for a in argv])
-        code = 0
-    except SystemExit as exc:
-        code = exc.code or 0
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
-def assert_one_error_line(code, err, *fragments):
-    assert code == 1, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("error: ") and "Try: " in lines[0], lines[0]
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
+run = cli_support.run
+assert_one_error_line = functools.partial(cli_support.assert_one_error_line, need_try=True)
 
 
 @pytest.fixture

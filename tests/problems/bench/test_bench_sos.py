@@ -1,6 +1,5 @@
 """problems.bench.sos: a smoke run at reduced size (no timing assertions)."""
 import json
-import math
 
 import pytest
 
@@ -10,13 +9,7 @@ pytest.importorskip("pyinstrument")
 from problems.bench import sos as bench_sos  # noqa: E402
 
 
-def _times_ok(d, keys):
-    for k in keys:
-        v = d[k]
-        assert v is not None and math.isfinite(v) and v > 0, (k, v)
-
-
-def test_bench_sos_quick(tmp_path):
+def test_bench_sos_quick(tmp_path, times_ok):
     assert bench_sos.main(["--quick", "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "sos.json").read_text())
     assert {"problems", "summary", "targets", "environment", "profiles"} <= set(res)
@@ -25,11 +18,11 @@ def test_bench_sos_quick(tmp_path):
     assert any(n.startswith("CDSP metric step") for n in names)
     for p in res["problems"]:
         for backend in ("direct", "cvxpy"):
-            _times_ok(p[backend], ("build", "canonicalize", "solve"))
+            times_ok(p[backend], ("build", "canonicalize", "solve"))
             assert p[backend]["sizes"]["variables"] > 0
         theirs = p["sumofsquares"]
         assert theirs is not None and "error" not in theirs, theirs
-        _times_ok(theirs, ("build", "solve"))
+        times_ok(theirs, ("build", "solve"))
         assert p["ratios"]["build_theirs_over_ours"] > 0
         assert p["status_ok"], (p["name"], p["direct"]["status"])
     resolved = [p["resolve"]["direct"] for p in res["problems"] if p["resolve"]["direct"]]
