@@ -18,6 +18,8 @@ EXPERIMENTS = {
     "lasa-all": "lasa_all",
     "lasa-dsopt": "lasa_dsopt",        # CDSP variants on the LPV-DS (ds-opt) LASA protocol
     "demo3d": "demo3d",
+    "demo7d": "demo7d",                # a certified CDSP from 5 noisy 7-D joint-space demonstrations
+    "sweep": "sweep",                  # a hyper-parameter sweep (joblib processes, or a Dask cluster)
     "learner-table": "learner_table",
     "bench": "bench.learner",          # where the CDSP learner spends its time
     "bench-sos": "bench.sos",          # the SOS layer against SumOfSquares

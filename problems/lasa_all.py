@@ -17,7 +17,7 @@ from sosdyn.report.figures import save_figure, streamline_panel
 from sosdyn.report.html import build_report, render_html
 
 from .fig2 import figure as fig2
-from .jobs import evaluate_all
+from .jobs import evaluate_all, take_scheduler_argument
 from .jsonio import write_json
 from .lattice import field_panel
 from .plumbing import Context, parse_args
@@ -77,7 +77,7 @@ def run(names, methods, config: EvalConfig, out_dir=REPORTS, *, n_jobs=2, K=6,
     sub = out_dir / "lasa_all"
     figures = draw_pages(panels, out_dir, sub, field_method, K) if panels else {}
     figures.update(fig2(entries, Context(shapes=shapes, config=config, out_dir=sub, methods=methods)))
-    results = assemble(entries, shapes, methods, config, figures, bench=False,
+    results = assemble(entries, shapes, methods, config, figures,
                        meta_extra={"n_shapes": len(shapes), "K": K})
     path = write_json(sub / "results.json", results)
     if render_pdf:   # trusted: the grid figure sits in ../figures, shared with the main report
@@ -86,7 +86,8 @@ def run(names, methods, config: EvalConfig, out_dir=REPORTS, *, n_jobs=2, K=6,
 
 
 def main(argv=None):
-    args = parse_args(argv, "All 30 LASA shapes x methods (slow)")
+    args = parse_args(take_scheduler_argument(argv), "All 30 LASA shapes x methods (slow; --scheduler ADDRESS: "
+                      "on a Dask cluster)")
     names = args.shapes or sd.lasa_names()
     config = EvalConfig(quick=args.quick, n_grid=5, field_grid=50)
     t0 = time.perf_counter()

@@ -1,6 +1,7 @@
 """``make report`` / ``python -m problems report``: rebuild results.json, the figures,
-``reports/index.html`` and ``reports/report.pdf`` from the cached experiment entries (no
-refitting; pairs that are not cached are shown as "not run").
+``reports/index.html`` and ``reports/report.pdf`` (the user report) from the cached experiment
+entries (no refitting; pairs that are not cached are shown as "not run"), and the benchmark
+report ``reports/bench/index.html`` from what the benchmarks wrote there.
 
 Not to be confused with ``sosdyn report --results FILE``, which only renders an existing
 results file into HTML and PDF.
@@ -10,6 +11,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from sosdyn.report.bench import render_bench
 from sosdyn.report.html import build_report
 
 from . import fig1, fig2, fig3, fig4
@@ -56,12 +58,16 @@ def _existing_figure(ctx, name):
 
 
 def build(entries: dict, ctx: Context, *, extra_meta=None, command=None) -> dict:
-    """Draw the figures, write ``results.json`` and render index.html + report.pdf."""
+    """Draw the figures, write ``results.json`` and render index.html + report.pdf; also
+    ``bench/index.html`` (key ``"bench"``) when the output folder has a ``bench/`` folder."""
     figures = draw_figures(entries, ctx)
     results = assemble(entries, ctx.shapes, ctx.methods, ctx.config, figures, command=command,
                        meta_extra={"quick": ctx.config.quick, **(extra_meta or {})})
     path = write_json(Path(ctx.out_dir) / "results.json", results)
-    return build_report(path, ctx.out_dir)
+    bench_dir = Path(ctx.out_dir) / "bench"
+    bench = render_bench(bench_dir) if bench_dir.is_dir() else None     # first: the user report links it
+    paths = build_report(path, ctx.out_dir)
+    return {**paths, "bench": bench} if bench else paths
 
 
 def main(argv=None):
@@ -73,5 +79,7 @@ def main(argv=None):
     n = sum(len(v) for v in entries.values())
     print(f"{n} cached results of {len(ctx.shapes) * len(ctx.methods)} in {ctx.cache_dir}")
     paths = build(entries, ctx)
-    print(f"report: {paths['html']} and {paths['pdf']} ({time.perf_counter() - t0:.1f} s)")
+    print(f"report: {paths['html']} and {paths['pdf']}"
+          f"{' (benchmarks: ' + str(paths['bench']) + ')' if 'bench' in paths else ''} "
+          f"({time.perf_counter() - t0:.1f} s)")
     return 0

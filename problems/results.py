@@ -15,7 +15,7 @@ from pathlib import Path
 import sosdyn
 
 from .findings import findings
-from .settings import BENCH, INTEGRATOR_NOTE, METHOD_ORDER, METHODS, REPO, SEED, EvalConfig, Shape
+from .settings import INTEGRATOR_NOTE, METHOD_ORDER, METHODS, REPO, SEED, EvalConfig, Shape
 
 
 def methods_section(shapes: Sequence[Shape], names: Sequence[str] = METHOD_ORDER,
@@ -65,18 +65,13 @@ def grid_note(config: EvalConfig) -> str:
 
 
 def assemble(entries: dict, shapes: Sequence[Shape], methods: Sequence[str], config: EvalConfig,
-             figures: dict, *, meta_extra: dict | None = None, command: str | None = None,
-             bench: bool = True) -> dict:
-    """The results dict: meta, findings, methods, the entry sections, figures (and the SOS
-    benchmark's summary ``reports/bench/sos.md`` when ``bench`` and it exists)."""
-    results = {"meta": meta(command, grid_convergence=grid_note(config), **(meta_extra or {})),
+             figures: dict, *, meta_extra: dict | None = None, command: str | None = None) -> dict:
+    """The results dict: meta, findings, methods, the entry sections, figures. The benchmarks
+    have their own page (``reports/bench/index.html``, :mod:`sosdyn.report.bench`)."""
+    return {"meta": meta(command, grid_convergence=grid_note(config), **(meta_extra or {})),
                "findings": findings(entries),
                "methods": methods_section(shapes, list(methods), quick=config.quick),
                **results_sections(entries), "figures": figures}
-    bench_md = BENCH / "sos.md"
-    if bench and bench_md.is_file():
-        results["bench"] = bench_md.read_text(encoding="utf-8")
-    return results
 
 
 # ------------------------------------------------------------------ environment

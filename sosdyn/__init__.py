@@ -4,11 +4,11 @@ Layers: :mod:`sosdyn.poly` (numeric polynomials) -> :mod:`sosdyn.sos` (SOS progr
 their conic lowering) -> :mod:`sosdyn.lfd` (learning from demonstrations).
 """
 from .errors import (DemonstrationError, InfeasibleError, InputError, ModelFileError,
-                     NotCertifiedError, NotFittedError, NotSymmetricError, PolynomialError,
-                     ResourceLimitError, SolverError, SosdynError, UnverifiedSolutionError)
+                     NoAtomsError, NotCertifiedError, NotFittedError, NotSymmetricError, PolynomialError,
+                     ResourceLimitError, SolverError, SosdynError, UnboundedError, UnverifiedSolutionError)
 from .limits import get_limits, limits, set_limits
 from .poly import PolyMatrix, Polynomial, from_sympy, jacobian, to_sympy, variables
-from .sos import SOSProgram, Solution, sum_squares
+from .sos import BasicSet, SOSProgram, Solution, minimize_on, sum_squares
 from .lfd import (CDSP, Demonstration, Demonstrations, Trajectory, check_demonstrations, lasa_names,
                   load_demos, load_lasa, load_model)
 
@@ -17,9 +17,9 @@ __version__ = "0.1.0"
 __all__ = [
     "SosdynError", "InputError", "PolynomialError", "NotSymmetricError", "DemonstrationError",
     "ModelFileError", "SolverError", "InfeasibleError", "NotCertifiedError", "NotFittedError",
-    "ResourceLimitError", "UnverifiedSolutionError", "get_limits", "set_limits", "limits",
+    "ResourceLimitError", "UnverifiedSolutionError", "UnboundedError", "NoAtomsError", "get_limits", "set_limits", "limits",
     "Polynomial", "PolyMatrix", "variables", "jacobian", "from_sympy", "to_sympy",
-    "SOSProgram", "Solution", "sum_squares",
+    "SOSProgram", "Solution", "sum_squares", "BasicSet", "minimize_on",
     "CDSP", "Demonstration", "Demonstrations", "Trajectory", "check_demonstrations",
     "lasa_names", "load_demos", "load_lasa", "load_model",
 ]

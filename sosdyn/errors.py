@@ -68,6 +68,17 @@ class InfeasibleError(SolverError):
     """The solver proved the program infeasible (no certificate exists at this degree)."""
 
 
+class UnboundedError(SolverError):
+    """The solver proved the objective unbounded (dual infeasible): no finite optimum exists."""
+
+
+class NoAtomsError(SolverError):
+    """No minimisers can be read from a solution's moments (not flat, or the points fail the check).
+
+    The bound itself may still be right; only the points are refused.
+    """
+
+
 class NotCertifiedError(SolverError):
     """A learned model whose independent check of the certificate failed."""
 

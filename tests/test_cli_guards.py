@@ -192,7 +192,7 @@ def _snapshot(folder):
     (json.dumps({"meta": {}}), "(no 'findings')"),
     (json.dumps({"meta": {}, "findings": {}}), "'findings' should be a JSON array, not object"),
     (json.dumps({"meta": [], "findings": [1]}), "'meta' should be a JSON object, not array; 'findings' holds non-objects"),
-    (json.dumps({**RESULTS_OK, "bench": 3}), "'bench' should be a JSON string, not number"),
+    (json.dumps({**RESULTS_OK, "timings": 3}), "'timings' should be a JSON object, not number"),
     ("{not json", "is not valid JSON"),
     ("[" * 65 + "]" * 65, "nesting depth of"),
     ("[" * 100_000 + "]" * 100_000, "is 1e+05, over the limit max_json_depth=64"),
@@ -216,7 +216,7 @@ def test_report_refuses_without_creating_the_folder(capsys, tmp_path):
 
 def test_report_file_size_cap(capsys, tmp_path, out_dir):
     results = tmp_path / "results.json"
-    results.write_text(json.dumps({**RESULTS_OK, "bench": "x" * 500}))
+    results.write_text(json.dumps({**RESULTS_OK, "methods": {"x" * 500: None}}))
     before = _snapshot(out_dir)
     with sd.limits(max_file_bytes=200):
         code, _, err = run(capsys, "report", "--results", results, "--out", out_dir)

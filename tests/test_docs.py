@@ -37,7 +37,7 @@ def page(site: Path, name: str) -> str:
 def test_narrative_pages(site):
     assert "sum-of-squares" in page(site, "").lower()
     for name, text in [("theory", "collapses"), ("errors", "UnverifiedSolutionError"),
-                       ("interfaces", "Demonstrations"), ("model-file", "sosdyn-cdsp")]:
+                       ("interfaces", "Demonstrations"), ("model-file", "sosdyn-cdsp"), ("findings", "16 694 to 7 479")]:
         assert text in page(site, name), name
 
 

@@ -1,2 +1,3 @@
 """The benchmarks: ``learner`` (``make bench``: where the CDSP learner spends its time) and ``sos``
-(``make bench-sos``: the SOS layer against SumOfSquares.py), with their problems and helpers."""
+(``make bench-sos``: the SOS layer against SumOfSquares.py and Drake, with the sparsity rows),
+with their problems and helpers."""

@@ -2,46 +2,59 @@
 
 For every problem: build / canonicalise / solve seconds for the ``direct`` and ``cvxpy`` back ends,
 the SDP sizes, the same problem in SumOfSquares.py (sympy + picos, solved by CVXOPT: the only SDP
-solver picos finds here) with ratios, and the re-solve overhead of the compiled problem
-(``con.update(p)`` + solve minus the solver's own time). Writes ``reports/bench/sos.json`` and
-``sos.md``.
+solver picos finds here) and in Drake (pydrake, solved by Clarabel as ours; :mod:`.drake_problems`)
+with ratios, the re-solve overhead of the compiled problem (``con.update(p)`` + solve minus the
+solver's own time), and the sparsity rows (chained Rosenbrock / Wood, :mod:`.sparse_problems`).
+Writes ``reports/bench/sos.json`` and ``sos.md`` (:mod:`.sos_report`).
 
 Options: ``--quick`` (small problems, few repetitions: the smoke test), ``--no-theirs``,
-``--out DIR``.
+``--no-drake``, ``--no-sparse``, ``--sparse-budget SECONDS``, ``--out DIR``.
 """
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 import traceback
 import warnings
-from collections import Counter
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
+import sosdyn as sd
+
 from ..settings import BENCH
-from . import sos_problems
+from . import drake_problems, sos_problems, sparse_problems
 from .catalog import problems
 from .cdsp_problems import cdsp_fields
-from .profiling import profile_call, profile_markdown
-from .timing import environment, fmt_ratio, fmt_s, md_table, median, now, verdict, write_json
+from .profiling import profile_call
+from .sos_report import markdown
+from .timing import environment, fmt_s, median, now, write_json
 
 BACKENDS = ("direct", "cvxpy")
 TARGETS = {"build_share_of_solve": 0.10, "build_share_min_solve_s": 1.0, "resolve_overhead_s": 5e-3,
-           "build_speedup_vs_sumofsquares": 50.0}
+           "build_speedup_vs_sumofsquares": 50.0, "total_vs_drake": 1.0}
 
 
-def _reps(seconds, quick, cap=5):
-    if quick:
-        return 1
-    return 1 if seconds > 2.0 else (2 if seconds > 0.5 else cap)
+def reps_for(quick, budget_s=0.5, cap=30):
+    """How many fresh runs a measurement takes, given the seconds of one run and the seconds
+    spent so far: one in quick mode or above 2 s, two above 0.5 s, else repeat until
+    ``budget_s`` is spent (at least 3, at most ``cap``), so millisecond builds are medians of
+    many samples rather than one noisy one."""
+    def count(per_run_s, elapsed_s):
+        if quick or per_run_s > 2.0:
+            return 1
+        if per_run_s > 0.5:
+            return 2
+        return cap if elapsed_s < budget_s else 3
+    return count
 
 
 def run_ours(p, backend, quick):
     """Median build / canonicalise / solve of fresh builds of problem ``p`` with ``backend``."""
-    runs = []
+    runs, elapsed, reps = [], 0.0, reps_for(quick)
     while True:
         t0 = now()
         prog, _ = p.ours()
@@ -52,9 +65,11 @@ def run_ours(p, backend, quick):
         runs.append({"build": build, "build_program": sol.timings["build"],
                      "canonicalize": sol.timings["canonicalize"], "solve": sol.timings["solve"],
                      "status": sol.status, "iterations": sol.info.get("iterations")})
-        if len(runs) >= _reps(build + sol.timings["solve"], quick):
+        elapsed += build + sol.timings["canonicalize"] + sol.timings["solve"]
+        if len(runs) >= reps(elapsed / len(runs), elapsed):
             break
     out = {k: median([r[k] for r in runs]) for k in ("build", "build_program", "canonicalize", "solve")}
+    out["build_min"] = min(r["build"] for r in runs)
     out.update(status=runs[-1]["status"], iterations=runs[-1]["iterations"], repetitions=len(runs),
                sizes=prog.compile().sizes())
     if backend == "direct" and sol.status in ("optimal", "optimal_inaccurate"):
@@ -106,8 +121,8 @@ def run_theirs(p, quick):
             p.theirs()
         except ValueError:                   # its Newton-polytope hull needs full-dimensional support
             sos_problems.SPARSE[0] = False
-        import picos   # optional (the bench extra): only when comparing with SumOfSquares.py
-        runs = []
+        import picos  # optional (the bench extra): only when comparing with SumOfSquares.py
+        runs, elapsed, reps = [], 0.0, reps_for(quick)
         while True:
             t0 = now()
             prob = p.theirs()
@@ -118,9 +133,11 @@ def run_theirs(p, quick):
             search = float(getattr(sol, "searchTime", float("nan")))
             runs.append({"build": build, "solve": search, "canonicalize": wall - search,
                          "status": f"{sol.claimedStatus}/{sol.problemStatus}"})
-            if len(runs) >= _reps(build + wall, quick, cap=3):
+            elapsed += build + wall
+            if len(runs) >= reps(elapsed / len(runs), elapsed):
                 break
         out = {k: median([r[k] for r in runs]) for k in ("build", "canonicalize", "solve")}
+        out["build_min"] = min(r["build"] for r in runs)
         out.update(status=runs[-1]["status"], repetitions=len(runs), solver="cvxopt",
                    newton_reduction=sos_problems.SPARSE[0],
                    picos=picos.__version__, constraints=len(prob.constraints))
@@ -131,14 +148,59 @@ def run_theirs(p, quick):
         sos_problems.SPARSE[0] = True
 
 
+def measure(p, args, drake_ok) -> dict:
+    """Every measurement of one problem: both back ends, re-solve, SumOfSquares.py, Drake, ratios."""
+    t0 = time.perf_counter()
+    entry = {"name": p.name, "group": p.group, "expect": p.expect, "params": p.params or {}}
+    for b in BACKENDS:
+        entry[b] = run_ours(p, b, args.quick)
+    first = entry["direct"]["solve"]
+    entry["resolve"] = {b: run_resolve(p, b, args.quick, first) for b in BACKENDS}
+    entry["sumofsquares"] = None if args.no_theirs else run_theirs(p, args.quick)
+    entry["drake"] = drake_problems.run_drake(p, reps_for(args.quick)) if drake_ok else None
+    d, th, dk = entry["direct"], entry["sumofsquares"], entry["drake"]
+    ratios = {"cvxpy_over_direct_total": total(entry["cvxpy"]) / total(d),
+              "cvxpy_over_direct_canonicalize": entry["cvxpy"]["canonicalize"] / d["canonicalize"]}
+    if th and "error" not in th:
+        ratios["build_theirs_over_ours"] = th["build_min"] / d["build_min"]     # fastest of each: least load noise
+        ratios["build_theirs_over_ours_median"] = th["build"] / d["build"]
+        ratios["build_canon_theirs_over_ours"] = (th["build"] + th["canonicalize"]) / (d["build"] + d["canonicalize"])
+        ratios["solve_theirs_over_ours"] = th["solve"] / d["solve"] if d["solve"] > 0 else None
+    if dk and "build" in dk:          # Drake / ours: above 1 ours is faster
+        dk["ratios"] = {k: dk[k] / d[k] if d[k] > 0 else None for k in ("build", "canonicalize", "solve")}
+        dk["ratios"]["total"] = total(dk) / total(d)
+    ratios["build_canon_over_solve"] = (d["build"] + d["canonicalize"]) / d["solve"] if d["solve"] > 0 else None
+    entry["ratios"] = ratios
+    entry["status_ok"] = (p.expect == "any" or d["status"] == p.expect
+                          or (p.expect == "optimal" and d["status"] == "optimal_inaccurate" and d.get("verified")))
+    print(f"[bench-sos] {p.name:45s} {d['status']:>18s} build {fmt_s(d['build']):>9s} canon "
+          f"{fmt_s(d['canonicalize']):>9s} solve {fmt_s(d['solve']):>9s}"
+          + (f"  theirs build {fmt_s(th['build'])}" if th and 'error' not in th else
+             (f"  theirs: {th['error'][:60]}" if th else ""))
+          + (f"  Drake/ours total {dk['ratios']['total']:.2f}x" if dk and "ratios" in dk else "")
+          + f"  ({time.perf_counter() - t0:.1f} s)", flush=True)
+    return entry
+
+
+def total(d) -> float:
+    """Build + canonicalise + solve seconds of one measurement."""
+    return d["build"] + d["canonicalize"] + d["solve"]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m problems bench-sos")
     ap.add_argument("--quick", action="store_true", help="small sizes, one repetition (smoke test)")
     ap.add_argument("--no-theirs", action="store_true", help="skip SumOfSquares.py")
+    ap.add_argument("--no-drake", action="store_true", help="skip Drake (skipped anyway when not installed)")
+    ap.add_argument("--no-sparse", action="store_true", help="skip the chained Rosenbrock / Wood rows")
+    ap.add_argument("--sparse-budget", type=float, default=None,
+                    help="wall-time budget of one sparsity row, seconds (default 120, quick 30)")
     ap.add_argument("--out", default=str(BENCH))
     args = ap.parse_args(argv)
     out_dir = Path(args.out)
     t_start = now()
+    load_start = os.getloadavg()[0]
+    drake_ok = not args.no_drake and drake_problems.available() is not None
 
     dense_ns = (2, 3) if args.quick else (2, 3, 4, 5, 6)
     probs = problems(quick=args.quick, dense_ns=dense_ns)
@@ -146,49 +208,114 @@ def main(argv=None):
         keep = {"quartic form", "Motzkin M", "SOS matrix", "probability bound (1/37)"}
         probs = [p for p in probs if p.name in keep or p.group in ("dense", "cdsp")]
     cdsp_fields()                   # fit the LASA model once, outside every timing
-    for p in probs[:3]:             # warm-up: imports, first-call caches (both libraries)
+    for p in probs[:3]:             # warm-up: imports, first-call caches (all libraries)
         p.ours()[0].solve()
         p.ours()[0].solve(backend="cvxpy")
         if not args.no_theirs:
             run_theirs(p, quick=True)
+        if drake_ok:
+            drake_problems.run_drake(p, reps_for(True))
 
-    rows = []
-    for p in probs:
-        t0 = time.perf_counter()
-        entry = {"name": p.name, "group": p.group, "expect": p.expect, "params": p.params or {}}
-        for b in BACKENDS:
-            entry[b] = run_ours(p, b, args.quick)
-        first = entry["direct"]["solve"]
-        entry["resolve"] = {b: run_resolve(p, b, args.quick, first) for b in BACKENDS}
-        entry["sumofsquares"] = None if args.no_theirs else run_theirs(p, args.quick)
-        d, th = entry["direct"], entry["sumofsquares"]
-        ratios = {"cvxpy_over_direct_total": (sum(entry["cvxpy"][k] for k in ("build", "canonicalize", "solve"))
-                                              / sum(d[k] for k in ("build", "canonicalize", "solve"))),
-                  "cvxpy_over_direct_canonicalize": entry["cvxpy"]["canonicalize"] / d["canonicalize"]}
-        if th and "error" not in th:
-            ratios["build_theirs_over_ours"] = th["build"] / d["build"]
-            ratios["build_canon_theirs_over_ours"] = (th["build"] + th["canonicalize"]) / (d["build"] + d["canonicalize"])
-            ratios["solve_theirs_over_ours"] = th["solve"] / d["solve"] if d["solve"] > 0 else None
-        ratios["build_canon_over_solve"] = (d["build"] + d["canonicalize"]) / d["solve"] if d["solve"] > 0 else None
-        entry["ratios"] = ratios
-        entry["status_ok"] = (p.expect == "any" or d["status"] == p.expect
-                              or (p.expect == "optimal" and d["status"] == "optimal_inaccurate" and d.get("verified")))
-        rows.append(entry)
-        print(f"[bench-sos] {p.name:45s} {d['status']:>18s} build {fmt_s(d['build']):>9s} canon "
-              f"{fmt_s(d['canonicalize']):>9s} solve {fmt_s(d['solve']):>9s}"
-              + (f"  theirs build {fmt_s(th['build'])}" if th and 'error' not in th else
-                 (f"  theirs: {th['error'][:60]}" if th else ""))
-              + f"  ({time.perf_counter() - t0:.1f} s)", flush=True)
-
-    result = {"benchmark": "bench-sos", "quick": args.quick, "environment": environment(),
+    rows = [measure(p, args, drake_ok) for p in probs]
+    env = environment()
+    env["load_average_start"], env["load_average_end"] = load_start, os.getloadavg()[0]
+    env["drake"] = _version("drake") if drake_ok else None
+    result = {"benchmark": "bench-sos", "quick": args.quick, "environment": env,
               "targets": TARGETS, "problems": rows}
     result["summary"] = summarize(rows)
+    by_name = {p.name: p for p in probs}
+    result["build_split"] = None        # the one-polynomial problem with the smallest speed-up
+    for _, name in sorted((r["ratios"]["build_theirs_over_ours"], r["name"]) for r in rows
+                          if r["ratios"].get("build_theirs_over_ours")):
+        result["build_split"] = build_split(by_name[name], 5 if args.quick else 50, drake_ok)
+        if result["build_split"]:
+            break
+    budget = args.sparse_budget or (30.0 if args.quick else 120.0)
+    result["sparse_budget_s"] = budget
+    result["sparse"] = None if args.no_sparse else sparse_problems.run_rows((4,) if args.quick else
+                                                                           sparse_problems.NS, budget)
+    result["summary"]["sparse_speedups"] = sparse_problems.speedups(result["sparse"] or [])
     result["profiles"] = profiles(probs, result["summary"], args.quick)
     result["elapsed_s"] = now() - t_start
     write_json(out_dir / "sos.json", result)
     (out_dir / "sos.md").write_text(markdown(result))
     print(f"[bench-sos] wrote {out_dir / 'sos.json'} and {out_dir / 'sos.md'} in {result['elapsed_s']:.0f} s")
     return 0
+
+
+def _version(dist) -> str | None:
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def build_split(p, reps, drake_ok) -> dict | None:
+    """Min and median seconds of the two stages of one build — the polynomial expression, then
+    the SOS constraint on it — in sosdyn, SumOfSquares.py and Drake, for a one-polynomial
+    problem (``ctx["fn"]``); None for other problems."""
+    _, ctx = p.ours()
+    fn = ctx.get("fn")
+    if fn is None:
+        return None
+    names = " ".join(v.vars[0] for v in ctx["vars"])
+    n = len(ctx["vars"])
+
+    def ours_expr():
+        return fn(*sd.variables(names))
+
+    def ours_sos(e):
+        sd.SOSProgram().add_sos(e)
+
+    stages = {"sosdyn": _stages(ours_expr, ours_sos, reps)}
+    try:
+        import sympy
+        from SumOfSquares import SOSProblem  # optional (the bench extra)
+        from sympy.core.cache import clear_cache
+        sparse = True                            # its Newton reduction, as in the main run
+        try:
+            syms = sympy.symbols(names)
+            SOSProblem().add_sos_constraint(sympy.expand(fn(*syms)), list(syms), sparse=True)
+        except ValueError:                       # its hull needs full-dimensional support
+            sparse = False
+        held = {}
+
+        def theirs_expr():
+            held["syms"] = sympy.symbols(names)
+            return sympy.expand(fn(*held["syms"]))
+        def theirs_sos(e):
+            SOSProblem().add_sos_constraint(e, list(held["syms"]), sparse=sparse)
+        stages["SumOfSquares.py"] = _stages(theirs_expr, theirs_sos, reps)
+        stages["SumOfSquares.py, sympy cache cleared before each build"] = _stages(
+            theirs_expr, theirs_sos, reps, before=clear_cache)
+    except ImportError:
+        pass
+    if drake_ok:
+        holder = {}
+
+        def drake_expr():
+            holder["prog"], xs = drake_problems.program(n)
+            return fn(*xs)
+        stages["Drake"] = _stages(drake_expr, lambda e: holder["prog"].AddSosConstraint(e), reps)
+    return {"problem": p.name, "repetitions": reps, "stages": stages}
+
+
+def _stages(make_expr, add_constraint, reps, before=None) -> dict:
+    """Seconds (min, median) of ``make_expr()`` and ``add_constraint(expr)``; ``before()`` runs
+    untimed ahead of each repetition."""
+    t = {"polynomial": [], "SOS constraint": [], "total": []}
+    for _ in range(reps):
+        if before is not None:
+            before()
+        t0 = now()
+        e = make_expr()
+        t1 = now()
+        add_constraint(e)
+        t2 = now()
+        t["polynomial"].append(t1 - t0)
+        t["SOS constraint"].append(t2 - t1)
+        t["total"].append(t2 - t0)
+    return {k: {"min": float(np.min(v)), "median": median(v)} for k, v in t.items()}
 
 
 def profiles(probs, summary, quick):
@@ -254,94 +381,13 @@ def summarize(rows) -> dict:
     s["solve_ratio_theirs_over_ours_geomean"] = _gmean([r["ratios"].get("solve_theirs_over_ours") for r in rows])
     s["cvxpy_over_direct_total_geomean"] = _gmean([r["ratios"]["cvxpy_over_direct_total"] for r in rows])
     s["statuses_as_expected"] = all(r["status_ok"] for r in rows)
+    dk = [(r["name"], r["drake"]["ratios"]["total"]) for r in rows if r.get("drake") and "ratios" in r["drake"]]
+    s["drake"] = {"compared": len(dk), "wins": sum(v >= 1 for _, v in dk), "geomean": _gmean([v for _, v in dk]),
+                  "min": min((v for _, v in dk), default=None), "max": max((v for _, v in dk), default=None),
+                  "min_problem": min(dk, key=lambda t: t[1])[0] if dk else None,
+                  "losses": [{"name": n, "drake_over_ours_total": v} for n, v in dk if v < 1]}
+    s["drake"]["met"] = all(v >= TARGETS["total_vs_drake"] for _, v in dk) if dk else None
     return s
-
-
-def markdown(res) -> str:
-    rows, s = res["problems"], res["summary"]
-    L = ["# SOS layer benchmark (`make bench-sos`)", "",
-         "All numbers from one run on this machine "
-         f"({res['environment'].get('processor')}, {res['environment'].get('cpus')} CPUs, Python "
-         f"{res['environment']['python']}, Clarabel {res['environment']['clarabel']}, cvxpy "
-         f"{res['environment']['cvxpy']}); ratios are the headline, seconds are secondary. "
-         "Build = wall time from plain numbers to a program with all constraints (polynomial arithmetic, "
-         "Newton polytope, Gram matching); canonicalise = conic assembly (direct) or conic assembly + cvxpy "
-         "compilation (cvxpy); solve = the solver's own time. SumOfSquares.py: build = sympy expression "
-         "to picos problem with all constraints; canonicalise = picos solve wall time minus the solver's "
-         "search time; its solver is CVXOPT (the only SDP solver picos finds here; Clarabel is not a picos "
-         "back end), so the solve ratio compares solvers, not formulations.", "",
-         "## Targets", ""]
-    bs = s["build_share"]
-    share_txt = ", ".join(f"{x['name']}: {100 * x['share']:.2f} % of {fmt_s(x['solve'])}" for x in bs["problems"])
-    rs = s["resolve"]
-    worst = max(rs["problems"], key=lambda x: x["overhead"]) if rs["problems"] else None
-    sp = s["build_speedup"]
-    L += [md_table(["target", "result", "numbers"], [
-        ["build + canonicalise ≤ 10 % of solve (solves ≥ 1 s, direct)", verdict(bs["met"]), share_txt or "no solve ≥ 1 s"],
-        ["re-solve overhead ≤ 5 ms (update + solve − solver, direct, median)", verdict(rs["met"]),
-         f"max {fmt_s(rs['max_overhead'])} ({worst['name']})" if worst else "–"],
-        ["build ≥ 50× faster than SumOfSquares.py (every problem)", verdict(sp["met"]),
-         f"min {fmt_ratio(sp['min'])} ({sp['min_problem']}), geometric mean {fmt_ratio(sp['geomean'])}, "
-         f"max {fmt_ratio(sp['max'])}" if sp["min"] else "–"],
-    ]), "",
-        f"Other ratios: cvxpy / direct total time, geometric mean {fmt_ratio(s['cvxpy_over_direct_total_geomean'])}; "
-        f"SumOfSquares (CVXOPT) / sosdyn (Clarabel) solver time, geometric mean "
-        f"{fmt_ratio(s['solve_ratio_theirs_over_ours_geomean'])}. "
-        f"Statuses as known: {'yes' if s['statuses_as_expected'] else 'NO (see table)'}.", "",
-        "## Ratios per problem", "",
-        md_table(["problem", "status (direct)", "build+canon / solve", "cvxpy / direct (total)",
-                  "SoS.py / ours build", "SoS.py / ours build+canon", "SoS.py / ours solve"],
-                 [[r["name"], r["direct"]["status"] + ("" if r["status_ok"] else " ⚠ expected " + r["expect"]),
-                   f"{100 * r['ratios']['build_canon_over_solve']:.1f} %" if r["ratios"]["build_canon_over_solve"] else "–",
-                   fmt_ratio(r["ratios"]["cvxpy_over_direct_total"]),
-                   fmt_ratio(r["ratios"].get("build_theirs_over_ours")),
-                   fmt_ratio(r["ratios"].get("build_canon_theirs_over_ours")),
-                   fmt_ratio(r["ratios"].get("solve_theirs_over_ours"))] for r in rows]), "",
-        "## Seconds and sizes", "",
-        md_table(["problem", "SDP: vars / eqs / PSD blocks", "direct: build / canon / solve",
-                  "cvxpy: build / canon / solve", "SumOfSquares.py: build / canon / solve (status)"],
-                 [[r["name"],
-                   f"{r['direct']['sizes']['variables']} / {r['direct']['sizes']['equalities']} / "
-                   f"{_blocks(r['direct']['sizes']['psd_blocks'])}",
-                   " / ".join(fmt_s(r["direct"][k]) for k in ("build", "canonicalize", "solve")),
-                   " / ".join(fmt_s(r["cvxpy"][k]) for k in ("build", "canonicalize", "solve")),
-                   (" / ".join(fmt_s(r["sumofsquares"][k]) for k in ("build", "canonicalize", "solve"))
-                    + f" ({r['sumofsquares']['status']}"
-                    + ("" if r["sumofsquares"].get("newton_reduction", True) else "; no Newton reduction: "
-                       "its hull fails on this support") + ")") if r["sumofsquares"] and "error" not in r["sumofsquares"]
-                   else (f"error: {r['sumofsquares']['error'][:80]}" if r["sumofsquares"] else "–")]
-                  for r in rows]), "",
-        "## Re-solve overhead (compile once, `con.update(p)`, solve again)", "",
-        "New numbers with the same support are prepared outside the timing; overhead = "
-        "wall(update + solve) − solver time, median over the repetitions.", "",
-        md_table(["problem", "direct: overhead (update)", "cvxpy: overhead (update)", "solver time", "reps"],
-                 [[r["name"],
-                   _res(r["resolve"]["direct"]), _res(r["resolve"]["cvxpy"]),
-                   fmt_s(r["resolve"]["direct"].get("solver")) if r["resolve"]["direct"] else "–",
-                   r["resolve"]["direct"].get("repetitions", "–") if r["resolve"]["direct"] else "–"]
-                  for r in rows if r["resolve"]["direct"]]), "",
-        ]
-    if res.get("profiles"):
-        L += ["## Profiles of the missed targets", ""]
-        for p in res["profiles"]:
-            L += [f"### {p['title']}", "", profile_markdown(p), ""]
-    L += [f"_Elapsed: {res.get('elapsed_s', 0):.0f} s._", ""]
-    return "\n".join(L)
-
-
-def _blocks(blocks):
-    if not blocks:
-        return "–"
-    c = Counter(blocks)
-    return " + ".join(f"{v}×{k}" if v > 1 else f"{k}" for k, v in sorted(c.items(), reverse=True))
-
-
-def _res(v):
-    if not v:
-        return "–"
-    if "skipped" in v:
-        return "skipped (" + v["skipped"] + ")"
-    return f"{fmt_s(v['overhead'])} ({fmt_s(v['update'])})"
 
 
 if __name__ == "__main__":

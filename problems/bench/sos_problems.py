@@ -8,21 +8,21 @@ Each ``Problem`` has
   (new polynomials prepared outside the timed region), or None;
 * ``expect``: the known status ("optimal" / "infeasible" / "any").
 
-The CDSP metric step is in :mod:`.cdsp_problems`; :func:`.catalog.problems` lists them all.
+The CDSP metric step is in :mod:`.cdsp_problems`, the Drake versions in :mod:`.drake_problems`;
+:func:`.catalog.problems` lists them all.
 SumOfSquares.py and sympy (the bench extra) are imported inside the ``theirs`` builders: they
 are optional, and only the comparison needs them.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 import sosdyn as sd
 from sosdyn.poly import PolyMatrix, Polynomial, monomials_up_to
 from sosdyn.sos import examples
-
 
 #: Newton-polytope reduction in SumOfSquares.py (``sparse=``); the runner retries with False when
 #: its hull computation fails (it needs a full-dimensional point set, e.g. not a binary form).
@@ -297,8 +297,7 @@ def dense_theirs(n):
 
 def dense_resolve(n):
     def make(prog, ctx, rng):
-        names, exps, _ = dense_data(n, seed=int(rng.integers(1 << 30)))
-        _, exps2, coef2 = dense_data(n, seed=int(rng.integers(1 << 30)))
+        names, exps2, coef2 = dense_data(n, seed=int(rng.integers(1 << 30)))
         new = Polynomial(names, exps2, coef2)
         con = ctx["cons"][0]
 

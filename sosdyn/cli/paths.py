@@ -57,3 +57,31 @@ def check_folder(folder: Path, *, create: bool = False) -> None:
         target = folder.parent
     if not os.access(target, os.W_OK | os.X_OK):
         raise InputError(f"cannot write in the folder {target} (permission denied). Try: choose another --out.")
+
+
+DEMO_SUFFIXES = (".csv", ".npy")
+_GLOB_CHARS = frozenset("*?[")
+
+
+def demo_inputs(specs: Sequence[str]) -> list[Path]:
+    """The demonstration files that ``specs`` name, in order, each once: a file as given, a
+    folder as its ``*.csv`` and ``*.npy`` files (sorted by name, not recursive), a pattern with
+    ``*``, ``?`` or ``[`` as its matching files (sorted; quote it so the shell leaves it alone).
+    FileNotFoundError / InputError when a spec names nothing."""
+    files: list[Path] = []
+    for spec in specs:
+        path = Path(spec)
+        if _GLOB_CHARS & set(spec):
+            anchor = Path(path.anchor) if path.is_absolute() else Path()
+            found = sorted(p for p in anchor.glob(str(path.relative_to(anchor))) if p.is_file())
+            if not found:
+                raise InputError(f"no file matches {spec}. Try: check the pattern (e.g. 'demos/*.csv').")
+        elif path.is_dir():
+            found = sorted(p for p in path.iterdir() if p.suffix.lower() in DEMO_SUFFIXES and p.is_file())
+            if not found:
+                raise InputError(f"the folder {path} holds no .csv or .npy file. Try: the folder of the "
+                                 "demonstration files, or the files themselves.")
+        else:
+            found = [existing(path, "demonstration file")]
+        files.extend(p for p in found if not any(same_file(p, q) for q in files))
+    return files

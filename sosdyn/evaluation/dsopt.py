@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import csv
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -125,6 +125,34 @@ def nearest_demo_score(train, test) -> float:
 # ---------------------------------------------------------------- one shape
 
 
+def reproduction_scores(field: Callable, curves) -> tuple[list[float], int, str | None]:
+    """Protocol steps 2-3 on ``curves`` (demonstrations): (DTWD of each reproduction from its
+    20th point, reproduction length, None); a diverging reproduction (SolverError) scores inf
+    for every curve, length 0, and its message."""
+    try:
+        reps = euler_reproduce(field, start_points(curves))
+    except SolverError as exc:
+        return [np.inf] * len(curves), 0, str(exc)
+    return [dtwd(r, d.pos).total for r, d in zip(reps, curves)], len(reps[0]), None
+
+
+def select_fit(fit_fns: Mapping[str, Callable], train) -> tuple[str, object, dict[str, float]]:
+    """Model selection on the training demonstrations only: fit every candidate
+    ``fit_fns[name](train)`` and keep the one whose protocol reproductions from the training
+    demonstrations' own 20th points are closest to them (lowest mean DTWD,
+    :func:`reproduction_scores`; ties: first name). Nothing but ``train`` is seen, so test
+    demonstrations cannot leak into the choice. Returns (name, model, {name: training DTWD})."""
+    if not fit_fns:
+        raise InputError("select_fit needs at least one candidate. Try: {'ica': fit_a, 'cubic': fit_b}.")
+    models, scores = {}, {}
+    for name, fit_fn in fit_fns.items():
+        models[name] = fit_fn(train)
+        scores[name] = float(np.mean(reproduction_scores(getattr(models[name], "predict", models[name]),
+                                                         train)[0]))
+    best = min(scores, key=scores.get)
+    return best, models[best], scores
+
+
 def evaluate_shape(fit_fn: Callable, demos) -> dict:
     """The whole protocol on one shape's demonstrations (7, e.g. ``sosdyn.load_lasa(name)``).
 
@@ -147,15 +175,10 @@ def evaluate_shape(fit_fn: Callable, demos) -> dict:
     result = {"name": getattr(demos, "name", ""), "fit_s": fit_s, "failure": None}
     t0 = time.perf_counter()
     for part, curves in (("train", train), ("test", test)):
-        try:
-            reps = euler_reproduce(field, start_points(curves))
-        except SolverError as exc:
-            result.update({f"dtwd_{part}": [np.inf] * len(curves), f"dtwd_{part}_mean": np.inf,
-                           f"n_points_{part}": 0, "failure": str(exc)})
-            continue
-        scores = [dtwd(r, d.pos).total for r, d in zip(reps, curves)]
+        scores, n_points, failure = reproduction_scores(field, curves)
         result.update({f"dtwd_{part}": scores, f"dtwd_{part}_mean": float(np.mean(scores)),
-                       f"n_points_{part}": len(reps[0])})
+                       f"n_points_{part}": n_points})
+        result["failure"] = failure or result["failure"]
     result["reproduce_s"] = time.perf_counter() - t0
     result["nearest_demo"] = nearest_demo_score(train, test)
     return result
@@ -186,5 +209,5 @@ def load_seds_published(path) -> dict[str, dict[str, float]]:
 
 __all__ = [
     "SINGLE_PATTERN_SHAPES", "split", "start_points", "euler_reproduce",
-    "nearest_demo_score", "evaluate_shape", "load_seds_published",
+    "nearest_demo_score", "reproduction_scores", "select_fit", "evaluate_shape", "load_seds_published",
 ]

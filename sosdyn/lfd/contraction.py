@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..poly import PolyMatrix, Polynomial, jacobian, monomial_gradients, monomial_values, monomials_up_to
+from ..poly import PolyMatrix, Polynomial, monomial_gradients, monomial_values, monomials_up_to, variable_names
+from ..poly.termarrays import (concat_terms, matrix_terms, terms_directional_derivative, terms_jacobian, terms_matmul,
+                               terms_scale, terms_transpose)
 
 SAMPLE_BOX = 2.0            # sampled states lie in |z|_inf <= 2: twice the data box
 
@@ -92,9 +94,13 @@ def contraction_matrices(C, fexps, W, mexps, Z, gamma):
     J = eval_jacobians(C, fexps, Z)
     F = eval_fields(C, fexps, Z)
     M = eval_metric(W, mexps, Z)[:, None]
-    dM = eval_metric_gradient(W, mexps, Z)
-    Mdot = np.einsum("nlab,nkl->nkab", dM, F)
-    JtM = np.einsum("nkia,nkib->nkab", J, M.repeat(J.shape[1], axis=1))
+    N, n = Z.shape
+    if degree(mexps) > 0:
+        dM = eval_metric_gradient(W, mexps, Z).reshape(N, n, n * n)
+        Mdot = (F @ dM).reshape(N, -1, n, n)                      # sum_l F[n,k,l] dM[n,l,a,b]
+    else:
+        Mdot = 0.0                                                # a constant metric: dM = 0
+    JtM = np.swapaxes(J, -1, -2) @ M
     return JtM + np.swapaxes(JtM, -1, -2) + Mdot + gamma * M
 
 
@@ -151,10 +157,17 @@ def numeric_metric(W, exps, vars):
 
 
 def contraction_polymatrix(f, M, vars, gamma):
-    """G(z) = J^T M + M J + dM[f] + gamma M as a PolyMatrix (f: list of n Polynomials)."""
-    J = jacobian(f, vars)
-    JtM = J.T @ M
-    return JtM + JtM.T + M.directional_derivative(f, vars) + gamma * M
+    """G(z) = J^T M + M J + dM[f] + gamma M as a PolyMatrix (f: list of n Polynomials).
+
+    Computed on term arrays (:class:`~sosdyn.poly.termarrays.Terms`): J^T M is one join of the
+    Jacobian's terms with M's on the inner index, dM[f] one join of dM/dz_l with f_l, and like
+    terms are combined once for the whole matrix -- no loop over its n x n entries."""
+    vars = variable_names(vars)
+    n = len(vars)
+    ft, mt = matrix_terms(list(f), vars), M.terms(vars)
+    JtM = terms_matmul(terms_transpose(terms_jacobian(ft, n)), mt)
+    G = concat_terms(JtM, terms_transpose(JtM), terms_directional_derivative(mt, ft, n), terms_scale(mt, gamma))
+    return PolyMatrix.from_terms(G, (n, n), vars)
 
 
 def certificate_matrices(C, fexps, W, mexps, gamma, eps) -> list:

@@ -17,6 +17,7 @@ from sosdyn.errors import DemonstrationError, InputError
 
 MIN_SAMPLES = 10
 GOAL_TOL_FRACTION = 0.05
+MAX_UNITS_CHARS = 32           # the units' name, e.g. 'mm' (a model file holds it)
 _SG_WINDOW, _SG_ORDER = 9, 3
 
 
@@ -73,7 +74,11 @@ class Demonstrations(Sequence):
                     f"Item {i} is a {type(demo).__name__}, not a Demonstration; build it with "
                     "Demonstration(t, pos, vel) or Demonstration.from_positions(t, pos)."
                 )
-        self._demos, self._name, self._units = demos, str(name), str(units)
+        units = str(units)
+        if len(units) > MAX_UNITS_CHARS or not units.isprintable():
+            raise InputError(f"units must be printable and at most {MAX_UNITS_CHARS} characters, got "
+                             f"{units!r:.60}. Try: a short name such as 'm' or 'mm'.")
+        self._demos, self._name, self._units = demos, str(name), units
 
     name = property(lambda self: self._name, doc="Name of the set, e.g. 'Leaf_1' or a file stem.")
     units = property(lambda self: self._units, doc="Position units, e.g. 'mm' for LASA.")
@@ -233,6 +238,7 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
         raise DemonstrationError(
             f"{_label(worst, items[worst], name)} ends {spread[worst]:.4g} {demos.units or 'units'} "
             f"from the mean end point, more than goal_tol = {goal_tol:.4g}; the demonstrations do "
-            "not share a goal. Trim or drop that demo, or pass a larger goal_tol."
+            f"not share a goal. Try: trim or drop that demo, or a larger goal_tol (e.g. "
+            f"{1.1 * spread[worst]:.3g}; sosdyn fit --goal-tol)."
         )
     return demos

@@ -22,7 +22,7 @@ _SNIFF_LINES = 50
 _DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab", None: "whitespace"}
 _DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
 _NO_TIME_HINT = ("name the time column t, time or timestamp, pass time_column=..., or pass "
-                 "dt=<sampling step in s> if the samples are equally spaced")
+                 "dt=<sampling step in s> (sosdyn fit --dt) if the samples are equally spaced")
 
 
 @dataclass(frozen=True)

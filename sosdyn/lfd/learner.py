@@ -45,6 +45,7 @@ class Settings:
     tol: float
     eps: float
     margin: float
+    metric_prox: float
     refine_gmm: bool
 
     @classmethod
@@ -172,13 +173,14 @@ def stage_a(data: LeastSquaresData, fexps, mexps, s: Settings, history: History)
 
 
 def alternate(data: LeastSquaresData, dyn: DynamicsStep, C, W, fexps, mexps, s: Settings, history: History):
-    """Plain alternation: metric step (max margin) then dynamics step, until no progress: (C, W)."""
+    """Alternation: metric step (max margin, proximal to the current metric if ``s.metric_prox``)
+    then dynamics step, until no progress: (C, W)."""
     K, n, _ = data.shape
     grow = margin_degree(W, mexps, fexps)
     met = MetricStep(n, K, mexps, fexps, state_variables(n), s.gamma, s.eps, grow_degree=grow,
                      solver=s.solver)
     for _ in range(s.max_iter):
-        W_new, t, sol = met.solve(C)
+        W_new, t, sol = met.solve(C, W, s.metric_prox)
         history.record("metric", data.cost(C), sol, margin=t)
         if t <= NO_ROOM:
             break

@@ -19,8 +19,21 @@ METHODS = ("alternating", "ica")
 METRICS = ("learned", "identity")
 MAX_SEED = 2**32 - 1            # numpy's and sklearn's bound on an integer seed
 PARAMS = ("n_components", "metric_degree", "field_degree", "gamma", "metric", "solver",
-          "solver_method", "max_iter", "tol", "eps", "margin", "refine_gmm", "max_samples",
+          "solver_method", "max_iter", "tol", "eps", "margin", "metric_prox", "refine_gmm", "max_samples",
           "random_state", "verify_samples", "allow_uncertified")      # what get_params and a file hold
+#: Named configurations (``CDSP.preset(name)``): the parameters each sets, the rest default.
+#: "paper": the paper's formulation as first implemented (K = 6 linear sub-systems, constant
+#: metric, plain alternation with the max-margin metric step) -- the reproduction's base;
+#: "ica": the same model learned by the inner convex approximation (CDSP() is "ica" with K = 8);
+#: "cubic": cubic sub-systems, degree-2 metric M(z), started from "ica", proximal alternation.
+PRESETS = {
+    "paper": {"n_components": 6, "metric_degree": 0, "field_degree": 1, "gamma": 0.1,
+              "solver_method": "alternating", "metric_prox": 0.0},
+    "ica": {"n_components": 6, "metric_degree": 0, "field_degree": 1, "gamma": 0.1, "solver_method": "ica"},
+    "cubic": {"n_components": 6, "metric_degree": 2, "field_degree": 3, "gamma": 0.1, "solver_method": "ica"},
+}
+#: Parameters added after version-1 model files were written, with the value those fits used.
+LEGACY_PARAMS = {"metric_prox": 0.0}
 
 
 def check_params(p: Mapping, defaults: Mapping) -> None:
@@ -61,6 +74,9 @@ def check_params(p: Mapping, defaults: Mapping) -> None:
             "be negative definite, so no certificate exists; use field_degree 1 or 3")
     for name in ("gamma", "eps", "tol", "margin"):
         positive(name)
+    v = p["metric_prox"]
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, Real) or not np.isfinite(v) or v < 0:
+        fail("metric_prox", "a finite number >= 0")
     choice("metric", METRICS)
     choice("solver_method", METHODS)
     if not isinstance(p["solver"], str) or not p["solver"]:
@@ -78,9 +94,13 @@ def check_params(p: Mapping, defaults: Mapping) -> None:
             fail(name, "True or False")
     if p.get("progress") is not None and not callable(p["progress"]):
         fail("progress", "None or a function called with each history row")
-    if p["solver_method"] == "ica" and p["metric"] == "identity":
-        raise InputError("solver_method='ica' learns the metric; with metric='identity' there is "
-                         "nothing to alternate: use solver_method='alternating'")
+
+
+def preset_params(name: str) -> dict:
+    """The parameters of the preset ``name`` (:data:`PRESETS`); InputError for an unknown name."""
+    if not isinstance(name, str) or name not in PRESETS:
+        raise InputError(f"unknown preset {name!r}. Try: one of {tuple(PRESETS)}.")
+    return dict(PRESETS[name])
 
 
 def check_solver(solver: str) -> None:

@@ -3,7 +3,8 @@
 Everything here is exponent arrays and coefficient arrays; no solver, no sympy in the hot
 path (sympy conversion is in :mod:`sosdyn.poly.sympy_io`). Modules, bottom up: ``decision``
 (decision ids), ``monomials`` (exponent rows), ``evaluation`` (monomial values and
-gradients at points), ``checks`` (admissible data), ``polynomial``, ``matrix``, ``sympy_io``.
+gradients at points), ``checks`` (admissible data), ``polynomial``, ``termarrays`` (polynomial
+matrices as flat term arrays), ``matrix``, ``sympy_io``.
 """
 from .checks import MAX_COEFFICIENT, check_terms_size, finite_points, real_array
 from .decision import allocate

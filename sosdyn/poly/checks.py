@@ -6,7 +6,7 @@ The rules (see :mod:`.polynomial`, which applies them whenever a polynomial is m
   of two admissible coefficients is finite (1e300 < 1.8e308, the float64 maximum);
 * total degrees are <= ``MAX_DEGREE`` (:mod:`.monomials`);
 * the arrays of a product, and of combining like terms, fit ``sosdyn.limits`` (max_bytes);
-* evaluation points are real and finite.
+* evaluation points are real and finite (ordered_points puts them in a polynomial's variable order).
 
 Each check raises :class:`~sosdyn.errors.PolynomialError` (or ResourceLimitError for sizes)
 with what to try.
@@ -89,3 +89,27 @@ def check_terms_size(nterms: int, nvars: int, ncoef: int, what: str) -> None:
     (nterms x ncoef) arrays, and their sorted copies made while combining like terms.
     """
     check_bytes(16.0 * nterms * (nvars + ncoef), f"{what} ({nterms} terms before combining)", SIZE_HINT)
+
+
+def ordered_points(X, own: tuple, vars=None) -> np.ndarray:
+    """Finite points as rows with columns in ``own`` order (a polynomial's variables).
+
+    ``X`` is a dict {name: values} (one value, or equally many, for each of ``own``), or an
+    array whose rows are points with columns in ``vars`` order (default ``own``).
+    """
+    if isinstance(X, dict):
+        missing = [v for v in own if v not in X]
+        cols = [finite_points(X[v], f"values of {v!r}").ravel() for v in own if not missing]
+        if missing or len({c.size for c in cols} - {1}) > 1:
+            raise PolynomialError(f"p(dict) needs one value (or equally many) for each of {own}; "
+                                  f"missing {missing}. Try: p({{'x': xs, 'y': ys}}) with every name")
+        return np.column_stack(np.broadcast_arrays(*cols)) if cols else np.zeros((1, 0))
+    X = finite_points(X)
+    vars = own if vars is None else tuple(vars)
+    X = X.reshape(-1, len(vars)) if X.ndim <= 1 else X
+    if X.shape[1] != len(vars):
+        raise PolynomialError(f"points have {X.shape[1]} columns for variables {vars}")
+    missing = [v for v in own if v not in vars]
+    if missing:
+        raise PolynomialError(f"no value given for variables {missing}")
+    return X[:, [vars.index(v) for v in own]]

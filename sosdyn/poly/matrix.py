@@ -4,16 +4,24 @@ A :class:`PolyMatrix` is a 2-D array of :class:`Polynomial` entries (an object a
 numeric matrices combine with it by the usual operators: ``A.T @ M + M @ A``. Entries and
 numeric operands obey the polynomial layer's rules (:mod:`.polynomial`: real, finite,
 |c| <= 1e150), and so do evaluation points.
+
+Products, sums and the symmetry check run on flat term arrays (:mod:`.termarrays`: one join
+and one sort per operation, no loop over entry pairs) whenever the polynomial entries share
+one variable tuple; a PolyMatrix keeps its term arrays (entries never change in place), so a
+matrix used in many products is decomposed once.
 """
 from __future__ import annotations
 
 from numbers import Number
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import NotSymmetricError, PolynomialError
 from .checks import finite_points, real_array
 from .polynomial import Polynomial, variable_names
+from .termarrays import (Terms, combine, concat_terms, matrix_terms, terms_entries, terms_matmul, terms_scale,
+                         terms_transpose)
 
 
 def _entry(value, vars=()) -> Polynomial:
@@ -35,9 +43,24 @@ class PolyMatrix:
             arr = arr.reshape(-1, 1)
         if arr.ndim != 2:
             raise PolynomialError(f"a PolyMatrix needs a 2-D array of entries, got ndim={arr.ndim}")
+        self._cache: dict = {}                      # vars and term arrays: entries never change in place
+        if all(type(v) is Polynomial for v in arr.flat):
+            self.entries = arr                      # np.array made a new array: nothing shared
+            return
         out = np.empty(arr.shape, dtype=object)
+        numbers: dict = {}                          # one constant Polynomial per distinct number
         for idx, v in np.ndenumerate(arr):
-            out[idx] = _entry(v)
+            if isinstance(v, Polynomial):
+                out[idx] = v
+            else:
+                key = (type(v), v) if isinstance(v, Number) else None
+                if key is None or key not in numbers:
+                    entry = _entry(v)
+                    if key is None:
+                        out[idx] = entry
+                        continue
+                    numbers[key] = entry
+                out[idx] = numbers[key]
         self.entries = out
 
     # ------------------------------------------------------------------ construction
@@ -52,14 +75,33 @@ class PolyMatrix:
 
     @property
     def T(self) -> "PolyMatrix":
-        return PolyMatrix(self.entries.T)
+        out = PolyMatrix(self.entries.T)
+        out._cache = {k: terms_transpose(v) if isinstance(v, Terms) else v for k, v in self._cache.items()}
+        return out
+
+    @classmethod
+    def from_terms(cls, t: Terms, shape, vars) -> "PolyMatrix":
+        """The matrix of term arrays ``t`` over ``vars``; the combined terms are kept for later products."""
+        t, _ = combine(t)
+        out = cls(terms_entries(t, shape, vars))
+        out._cache.update({("terms", vars): t, "vars": vars, "var_tuples": {vars}})
+        return out
 
     @property
     def vars(self) -> tuple:
-        out: list = []
-        for p in self.entries.flat:
-            out += [v for v in p.vars if v not in out]
-        return tuple(out)
+        if "vars" not in self._cache:
+            out: list = []
+            for vars in dict.fromkeys(p.vars for p in self.entries.flat):
+                out += [v for v in vars if v not in out]
+            self._cache["vars"] = tuple(out)
+        return self._cache["vars"]
+
+    def terms(self, vars) -> Terms:
+        """The entries' term arrays over ``vars`` (:mod:`.termarrays`), computed once per vars."""
+        key = ("terms", tuple(vars))
+        if key not in self._cache:
+            self._cache[key] = matrix_terms(self.entries, tuple(vars))
+        return self._cache[key]
 
     @property
     def ids(self) -> np.ndarray:
@@ -98,14 +140,22 @@ class PolyMatrix:
             raise PolynomialError(f"shape mismatch: {self.shape} and {other.shape}")
 
     def __add__(self, other):
+        right = other if isinstance(other, PolyMatrix) else None
         other = self._operand(other)
         self._check_same_shape(other)
+        if isinstance(other, np.ndarray) and other.shape == self.shape:
+            vars = _shared_vars(self, right or other)
+            if vars is not None:           # on term arrays: one sort for the whole matrix
+                t = concat_terms(self.terms(vars), _terms_of(right or other, vars))
+                return PolyMatrix.from_terms(t, self.shape, vars)
         return PolyMatrix(self.entries + other)
 
     __radd__ = __add__
 
     def __neg__(self):
-        return PolyMatrix(-self.entries)
+        out = PolyMatrix(-self.entries)
+        out._cache = {k: terms_scale(v, -1.0) if isinstance(v, Terms) else v for k, v in self._cache.items()}
+        return out
 
     def __sub__(self, other):
         return self + (-PolyMatrix(self._operand(other)) if isinstance(other, (PolyMatrix, np.ndarray, list)) else -other)
@@ -121,20 +171,21 @@ class PolyMatrix:
     __rmul__ = __mul__
 
     def __matmul__(self, other):
+        right = other if isinstance(other, PolyMatrix) else None
         other = self._operand(other)
         if not isinstance(other, np.ndarray):
             raise PolynomialError("@ needs a matrix operand")
         other = other.reshape(-1, 1) if other.ndim == 1 else other
         if self.shape[1] != other.shape[0]:
             raise PolynomialError(f"cannot multiply {self.shape} by {other.shape}")
-        return PolyMatrix(self.entries @ other)
+        return matrix_product(self, right or other)
 
     def __rmatmul__(self, other):
         other = self._operand(other)
         other = other.reshape(1, -1) if other.ndim == 1 else other
         if other.shape[1] != self.shape[0]:
             raise PolynomialError(f"cannot multiply {other.shape} by {self.shape}")
-        return PolyMatrix(other @ self.entries)
+        return matrix_product(other, self)
 
     # ------------------------------------------------------------------ calculus
     def map(self, fn) -> "PolyMatrix":
@@ -165,23 +216,32 @@ class PolyMatrix:
             out[:, i, j] = p(X, vars)
         return out
 
+    def asymmetry(self) -> np.ndarray:
+        """(r, r) array: the largest |coefficient| of P_ij - P_ji relative to max(1, the largest
+        |coefficient| of P), so that round-off of large products is not asymmetry (one sort)."""
+        t = self.terms(self.vars)
+        d, _ = combine(concat_terms(t, terms_scale(terms_transpose(t), -1.0)))
+        out = np.zeros(self.shape)
+        np.maximum.at(out, (d.row, d.col), np.abs(d.val))
+        return out / max(1.0, float(np.abs(t.val).max(initial=0.0)))
+
     def is_symmetric(self, atol: float = 1e-12) -> bool:
         r, c = self.shape
-        return r == c and all(self.entries[i, j].allclose(self.entries[j, i], atol)
-                              for i in range(r) for j in range(i + 1, r))
+        return r == c and bool((self.asymmetry() <= atol).all())
 
     def check_symmetric(self, what: str = "matrix", atol: float = 1e-12) -> "PolyMatrix":
-        """Raise :class:`NotSymmetricError` naming the first asymmetric entry pair."""
+        """Raise :class:`NotSymmetricError` naming the first entry pair (row-major) whose difference
+        exceeds ``atol`` relative to max(1, the largest |coefficient|)."""
         r, c = self.shape
         if r != c:
             raise NotSymmetricError(f"{what} must be square, got shape {self.shape}")
-        for i in range(r):
-            for j in range(i + 1, r):
-                if not self.entries[i, j].allclose(self.entries[j, i], atol):
-                    diff = self.entries[i, j] - self.entries[j, i]
-                    raise NotSymmetricError(
-                        f"{what} is not symmetric: entries ({i},{j}) and ({j},{i}) differ by "
-                        f"{_short(diff)}; symmetrise it, e.g. (P + P.T) * 0.5")
+        bad = np.argwhere(np.triu(self.asymmetry() > atol, 1))
+        if bad.size:
+            i, j = (int(v) for v in bad[0])
+            diff = self.entries[i, j] - self.entries[j, i]
+            raise NotSymmetricError(
+                f"{what} is not symmetric: entries ({i},{j}) and ({j},{i}) differ by "
+                f"{_short(diff)}; symmetrise it, e.g. (P + P.T) * 0.5")
         return self
 
     def __repr__(self) -> str:
@@ -194,8 +254,43 @@ def _short(p, limit: int = 120) -> str:
     return text if len(text) <= limit else text[:limit] + " ..."
 
 
+def matrix_product(a, b) -> PolyMatrix:
+    """a @ b for PolyMatrices or 2-D arrays of Polynomials or numbers: on term arrays (one join,
+    one sort) when the polynomial entries share one variable tuple (every entry of the result is
+    then over it), else entry by entry."""
+    vars = _shared_vars(a, b)
+    if vars is None:
+        return PolyMatrix(_entries_of(a) @ _entries_of(b))
+    return PolyMatrix.from_terms(terms_matmul(_terms_of(a, vars), _terms_of(b, vars)), (a.shape[0], b.shape[1]), vars)
+
+
+def _terms_of(x, vars) -> Terms:
+    return x.terms(vars) if isinstance(x, PolyMatrix) else matrix_terms(x, vars)
+
+
+def _entries_of(x) -> np.ndarray:
+    return x.entries if isinstance(x, PolyMatrix) else x
+
+
+def _var_tuples(x) -> set:
+    """The distinct non-empty variable tuples of the Polynomial entries of x."""
+    if isinstance(x, PolyMatrix):
+        if "var_tuples" not in x._cache:
+            x._cache["var_tuples"] = _var_tuples(x.entries)
+        return x._cache["var_tuples"]
+    return {p.vars for p in np.asarray(x, dtype=object).flat if isinstance(p, Polynomial) and p.vars}
+
+
+def _shared_vars(*operands):
+    """The one variable tuple of the operands' non-constant-free Polynomial entries, or None."""
+    found = set().union(*(_var_tuples(x) for x in operands))
+    return found.pop() if len(found) == 1 else None
+
+
 def jacobian(field, vars) -> PolyMatrix:
     """J_ij = d f_i / d x_j of a polynomial vector field f (a sequence of Polynomials)."""
     vars = variable_names(vars)
     return PolyMatrix([[f.diff(v) if isinstance(f, Polynomial) else Polynomial.constant(0.0)
                         for v in vars] for f in field])
+
+

@@ -63,6 +63,22 @@ def sum_rows(exps: np.ndarray, coef: np.ndarray):
     return uniq, np.add.reduceat(coef[order], starts, axis=0)
 
 
+def combine_terms(exps: np.ndarray, coef: np.ndarray, ids: np.ndarray, sort: bool = True):
+    """Canonical terms: like monomials summed (and rows sorted) when ``sort``, terms whose
+    coefficient row is all zero dropped, decision ids no coefficient uses dropped."""
+    if sort and exps.shape[0] > 1:
+        exps, coef = sum_rows(exps, coef)
+    nonzero = coef != 0.0
+    keep = nonzero.any(axis=1)
+    if not keep.all():
+        exps, coef, nonzero = exps[keep], coef[keep], nonzero[keep]
+    if ids.size:
+        used = nonzero[:, 1:].any(axis=0)
+        if not used.all():
+            coef, ids = coef[:, np.concatenate(([True], used))], ids[used]
+    return exps, coef, ids
+
+
 def monomials_up_to(n: int, degree: int, min_degree: int = 0,
                     max_per_var: np.ndarray | None = None) -> np.ndarray:
     """All exponent vectors in n variables with min_degree <= |alpha| <= degree.

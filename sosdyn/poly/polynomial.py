@@ -14,10 +14,14 @@ decision variables, so every result stays affine in d (the form an SOS program n
 Admissible data (:mod:`.checks`, applied whenever a polynomial is made, so also after every
 operation): real, finite coefficients with |c| <= ``MAX_COEFFICIENT`` = 1e150 (an operation
 whose result breaks the rule -- an overflow -- raises too); non-negative integer exponents of
-total degree <= ``MAX_DEGREE``, checked before a power is expanded (``canonical=True`` marks
-exponent rows already in canonical form, made by sosdyn itself: they are not checked again);
+total degree <= ``MAX_DEGREE``, checked before a power is expanded. Results of operations are
+made by ``Polynomial._made`` from admissible operands: their exponents are sums of admissible
+ones, so only what an operation can break is checked again (coefficients always, the degree
+of a product); ``canonical=True`` marks given rows already in canonical form;
 arrays of products and of combining like terms within ``sosdyn.limits``; finite evaluation
-points. Evaluation is :func:`.evaluation.monomial_values` times the coefficients.
+points. Evaluation is :func:`.evaluation.monomial_values` times the coefficients, at points
+given by name (a dict) or as columns in ``vars`` order; ``==`` compares by value; the variable
+order of a result and the printing rules are in :mod:`.terms`.
 """
 from __future__ import annotations
 
@@ -26,10 +30,11 @@ from numbers import Number
 import numpy as np
 
 from ..errors import PolynomialError
-from .checks import (check_coefficients, check_degree, check_exponents, check_terms_size, finite_points,
+from .checks import (check_coefficients, check_degree, check_exponents, check_terms_size, ordered_points,
                      real_array)
 from .evaluation import monomial_values
-from .monomials import MAX_DEGREE, match_rows, sum_rows
+from .monomials import MAX_DEGREE, combine_terms, match_rows, sum_rows
+from .terms import canonical_key, format_terms, merged_vars
 
 
 def _scalar(value) -> float:
@@ -64,22 +69,32 @@ class Polynomial:
                 check_degree(int(exps.sum(axis=1).max()), "a polynomial")
         check_coefficients(coef)
         if not canonical:
-            if exps.shape[0] > 1:
-                exps, coef = sum_rows(exps, coef)
-            keep = (coef != 0.0).any(axis=1)
-            if not keep.all():
-                exps, coef = exps[keep], coef[keep]
-            if ids.size:
-                used = (coef[:, 1:] != 0.0).any(axis=0)
-                if not used.all():
-                    coef, ids = coef[:, np.concatenate(([True], used))], ids[used]
+            exps, coef, ids = combine_terms(exps, coef, ids)
         self.exps, self.coef, self.ids = exps, coef, ids
+
+    @classmethod
+    def _made(cls, vars: tuple, exps, coef, ids, sort: bool = True) -> "Polynomial":
+        """The polynomial of arrays an operation computed from admissible polynomials (int64
+        exponents >= 0 of checked degree, sorted ids): terms combined (see combine_terms; rows
+        sorted when ``sort``), then the coefficients checked, which an operation can overflow."""
+        exps, coef, ids = combine_terms(exps, coef, ids, sort)
+        check_coefficients(coef)
+        return cls._bare(vars, exps, coef, ids)
+
+    @classmethod
+    def _bare(cls, vars: tuple, exps, coef, ids) -> "Polynomial":
+        """The polynomial of arrays already admissible and canonical (nothing checked)."""
+        self = object.__new__(cls)
+        self.vars, self.exps, self.coef, self.ids = vars, exps, coef, ids
+        return self
 
     # ------------------------------------------------------------------ construction
     @classmethod
     def constant(cls, value: float, vars=()) -> "Polynomial":
         """The constant polynomial ``value``."""
-        return cls(vars, np.zeros((1, len(vars)), dtype=np.int64), [_scalar(value)])
+        vars = tuple(vars)
+        return cls._made(vars, np.zeros((1, len(vars)), dtype=np.int64), np.array([[_scalar(value)]]),
+                         np.zeros(0, dtype=np.int64), sort=False)
 
     @classmethod
     def affine(cls, ids, coefs, const: float = 0.0, vars=()) -> "Polynomial":
@@ -87,7 +102,7 @@ class Polynomial:
         ids = np.asarray(ids, dtype=np.int64)
         order = np.argsort(ids)
         row = np.r_[_scalar(const), real_array(coefs)[order]][None, :]
-        return cls(vars, np.zeros((1, len(vars)), dtype=np.int64), row, ids[order])
+        return cls._made(tuple(vars), np.zeros((1, len(vars)), dtype=np.int64), row, ids[order], sort=False)
 
     # ------------------------------------------------------------------ properties
     @property
@@ -130,7 +145,10 @@ class Polynomial:
         for j, v in enumerate(self.vars):
             if v in vars:
                 exps[:, vars.index(v)] = self.exps[:, j]
-        return Polynomial(vars, exps, self.coef, self.ids)
+        coef = self.coef
+        if self.nterms > 1:                 # distinct rows: only sorted again, in the new order
+            exps, coef = sum_rows(exps, coef)
+        return Polynomial._bare(vars, exps, coef, self.ids)
 
     def with_ids(self, ids) -> "Polynomial":
         """The same polynomial with coefficient columns for the decision ids ``ids`` (a superset)."""
@@ -141,11 +159,11 @@ class Polynomial:
         coef = np.zeros((self.nterms, 1 + ids.size))
         coef[:, 0] = self.coef[:, 0]
         coef[:, 1 + np.searchsorted(ids, self.ids)] = self.coef[:, 1:]
-        return Polynomial(self.vars, self.exps, coef, ids, canonical=True)
+        return Polynomial._bare(self.vars, self.exps, coef, ids)
 
     def _align(self, other: "Polynomial"):
         if self.vars != other.vars:
-            vars = self.vars + tuple(v for v in other.vars if v not in self.vars)
+            vars = merged_vars(self.vars, other.vars)
             a, b = self.with_vars(vars), other.with_vars(vars)
         else:
             a, b = self, other
@@ -167,12 +185,13 @@ class Polynomial:
         if other is NotImplemented:
             return NotImplemented
         a, b = self._align(other)
-        return Polynomial(a.vars, np.vstack([a.exps, b.exps]), np.vstack([a.coef, b.coef]), a.ids)
+        check_terms_size(a.nterms + b.nterms, a.nvars, a.coef.shape[1], "combining like terms")
+        return Polynomial._made(a.vars, np.vstack([a.exps, b.exps]), np.vstack([a.coef, b.coef]), a.ids)
 
     __radd__ = __add__
 
     def __neg__(self):
-        return Polynomial(self.vars, self.exps, -self.coef, self.ids, canonical=True)
+        return Polynomial._made(self.vars, self.exps, -self.coef, self.ids, sort=False)
 
     def __sub__(self, other):
         other = self._coerce(other)
@@ -188,7 +207,7 @@ class Polynomial:
 
     def __mul__(self, other):
         if isinstance(other, Number) or (isinstance(other, np.ndarray) and other.ndim == 0):
-            return Polynomial(self.vars, self.exps, self.coef * _scalar(other), self.ids)
+            return Polynomial._made(self.vars, self.exps, self.coef * _scalar(other), self.ids, sort=False)
         if not isinstance(other, Polynomial):
             return NotImplemented
         if not self.is_numeric and not other.is_numeric:
@@ -197,12 +216,14 @@ class Polynomial:
                 "affine in them (a bilinear term); fix one factor to numbers first")
         a, b = (other, self) if self.is_numeric and not other.is_numeric else (self, other)  # b numeric
         if a.vars != b.vars:
-            vars = a.vars + tuple(v for v in b.vars if v not in a.vars)
+            vars = merged_vars(a.vars, b.vars)
             a, b = a.with_vars(vars), b.with_vars(vars)
         check_terms_size(a.nterms * b.nterms, a.nvars, a.coef.shape[1], "a product")
         exps = (a.exps[:, None, :] + b.exps[None, :, :]).reshape(a.nterms * b.nterms, a.nvars)
+        if int(exps.max(initial=0)) * a.nvars > MAX_DEGREE:      # else no row can exceed it
+            check_degree(int(exps.sum(axis=1).max()), "a product")
         coef = (a.coef[:, None, :] * b.coef[None, :, :1]).reshape(-1, a.coef.shape[1])
-        return Polynomial(a.vars, exps, coef, a.ids)
+        return Polynomial._made(a.vars, exps, coef, a.ids)
 
     __rmul__ = __mul__
 
@@ -218,14 +239,17 @@ class Polynomial:
         if not isinstance(k, (int, np.integer)) or k < 0:
             raise PolynomialError(f"power must be a non-negative integer, got {k!r}")
         check_degree(max(self.degree, 0) * int(k), f"a power p**{k}")
-        result, base = Polynomial.constant(1.0, self.vars), self
+        if self.nterms == 1 and self.is_numeric:          # (c x^a)^k = c^k x^(k a)
+            with np.errstate(over="ignore", under="ignore"):  # an overflow to inf is refused by _made
+                return Polynomial._made(self.vars, self.exps * int(k), self.coef ** int(k), self.ids, sort=False)
+        result, base = None, self
         while k:
             if k & 1:
-                result = result * base
+                result = base if result is None else result * base
             k >>= 1
             if k:
                 base = base * base
-        return result
+        return Polynomial.constant(1.0, self.vars) if result is None else result
 
     # ------------------------------------------------------------------ calculus
     def diff(self, var) -> "Polynomial":
@@ -241,8 +265,8 @@ class Polynomial:
         e = self.exps[:, j]
         keep = e > 0
         exps = self.exps[keep].copy()
-        exps[:, j] -= 1
-        return Polynomial(self.vars, exps, self.coef[keep] * e[keep, None], self.ids)
+        exps[:, j] -= 1           # rows stay distinct and in order
+        return Polynomial._made(self.vars, exps, self.coef[keep] * e[keep, None], self.ids, sort=False)
 
     def gradient(self, vars=None) -> list:
         """[dp/dv for v in vars]."""
@@ -256,29 +280,20 @@ class Polynomial:
         return sum((self.diff(v) * f for v, f in zip(vars, field)), Polynomial.constant(0.0, vars))
 
     # ------------------------------------------------------------------ evaluation
-    def _points(self, X, vars) -> np.ndarray:
-        X = finite_points(X)
-        vars = self.vars if vars is None else tuple(vars)
-        X = X.reshape(-1, len(vars)) if X.ndim <= 1 else X
-        if X.shape[1] != len(vars):
-            raise PolynomialError(f"points have {X.shape[1]} columns for variables {vars}")
-        cols = []
-        for v in self.vars:
-            if v not in vars:
-                raise PolynomialError(f"no value given for variable {v!r}")
-            cols.append(vars.index(v))
-        return X[:, cols]
-
     def monomial_values(self, X, vars=None) -> np.ndarray:
         """(N, m) values of every monomial at N points (rows of X, columns in ``vars``)."""
-        return monomial_values(self._points(X, vars), self.exps)
+        return monomial_values(ordered_points(X, self.vars, vars), self.exps)
 
     def evaluate_affine(self, X, vars=None) -> np.ndarray:
         """(N, 1 + k) values: column 0 constant part, column j the coefficient of ids[j-1]."""
         return self.monomial_values(X, vars) @ self.coef
 
     def __call__(self, X, vars=None) -> np.ndarray:
-        """Vectorised evaluation of a numeric polynomial at the rows of X: shape (N,)."""
+        """Vectorised evaluation of a numeric polynomial: shape (N,).
+
+        ``X`` is a dict {name: values} (by name, any order), or an array whose rows are points
+        with columns in ``vars`` order (default ``self.vars``; see :mod:`.terms` for that order).
+        """
         if not self.is_numeric:
             raise PolynomialError("polynomial depends on decision variables: use "
                                   "evaluate_affine, or substitute values with assign()")
@@ -344,23 +359,21 @@ class Polynomial:
 
     def allclose(self, other, atol: float = 1e-9) -> bool:
         """Coefficient-wise comparison (numeric and decision parts)."""
-        if (isinstance(other, Polynomial) and self.vars == other.vars and self.exps.shape == other.exps.shape
-                and np.array_equal(self.ids, other.ids) and np.array_equal(self.exps, other.exps)):
-            return bool(np.abs(self.coef - other.coef).max(initial=0.0) <= atol)
         diff = self - other
         return diff.nterms == 0 or bool(np.abs(diff.coef).max() <= atol)
 
+    def __eq__(self, other):
+        """Equality by value: the same coefficients (numeric and decision parts) on the same monomials."""
+        other = self._coerce(other)
+        if other is NotImplemented:
+            return NotImplemented
+        return (self - other).nterms == 0
+
+    def __hash__(self) -> int:
+        return hash(canonical_key(self.vars, self.exps, self.coef, self.ids))
+
     def __repr__(self) -> str:
-        if not self.nterms:
-            return "0"
-        terms = []
-        for i in range(self.nterms):
-            mono = "*".join(v if e == 1 else f"{v}^{e}" for v, e in zip(self.vars, self.exps[i]) if e)
-            parts = [f"{self.coef[i, 0]:.6g}"] if self.coef[i, 0] else []
-            parts += [f"{c:.6g}*d{d}" for c, d in zip(self.coef[i, 1:], self.ids) if c]
-            c = parts[0] if len(parts) == 1 else "(" + " + ".join(parts) + ")"
-            terms.append(c if not mono else (mono if c == "1" else f"{c}*{mono}"))
-        return " + ".join(terms)
+        return format_terms(self.vars, self.exps, self.coef, self.ids)
 
 
 def variables(names) -> tuple:

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import PolynomialError
 from ..limits import check_bytes
+from .decision import decision_name
 from .monomials import MAX_DEGREE
 from .polynomial import Polynomial, variable_names
 
@@ -208,11 +209,15 @@ def _short(text: str, limit: int = 60) -> str:
 
 
 def to_sympy(poly: Polynomial):
-    """A sympy expression of ``poly``; decision variables become symbols ``d<id>``."""
+    """A sympy expression of ``poly``; decision variables become symbols named as they print
+    (:func:`.decision.decision_name`: ``g``, ``c[1]``, else ``d<id>``; ``d<id>`` when that name
+    is also one of the polynomial's variables, or shared by two decision variables)."""
     import sympy                    # lazily (1 s to import): see the module docstring
 
     xs = [sympy.Symbol(v) for v in poly.vars]
-    ds = [sympy.Symbol(f"d{int(i)}") for i in poly.ids]
+    names = [decision_name(i) for i in poly.ids]
+    clash = {n for n in names if n in poly.vars or names.count(n) > 1}
+    ds = [sympy.Symbol(n if n not in clash else f"d{int(i)}") for n, i in zip(names, poly.ids)]
     expr = sympy.Integer(0)
     for i in range(poly.nterms):
         c = sympy.nsimplify(poly.coef[i, 0], rational=False) if poly.coef[i, 0] else 0

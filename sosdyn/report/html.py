@@ -31,15 +31,17 @@ Lengths are in the demonstrations' unit (mm for LASA), times in seconds. A *stat
          "min_gram_eig", "max_coeff_residual", "max_sampled_eig", "n_samples",
          "passed": bool, "metric_collapse": {label: value} | null}}},
      "timings": {shape: {method: {"em_s", "build_s", "solve_s", "verify_s", "total_s"}}},
-     "figures": {name: {"svg": path, "png": path, "caption": str}},
-     "bench": markdown str | null}
+     "figures": {name: {"svg": path, "png": path, "caption": str}}}
 
 Figure paths are relative to ``base_dir`` (for :func:`build_report`: the folder of
 ``results.json``); SVG is embedded when present and below 2 MB, PNG otherwise.
 Unless rendered with ``trusted=True`` (the experiments' own results), a figure path that
 leads outside ``base_dir`` (``..``, an absolute path, a symlink out) is refused.
 ``findings[*].text`` may use a small markup subset (:func:`markup`: ``<b>``, ``<i>``,
-``<br>`` and character entities); anything else in it is escaped.
+``<br>`` and character entities); anything else in it is escaped. ``findings[*].numbers``
+whose labels read ``"<shape>: <quantity>"`` are shown as one table (a row per shape, a column
+per quantity), the others as labelled values. Benchmarks have their own page
+(:mod:`sosdyn.report.bench`).
 """
 
 from __future__ import annotations
@@ -60,6 +62,7 @@ from .results import check_results, load_results
 __all__ = ["REPORT_FILES", "build_report", "check_results", "load_results", "render_html", "render_pdf"]
 
 REPORT_FILES = {"html": "index.html", "pdf": "report.pdf"}     # written into the output folder
+BENCH_PAGE = "bench/index.html"   # the benchmark report (sosdyn.report.bench), linked when present
 
 _MAX_INLINE_SVG = 2_000_000      # bytes; larger SVGs (dense streamplots) go in as PNG
 _MIME_TYPES = {"svg": "image/svg+xml", "png": "image/png"}      # in order of preference
@@ -228,10 +231,32 @@ def markup(text: str) -> Markup:
     return Markup(_ALLOWED_ENTITY.sub(r"&\1;", escaped))
 
 
+def number_table(numbers: Mapping) -> tuple[dict | None, list[tuple[str, str]]]:
+    """Split a finding's numbers: labels ``"<row>: <column>"`` as a table ``{"columns",
+    "rows": [(row, [cell, ...])]}`` (None when there are none; "—" for a missing pair),
+    the other labels as ``[(label, text)]``."""
+    cells, other = {}, []
+    for label, value in numbers.items():
+        row, sep, column = str(label).partition(": ")
+        if sep:
+            cells[row, column] = fmt(value)
+        else:
+            other.append((label, fmt(value)))
+    if not cells:
+        return None, other
+    rows = list(dict.fromkeys(r for r, _ in cells))
+    columns = list(dict.fromkeys(c for _, c in cells))
+    return ({"columns": columns, "rows": [(r, [cells.get((r, c), "—") for c in columns]) for r in rows]},
+            other)
+
+
 def _findings(section) -> list[dict]:
-    return [{"title": f.get("title", ""), "text": markup(str(f.get("text", ""))),
-             "numbers": [(k, fmt(v)) for k, v in (f.get("numbers") or {}).items()]}
-            for f in section]
+    out = []
+    for f in section:
+        table, other = number_table(f.get("numbers") or {})
+        out.append({"title": f.get("title", ""), "text": markup(str(f.get("text", ""))),
+                    "table": table, "numbers": other})
+    return out
 
 
 def _environment(meta: Mapping) -> dict:
@@ -239,7 +264,7 @@ def _environment(meta: Mapping) -> dict:
             "packages": sorted((k, str(v)) for k, v in (meta.get("packages") or {}).items())}
 
 
-def _bench(text: str) -> str:
+def markdown_html(text: str) -> str:
     """Markdown to HTML with markdown-it (installed with rich); <pre> without it."""
     try:
         from markdown_it import MarkdownIt
@@ -281,11 +306,12 @@ def _figures(section: Mapping, base_dir: Path, trusted: bool = False) -> list[di
 _SECTIONS: dict[str, Callable] = {
     "findings": _findings, "methods": _methods, "accuracy": _accuracy,
     "robustness": _robustness, "certificates": _certificates, "timings": _timings,
-    "meta": _environment, "bench": _bench,
+    "meta": _environment,
 }
 # --------------------------------------------------------------------------- public
 
-def _environment_jinja() -> jinja2.Environment:
+def jinja_environment() -> jinja2.Environment:
+    """The report templates (``sosdyn/report/templates``), autoescaped, with the ``fmt`` filter."""
     env = jinja2.Environment(loader=jinja2.PackageLoader("sosdyn.report", "templates"),
                              autoescape=True, trim_blocks=True, lstrip_blocks=True)
     env.filters["fmt"] = fmt
@@ -315,7 +341,8 @@ def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path |
         except (AttributeError, KeyError, TypeError, ValueError) as exc:
             context["errors"][key] = f"{type(exc).__name__}: {exc}"
     context["meta_raw"] = results.get("meta") or {}
-    html = _environment_jinja().get_template("report.html.j2").render(**context)
+    context["bench_href"] = BENCH_PAGE if (out_dir / BENCH_PAGE).is_file() else None
+    html = jinja_environment().get_template("report.html.j2").render(**context)
     path = out_dir / REPORT_FILES["html"]
     path.write_text(html, encoding="utf-8")
     return path

@@ -15,7 +15,7 @@ _JSON_KINDS = {"object": Mapping, "array": list, "string": str, "boolean": bool,
 # JSON kind of each top-level value of a results file (null also allowed); the first two are required.
 _SECTION_KINDS = {"meta": "object", "findings": "array", "methods": "object", "accuracy": "object",
                   "robustness": "object", "certificates": "object", "timings": "object",
-                  "figures": "object", "bench": "string"}
+                  "figures": "object"}
 _REQUIRED_SECTIONS = ("meta", "findings")
 RESULTS_HINT = ("pass the results.json written by `python -m problems run` (or `make run`), "
                  "e.g. reports/results.json")

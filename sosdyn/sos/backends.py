@@ -8,6 +8,13 @@
 Both return a :class:`~.solution.Solution` with a normalised status:
 "optimal" | "optimal_inaccurate" | "infeasible" | "unbounded" | "solver_error".
 
+Both also hand the dual of every PSD block to the Solution (``info["psd_duals"]``: Clarabel's z
+on the PSD cones, or the cvxpy PSD constraints' ``dual_value``), from which
+:mod:`.moments` reads moment matrices. Through cvxpy each block is one constraint
+``svec^-1(x[block]) >> 0`` on the expression itself: no extra matrix variable tied to x by
+equalities, whose n^2 rows repeat each off-diagonal entry (cvxpy stores a symmetric variable
+once) and made CVXOPT stop with "Rank(A) < p".
+
 Before anything reaches a solver, the data is checked (:func:`~.conic.check_data`) and the
 solver's working memory is estimated (:func:`solver_bytes`) and compared with
 ``sosdyn.limits`` (max_bytes): over it, :class:`~sosdyn.errors.ResourceLimitError`.
@@ -24,7 +31,7 @@ from ..errors import InputError
 from ..limits import check_bytes
 from ..poly import MAX_COEFFICIENT
 from .conic import check_data, coupled_psd_sizes, cvxpy_block_vars
-from .gram import svec_pairs
+from .gram import svec_pairs, svec_to_matrix
 from .objective import is_cvxpy
 from .solution import Solution
 
@@ -81,7 +88,13 @@ def _clarabel(data, verbose, settings):
     seconds = time.perf_counter() - t0
     status = _CLARABEL_STATUS.get(str(result.status), "solver_error")
     x = np.asarray(result.x, dtype=float)
-    return status, x, str(result.status), seconds, {"iterations": int(result.iterations)}
+    z = np.asarray(result.z, dtype=float)
+    start = data.A_eq.shape[0] + data.A_ge.shape[0]
+    duals = []
+    for pos, size in data.psd:          # z's PSD parts: svec of each block's dual matrix
+        duals.append(svec_to_matrix(z[start:start + pos.size], size))
+        start += pos.size
+    return status, x, str(result.status), seconds, {"iterations": int(result.iterations), "psd_duals": duals}
 
 
 def _svec_to_vec_map(size):
@@ -103,9 +116,11 @@ def _cvxpy(program, data, solver, verbose, settings):
         cons.append(data.A_eq @ x == data.b_eq)
     if data.A_ge.shape[0]:
         cons.append(data.A_ge @ x >= data.b_ge)
-    for pos, size in data.psd:
-        Q = cp.Variable((size, size), PSD=True)
-        cons.append(_svec_to_vec_map(size) @ x[pos] == cp.vec(Q, order="F"))
+    psd_cons = []
+    for pos, size in data.psd:      # Q = svec^-1(x[pos]) >> 0 itself: no equality rows Q = svec^-1(x)
+        Q = cp.reshape(_svec_to_vec_map(size) @ x[pos], (size, size), order="F")
+        psd_cons.append(Q >> 0)
+    cons += psd_cons
     if data.n_soc:
         s = cp.reshape(data.soc @ x, (3, data.n_soc), order="F")
         cons.append(cp.SOC(s[0], s[1:], axis=0))
@@ -134,6 +149,8 @@ def _cvxpy(program, data, solver, verbose, settings):
             "iterations": getattr(stats, "num_iters", None) if stats else None}
     if program.objective and isinstance(program.objective[1], cp.Expression):
         info["objective"] = problem.value
+    if all(c.dual_value is not None for c in psd_cons):
+        info["psd_duals"] = [np.asarray(c.dual_value, dtype=float) for c in psd_cons]
     return status, np.asarray(value, dtype=float), raw, seconds, info
 
 
@@ -168,7 +185,8 @@ def solver_bytes(data, solver: str, backend: str) -> float:
 
 
 def _size_hint(solver: str) -> str:
-    hint = ("lower the degree (a smaller Gram basis), exploit sparsity (fewer monomials), or use "
+    hint = ("lower the degree (a smaller Gram basis), exploit sparsity (add_sos(..., sparsity='correlative' or 'term'): "
+            "one small Gram block per clique or term component), or use "
             "cone='dsos' (an LP) or cone='sdsos' (second-order cones) in add_sos: no dense blocks")
     return hint if solver == "SCS" else hint + ", or solver='SCS' (first order: no dense KKT blocks)"
 

@@ -8,7 +8,7 @@
   :class:`FamilySOSConstraint` -- sum_t w_t T_t is an SOS matrix, weights changeable;
   :class:`Multiplier` / :class:`EqualityMultiplier` -- the multipliers of ``add_nonneg_on``;
 * functions on arrays: :func:`matrix_form` (y^T P(x) y and its multipartite basis),
-  :func:`gram_polynomial` (z^T Q z as a decision polynomial), :func:`basis_exponents`
+  :func:`gram_polynomial` (z^T Q z as a decision polynomial), :func:`user_basis`
   (a user's basis). The rows that put a Gram block in a smaller cone live in :mod:`.cones`.
 
 A handle reads numbers only from a solution it is given: ``con.gram_matrix(sol)`` is
@@ -77,8 +77,9 @@ class PsdBlock:
     ``cone`` "psd" (Q >= 0, an SDP block), "sdsos" (Q scaled diagonally dominant: linear
     rows and 3-dimensional second-order cones, :func:`.cones.sdsos_rows`) or "dsos" (Q diagonally
     dominant with a nonnegative diagonal: linear inequalities only); see the module docstring.
-    ``role`` says who owns it: "gram" (an SOS constraint's Gram matrix), "multiplier" (an
-    SOS multiplier of add_nonneg_on), "sos_var" (new_sos) or "psd_var" (new_psd). Every
+    ``role`` says who owns it: "gram" (an SOS constraint's Gram matrix), "clique" (a further
+    Gram block of a sparse constraint), "multiplier" (an SOS multiplier of add_nonneg_on),
+    "sos_var" (new_sos) or "psd_var" (new_psd). Every
     block is checked by ``Solution.verify()``. Off the diagonal, Q_ij = s_k * SQRT2 / 2
     (s the svec entry): the one convention every expression built on a block uses.
     """
@@ -141,7 +142,9 @@ class SOSConstraint:
 
     For ``add_nonneg_on``, ``source`` is the polynomial shown nonnegative, ``multipliers``
     the SOS multipliers (:class:`Multiplier`) and ``eq_multipliers`` the free ones; ``poly``
-    is then source - sum sigma_i g_i - sum lambda_j h_j.
+    is then source - sum sigma_i g_i - sum lambda_j h_j. A sparse constraint (``sparsity=``)
+    has further Gram blocks sigma_k = z_k^T Q_k z_k, kept as multipliers of the constant 1
+    (role "clique"), so poly = source - sum_k sigma_k - ...; ``gram_blocks`` lists them all.
     """
 
     def __init__(self, program, name, kind, poly, basis, psd, multipliers=(), eq_multipliers=(),
@@ -153,7 +156,7 @@ class SOSConstraint:
         self.multipliers: list[Multiplier] = list(multipliers)
         self.eq_multipliers: list[EqualityMultiplier] = list(eq_multipliers)
         self.source: Polynomial = poly if source is None else source
-        self._gram_exps, self._G = gram_matching(basis.exps)
+        self._gram_exps, self._gram_rows, self._gram_weights = gram_matching(basis.exps)
         self.rows: LinearRows | None = None
         self.infeasible_reason: str | None = None
         self._match()
@@ -164,15 +167,14 @@ class SOSConstraint:
         U, _ = unique_rows(np.vstack([p.exps, self._gram_exps]))
         idx_p = match_rows(U, p.exps)
         idx_g = match_rows(U, self._gram_exps)
-        G = self._G.tocoo()
         prows = LinearRows.from_affine(self.name, "eq", p.coef, p.ids, idx_p)
         rhs = np.zeros(U.shape[0])
         rhs[idx_p] = p.coef[:, 0]
         self.rows = LinearRows(
             self.name, "eq",
-            np.concatenate([prows.rows, idx_g[G.row]]),
-            np.concatenate([prows.ids, self.psd.ids[G.col]]),
-            np.concatenate([-prows.vals, G.data]),
+            np.concatenate([prows.rows, idx_g[self._gram_rows]]),
+            np.concatenate([prows.ids, self.psd.ids]),
+            np.concatenate([-prows.vals, self._gram_weights]),
             rhs)
         covered = np.zeros(U.shape[0], dtype=bool)
         covered[idx_g] = True
@@ -182,6 +184,12 @@ class SOSConstraint:
             f"constraint {self.name!r}: monomial "
             f"{Polynomial(self.basis.vars, U[bad[:1]], [1.0])!r} has a fixed non-zero coefficient "
             f"but cannot be produced by the Gram basis {self.basis!r}")
+
+    @property
+    def gram_blocks(self) -> list:
+        """(Basis, PsdBlock) of every Gram block of the certificate of ``source``: the main one,
+        then the clique blocks of a sparse constraint (not the multipliers of add_nonneg_on)."""
+        return [(self.basis, self.psd)] + [(m.basis, m.psd) for m in self.multipliers if m.psd.role == "clique"]
 
     def update(self, poly) -> "SOSConstraint":
         """Replace the polynomial by one with new numbers, keeping the Gram basis.
@@ -204,7 +212,7 @@ class SOSConstraint:
             exps = newton_basis(poly.exps) if exps is None else exps
             self.basis = Basis(poly.vars, exps if exps.shape[1] == len(poly.vars) else newton_basis(poly.exps))
             self.psd = self.program.replace_gram_block(self.psd, len(self.basis))
-            self._gram_exps, self._G = gram_matching(self.basis.exps)
+            self._gram_exps, self._gram_rows, self._gram_weights = gram_matching(self.basis.exps)
         self.poly, self.source = poly, source.with_vars(vars)
         self._match()
         self.program.mark_changed()
@@ -271,10 +279,20 @@ def as_sos_polynomial(expr) -> Polynomial:
     return expr
 
 
-def matrix_form(P, basis_from=None, with_basis=True):
+def helper_names(r: int, taken) -> tuple:
+    """r new variable names ``_y0 .. _y<r-1>``, with as many leading underscores as it takes
+    for none of them to be in ``taken`` (so they never collide with a user's variables)."""
+    taken, prefix = set(taken), "_y"
+    while any(f"{prefix}{i}" in taken for i in range(r)):
+        prefix = "_" + prefix
+    return tuple(f"{prefix}{i}" for i in range(r))
+
+
+def matrix_form(P, basis_from=None, with_basis=True, taken=()):
     """y^T P(x) y as a scalar polynomial in (x, y), and the multipartite basis y (x) z(x).
 
-    y^T P y = sum_i P_ii y_i^2 + 2 sum_{i<j} P_ij y_i y_j over new variables y_i = ``_y<i>``.
+    y^T P y = sum_i P_ii y_i^2 + 2 sum_{i<j} P_ij y_i y_j over new variables y_i
+    (:func:`helper_names`, unique against the variables of P, ``basis_from`` and ``taken``).
     z_i comes from the Newton polytope of P_ii, or of the union of the P_ii of the matrices
     ``basis_from`` (a list sharing P's shape) when given; the basis rows are y_i z_i(x).
     With ``with_basis=False`` the basis is empty (only the scalar form is wanted).
@@ -287,18 +305,18 @@ def matrix_form(P, basis_from=None, with_basis=True):
     xvars: tuple = ()
     for S in sources + [P]:
         xvars = xvars + tuple(v for v in S.vars if v not in xvars)
-    yvars = tuple(f"_y{i}" for i in range(r))
+    yvars = helper_names(r, xvars + tuple(taken))
     allv = xvars + yvars
-    entries = [(i, j, P.entries[i, j].with_vars(xvars)) for i in range(r) for j in range(i, r)]
-    ids = np.unique(np.concatenate([e.ids for _, _, e in entries] + [np.zeros(0, dtype=np.int64)]))
-    exps, coef = [], []
-    for i, j, e in entries:
-        y = np.zeros((e.nterms, r), dtype=np.int64)
-        y[:, i] += 1
-        y[:, j] += 1
-        exps.append(np.hstack([e.exps, y]))
-        coef.append(e.with_ids(ids).coef * (1.0 if i == j else 2.0))
-    q = Polynomial(allv, np.vstack(exps), np.vstack(coef), ids)
+    t = P.terms(xvars)                                 # the upper triangle's terms, vectorised
+    t = t.select(t.row <= t.col)
+    y = np.zeros((t.row.size, r), dtype=np.int64)
+    np.add.at(y, (np.arange(t.row.size), t.row), 1)
+    np.add.at(y, (np.arange(t.row.size), t.col), 1)
+    ids = np.unique(t.did[t.did >= 0])
+    coef = np.zeros((t.row.size, 1 + ids.size))
+    coef[np.arange(t.row.size), np.where(t.did >= 0, 1 + np.searchsorted(ids, t.did), 0)] = \
+        t.val * np.where(t.row == t.col, 1.0, 2.0)
+    q = Polynomial(allv, np.hstack([t.exps, y]), coef, ids)
     rows = []
     for i in range(r):
         if with_basis:
@@ -339,26 +357,30 @@ def affine_rows(name, kind, items) -> LinearRows:
     return LinearRows(name, kind, cat("rows", np.int64), cat("ids", np.int64), cat("vals", float), cat("rhs", float))
 
 
-def basis_variables(basis) -> tuple:
-    """Variable names of a basis given as monomial Polynomials (none for an exponent array)."""
-    if isinstance(basis, np.ndarray):
-        return ()
-    out: list = []
-    for m in basis:
-        out += [v for v in m.vars if v not in out]
-    return tuple(out)
+def basis_monomials(basis) -> list:
+    """A user's basis as monomial Polynomials: numbers (the monomial 1) and one-term polynomials."""
+    if isinstance(basis, (Polynomial, int, float)):
+        basis = [basis]
+    out = []
+    for m in np.asarray(basis, dtype=object).ravel() if isinstance(basis, np.ndarray) else basis:
+        if isinstance(m, (int, float, np.integer, np.floating)) and not isinstance(m, bool) and m != 0:
+            m = Polynomial.constant(1.0)
+        if not isinstance(m, Polynomial) or m.nterms != 1 or not m.is_numeric:
+            raise PolynomialError(f"a basis is a list of monomials such as [1, x, x*y, x**2]; got {m!r}")
+        out.append(m)
+    return out
 
 
-def basis_exponents(basis, p: Polynomial) -> np.ndarray:
-    """Exponent rows of a user's basis (monomials or an array) over p's variables + the basis's."""
-    if isinstance(basis, np.ndarray):
+def user_basis(basis, p: Polynomial):
+    """(p over its variables + the basis's, the basis's exponent rows over those variables) for a
+    user's basis: monomials (numbers count as the monomial 1) or an integer exponent array over p.vars."""
+    if isinstance(basis, np.ndarray) and basis.dtype != object:
         exps = np.asarray(basis, dtype=np.int64).reshape(-1, p.nvars)
     else:
-        vars = p.vars + tuple(v for v in basis_variables(basis) if v not in p.vars)
-        mons = [m.with_vars(vars) for m in basis]
-        if any(m.nterms != 1 or not m.is_numeric for m in mons):
-            raise PolynomialError("a basis is a list of monomials such as [x**2, x*y, 1]")
-        exps = np.vstack([m.exps for m in mons])
+        mons = basis_monomials(basis)
+        for m in mons:
+            p = p.with_vars(p.vars + tuple(v for v, e in zip(m.vars, m.exps[0]) if e and v not in p.vars))
+        exps = np.vstack([m.with_vars(p.vars).exps for m in mons])
     if unique_rows(exps)[0].shape[0] != exps.shape[0]:
         raise PolynomialError("the given basis has repeated monomials")
-    return exps
+    return p, exps

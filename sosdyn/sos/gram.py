@@ -20,11 +20,11 @@ rational LDL^T instead: a zero pivot must come with a zero row.
 """
 from __future__ import annotations
 
+import functools
 import math
 from fractions import Fraction
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..poly.monomials import unique_rows
 
@@ -57,14 +57,34 @@ def matrix_to_svec(Q: np.ndarray) -> np.ndarray:
     return np.where(i == j, Q[i, j], SQRT2 * Q[i, j])
 
 
+CACHE_MAX_BASIS = 64  # gram_matching keeps its answers for bases up to this size (small, often repeated)
+
+
 def gram_matching(basis: np.ndarray):
-    """Monomials of z^T Q z and the sparse map G with coefficients = G @ svec(Q)."""
-    b = basis.shape[0]
-    i, j = svec_pairs(b)
-    exps, inv = unique_rows(basis[i] + basis[j])
-    weights = np.where(i == j, 1.0, SQRT2)
-    G = sp.csr_matrix((weights, (inv, np.arange(i.size))), shape=(exps.shape[0], i.size))
-    return exps, G
+    """Monomials of z^T Q z and the sparse map G with coefficients = G @ svec(Q).
+
+    Returns (exps, rows, weights): svec entry k adds weights[k] s_k to the coefficient of
+    monomial exps[rows[k]], i.e. G has one entry (rows[k], k) per column. The arrays are
+    read-only: answers for small bases are cached (a program repeats its bases).
+    """
+    basis = np.ascontiguousarray(basis, dtype=np.int64)
+    if basis.shape[0] <= CACHE_MAX_BASIS:
+        return _gram_matching_cached(basis.shape, basis.tobytes())
+    return _gram_matching(basis)
+
+
+def _gram_matching(basis: np.ndarray):
+    i, j = svec_pairs(basis.shape[0])
+    exps, rows = unique_rows(basis[i] + basis[j])
+    out = (exps, rows, np.where(i == j, 1.0, SQRT2))
+    for a in out:
+        a.flags.writeable = False
+    return out
+
+
+@functools.lru_cache(maxsize=512)
+def _gram_matching_cached(shape: tuple, data: bytes):
+    return _gram_matching(np.frombuffer(data, dtype=np.int64).reshape(shape))
 
 
 # ---------------------------------------------------------------------- exact arithmetic

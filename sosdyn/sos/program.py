@@ -15,6 +15,7 @@ blocks: inner approximations, valid but weaker bounds (:mod:`.cones`; docs/sos-c
 from __future__ import annotations
 
 import copy
+import functools
 import time
 
 import numpy as np
@@ -25,11 +26,12 @@ from . import conic
 from .backends import solve_program
 from .cones import auxiliary_count, check_cone, cone_rows, face_rows
 from .constraints import (Basis, Block, EqualityMultiplier, FamilySOSConstraint, LinearRows, Multiplier,
-                          PsdBlock, SOSConstraint, as_sos_polynomial, basis_exponents, basis_variables,
+                          PsdBlock, SOSConstraint, as_sos_polynomial, user_basis,
                           affine_items, affine_rows, gram_polynomial, matrix_form)
 from .gram import SQRT2, svec_pairs, svec_size
-from .newton import newton_basis
 from .objective import QuadraticForm, is_cvxpy
+from .sets import as_set, putinar_terms
+from .sparsity import clique_vars, constraint_cliques, sparse_bases
 
 
 class SOSProgram:
@@ -39,8 +41,8 @@ class SOSProgram:
     >>> con = prog.add_sos(x**4 + y**4 - g); prog.maximize(g); sol = prog.solve()
     """
 
-    def __init__(self, name: str = "sos"):
-        self.name = name
+    def __init__(self, name: str = "sos", hint: str | None = None):
+        self.name, self.hint = name, hint   # hint: what to try when infeasible, from the program's owner
         self.blocks: list[Block] = []
         self.sos_constraints: list[SOSConstraint] = []
         self.linear: list[LinearRows] = []
@@ -67,6 +69,7 @@ class SOSProgram:
         self.version += 1
 
     def _timed(fn):  # noqa: N805 -- decorator over methods
+        @functools.wraps(fn)          # keeps the signature visible (inspect, docs)
         def wrapper(self, *args, **kwargs):
             t0 = time.perf_counter()
             self._depth += 1
@@ -77,12 +80,11 @@ class SOSProgram:
                 if not self._depth:
                     self.build_seconds += time.perf_counter() - t0
                 self.mark_changed()
-        wrapper.__doc__, wrapper.__name__ = fn.__doc__, fn.__name__
         return wrapper
 
     # ------------------------------------------------------------------ decision variables
     def _block(self, name, count, psd_size=None, role="gram") -> Block:
-        ids = allocate(count)
+        ids = allocate(count, name)
         psd = PsdBlock(name, ids, psd_size, role=role) if psd_size is not None else None
         block = Block(name, ids, psd)
         self.blocks.append(block)
@@ -121,10 +123,7 @@ class SOSProgram:
 
     @_timed
     def new_ids(self, count: int, name=None) -> np.ndarray:
-        """Low level: ``count`` free scalar decision variables, returned as their ids.
-
-        Build polynomials on them directly, e.g. ``Polynomial(vars, exps, coef, ids)``.
-        """
+        """Low level: ``count`` free decision variables as ids (for ``Polynomial(vars, exps, coef, ids)``)."""
         return self._block(self._name("ids", name), int(count)).ids
 
     @_timed
@@ -141,9 +140,14 @@ class SOSProgram:
             raise PolynomialError(f"an SOS polynomial has even degree, got {degree}")
         names = variable_names(vars)
         basis = Basis(names, monomials_up_to(len(names), degree // 2))
+        sigma, psd = self._gram(basis, name, role, cone)
+        return sigma, basis, psd
+
+    def _gram(self, basis: Basis, name, role, cone):
+        """(z^T Q z, block of Q) for a new Gram block over ``basis`` in ``cone``."""
         psd = self._block(name, svec_size(len(basis)), len(basis), role).psd
         self._in_cone(psd, cone)
-        return gram_polynomial(basis, psd), basis, psd
+        return gram_polynomial(basis, psd), psd
 
     @_timed
     def new_sos(self, vars, degree: int, name=None, cone="psd") -> Polynomial:
@@ -162,38 +166,41 @@ class SOSProgram:
         return PolyMatrix(entries)
 
     # ------------------------------------------------------------------ constraints
-    def _register(self, name, kind, poly, basis_exps, cone="psd", **handles):
-        psd = self._block(name, svec_size(basis_exps.shape[0]), basis_exps.shape[0]).psd
+    def _register(self, name, kind, poly, bases, cone="psd", multipliers=(), source=None, **handles):
+        """An SOSConstraint over ``bases``: the first the main block, the others "clique" multipliers of 1."""
+        psd = self._block(name, svec_size(bases[0].shape[0]), bases[0].shape[0]).psd
         self._in_cone(psd, cone)
-        con = SOSConstraint(self, name, kind, poly, Basis(poly.vars, basis_exps), psd, **handles)
+        vars, rest, mults = poly.vars, poly, list(multipliers)
+        for k, exps in enumerate(bases[1:], start=1):
+            sigma, block = self._gram(Basis(vars, exps), f"{name}.block{k}", "clique", cone)
+            mults.append(Multiplier(Polynomial.constant(1.0).with_vars(vars), sigma, Basis(vars, exps), block))
+            rest = rest - sigma
+        con = SOSConstraint(self, name, kind, rest.with_vars(vars), Basis(vars, bases[0]), psd, multipliers=mults,
+                            source=poly if source is None else source, **handles)
         self.sos_constraints.append(con)
         return con
 
     @_timed
-    def add_sos(self, expr, basis=None, name=None, cone="psd") -> SOSConstraint:
+    def add_sos(self, expr, basis=None, name=None, cone="psd", sparsity=None) -> SOSConstraint:
         """Constrain the polynomial ``expr`` to be a sum of squares.
 
-        The Gram basis comes from the Newton polytope of ``expr``'s support unless ``basis``
-        (monomial Polynomials or an exponent array) is given, in which case it is honoured.
-        ``cone="dsos"`` asks for a diagonally dominant Gram matrix instead (an LP; a
-        stronger condition, so a smaller feasible set, that scales to large bases),
-        ``cone="sdsos"`` for a scaled diagonally dominant one (second-order cones; between).
+        Gram basis: from the Newton polytope of ``expr``, or ``basis`` (monomials such as
+        ``[1, x, x*y]``, or an exponent array) honoured. ``cone``: "psd", or the inner "sdsos"
+        (second-order cones) / "dsos" (an LP) approximations (:mod:`.cones`). ``sparsity``: None
+        (one block), "correlative" (one per clique of the variable-interaction graph), "term"
+        (one per TSSOS component; splits a given basis too) or "correlative+term" (:mod:`.sparsity`).
         """
         check_cone(cone)
         p = as_sos_polynomial(expr)
         name = self._name("sos", name)
-        if basis is None:
-            exps = newton_basis(p.exps)
-        else:
-            exps = basis_exponents(basis, p)
-            p = p.with_vars(p.vars + tuple(v for v in basis_variables(basis) if v not in p.vars))
-        return self._register(name, "sos", p, exps, cone=cone)
+        p, exps = (p, None) if basis is None else user_basis(basis, p)
+        return self._register(name, "sos", p, sparse_bases(p.exps, sparsity, dense_basis=exps), cone=cone)
 
-    def _cached_form(self, P: PolyMatrix) -> Polynomial:
-        """y^T P y, expanded once per matrix object (families often share terms)."""
-        key = id(P)
+    def _cached_form(self, P: PolyMatrix, taken: tuple) -> Polynomial:
+        """y^T P y (y named against ``taken``), expanded once per matrix (families share terms)."""
+        key = (id(P), taken)
         if key not in self._forms or self._forms[key][0] is not P:
-            self._forms[key] = (P, matrix_form(P, with_basis=False)[0])
+            self._forms[key] = (P, matrix_form(P, with_basis=False, taken=taken)[0])
         return self._forms[key][1]
 
     @_timed
@@ -211,7 +218,8 @@ class SOSProgram:
             raise PolynomialError("add_sos_matrix_family needs a non-empty list of equal-shape matrices")
         name = self._name("family", name)
         q0, exps = matrix_form(terms[0], basis_from=terms)
-        qs = [q0] + [self._cached_form(t) for t in terms[1:]]
+        taken = tuple(sorted({v for t in terms for v in t.vars}))
+        qs = [q0] + [self._cached_form(t, taken) for t in terms[1:]]
         psd = self._block(name, svec_size(exps.shape[0]), exps.shape[0]).psd
         self._in_cone(psd, cone)
         vars = qs[0].vars
@@ -231,48 +239,40 @@ class SOSProgram:
         check_cone(cone)
         name = self._name("sosmat", name)
         q, exps = matrix_form(P)
-        return self._register(name, "sos_matrix", q, exps, cone=cone)
+        return self._register(name, "sos_matrix", q, [exps], cone=cone)
 
     @_timed
     def add_nonneg_on(self, expr, ineqs=(), eqs=(), degree=None, name=None, cone="psd",
-                      multiplier_cone=None) -> SOSConstraint:
-        """expr >= 0 on {g_i >= 0, h_j = 0} via Putinar/S-procedure multipliers.
+                      multiplier_cone=None, products=False, sparsity=None) -> SOSConstraint:
+        """expr >= 0 on K = {g_i >= 0, h_j = 0}: expr - sum_S sigma_S g_S - sum_j lambda_j h_j SOS.
 
-        expr - sum_i sigma_i g_i - sum_j lambda_j h_j is SOS, sigma_i SOS and lambda_j free,
-        each multiplier of the largest degree with deg(multiplier * constraint) <= degree.
-        ``cone`` is the cone of the main Gram matrix and, unless ``multiplier_cone`` is given,
-        of the multipliers' Gram matrices (as in :meth:`add_sos`).
+        ``ineqs``: a :class:`~.sets.BasicSet` or the g_i (``eqs`` the h_j); sigma SOS, lambda free,
+        each of the largest degree with deg(multiplier * constraint) <= ``degree`` (one int, or
+        a list/dict per constraint, inequalities first); ``products``: True or k adds products of
+        up to k inequalities (:mod:`.sets`). ``cone``: of the main block and, unless
+        ``multiplier_cone``, the multipliers'. ``sparsity``: as in :meth:`add_sos`; "correlative"
+        also puts each multiplier in one clique's variables.
         """
         check_cone(cone)
         multiplier_cone = check_cone(cone if multiplier_cone is None else multiplier_cone, "multiplier_cone")
-        p = as_sos_polynomial(expr)
-        ineqs, eqs = list(ineqs), list(eqs)
-        allv = p.vars
-        for g in ineqs + eqs:
-            allv = allv + tuple(v for v in g.vars if v not in allv)
-        degree = degree if degree is not None else max([p.degree] + [g.degree for g in ineqs + eqs])
-        name = self._name("nonneg", name)
-        source = p.with_vars(allv)
+        p, K = as_sos_polynomial(expr), as_set(ineqs, eqs)
+        allv = p.vars + tuple(v for v in K.vars if v not in p.vars)
+        terms = putinar_terms(K, degree, products, max([p.degree] + [g.degree for g in K.ineqs + K.eqs]))
+        name, source = self._name("nonneg", name), p.with_vars(allv)
+        cliques = constraint_cliques(sparsity, allv, source.exps, [g.vars for _, _, g, _ in terms])
         rest, mults, eq_mults = source, [], []
-        for k, g in enumerate(ineqs):
-            d = degree - g.degree
-            d -= d % 2
-            if d < 0:
-                raise PolynomialError(f"degree {degree} is below the degree of constraint g{k} ({g.degree})")
-            g = g.with_vars(allv)
-            sigma, basis, psd = self._sos_block(allv, d, f"{name}.sigma{k}", "multiplier", multiplier_cone)
-            mults.append(Multiplier(g, sigma, basis, psd))
+        for kind, label, g, d in terms:
+            vars = clique_vars(cliques, g.vars, allv)
+            if kind == "sos":
+                sigma, basis, psd = self._sos_block(vars, d, f"{name}.{label}", "multiplier", multiplier_cone)
+                mults.append(Multiplier(g.with_vars(allv), sigma, basis, psd))
+            else:
+                sigma = self.new_poly(vars, d, name=f"{name}.{label}")
+                eq_mults.append(EqualityMultiplier(g.with_vars(allv), sigma))
             rest = rest - sigma * g
-        for k, h in enumerate(eqs):
-            d = degree - h.degree
-            if d < 0:
-                raise PolynomialError(f"degree {degree} is below the degree of equality h{k} ({h.degree})")
-            h = h.with_vars(allv)
-            lam = self.new_poly(allv, d, name=f"{name}.lambda{k}")
-            eq_mults.append(EqualityMultiplier(h, lam))
-            rest = rest - lam * h
-        return self._register(name, "nonneg_on", rest, newton_basis(rest.exps), cone=cone, multipliers=mults,
-                              eq_multipliers=eq_mults, source=source)
+        rest = rest.with_vars(allv)
+        return self._register(name, "nonneg_on", rest, sparse_bases(rest.exps, sparsity, cliques=cliques),
+                              cone=cone, multipliers=mults, eq_multipliers=eq_mults, source=source)
 
     @_timed
     def add_eq(self, lhs, rhs=0.0, name=None) -> LinearRows:

@@ -16,18 +16,17 @@ import time
 
 import numpy as np
 
-from ..errors import InfeasibleError, InputError, SolverError, UnverifiedSolutionError
+from ..errors import InfeasibleError, InputError, SolverError, UnboundedError, UnverifiedSolutionError
 from ..poly import PolyMatrix, Polynomial
 from .conic import assign_at, objective_value, positions
+from .decomposition import SOSDecomposition, sos_decomposition
 from .gram import svec_to_matrix
+from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
 from .rigorous import ANSWERED, Bound, prove_bound
 from .verification import VerificationReport, verify_certificate
 
 _HINTS = {
-    "infeasible": "a higher degree (a richer Gram basis or multipliers), or check that the "
-                  "statement is true: an SOS relaxation can be infeasible although the "
-                  "polynomial inequality holds",
     "unbounded": "bound the objective (add constraints) or check its sign (maximize vs minimize)",
     "solver_error": "keep scale=True, rescale the data (coefficients of very different "
                     "magnitudes), lower the degree, or backend='cvxpy' with another installed solver",
@@ -40,6 +39,27 @@ _UNVERIFIED_HINTS = {
           "(a small positive margin in strict inequalities, a lower degree)",
 }
 _DEFAULT_TOLS = (1e-7, 1e-6)      # verify()'s default (eig_tol, rel_tol): the cached report
+
+
+def infeasible_hint(program) -> str:
+    """What to try when ``program`` is infeasible, by the kind of constraints it has."""
+    kinds = {c.kind for c in program.sos_constraints}
+    tips = [program.hint] if program.hint else []
+    if "nonneg_on" in kinds:
+        tips.append("a higher multiplier degree in add_nonneg_on (degree=...), or check that the set "
+                    "is not empty and the polynomial is nonnegative on it")
+    if kinds & {"sos", "sos_matrix"}:
+        tips.append("check that the polynomial (matrix) is nonnegative; a nonnegative polynomial need not "
+                    "be SOS (Motzkin): multiply it by (1 + x1^2 + ... + xn^2), or raise the degree of the "
+                    "free polynomials in it")
+    if any(m.psd.role == "clique" for c in program.sos_constraints for m in c.multipliers):
+        tips.append("sparsity=None (one dense Gram block): a sparse basis can be too restrictive")
+    if program.objective is None and not tips:
+        tips.append("check the constraints added with add_eq/add_ge for a contradiction")
+    if program.objective is not None:
+        tips.append("relax the constraints on the objective's variables: a required bound may be "
+                    "beyond what any certificate of this degree proves")
+    return "; or ".join(tips)
 
 
 def unverified_hint(solver: str) -> str:
@@ -100,7 +120,10 @@ class Solution:
         detail = f" ({self.reason})" if self.reason else f" (solver said {self.raw_status!r})"
         if self.status == "infeasible":
             raise InfeasibleError(f"program {self.program.name!r} is infeasible{detail}.",
-                                  "infeasible", _HINTS["infeasible"])
+                                  "infeasible", infeasible_hint(self.program))
+        if self.status == "unbounded":
+            raise UnboundedError(f"program {self.program.name!r} is unbounded: the objective has no finite "
+                                 f"optimum{detail}.", "unbounded", _HINTS["unbounded"])
         if self.status in ANSWERED:
             report = self.verify()
             raise UnverifiedSolutionError(
@@ -163,6 +186,49 @@ class Solution:
         if self.rigorous and self.rigorous_bound().proven is not None:
             return self.rigorous_bound().proven
         return objective_value(self.data, self.x)
+
+    # ------------------------------------------------------------------ dual side
+    def moments(self, con, tol: float = 1e-6) -> Moments:
+        """The moments of an SOS constraint (the dual of its Gram block; :mod:`.moments`).
+
+        Raises unless the solution is verified, and UnverifiedSolutionError unless the dual is
+        a PSD moment matrix to ``tol``.
+        """
+        self.raise_for_status()
+        if con.kind not in ("sos", "nonneg_on") or con.psd.cone != "psd":
+            raise InputError(f"moments are read from a scalar SOS constraint in the PSD cone; {con.name!r} "
+                             f"is {con.kind!r} in cone {con.psd.cone!r}. Try: add_sos or add_nonneg_on "
+                             "with cone='psd'")
+        if self.program.objective is None:
+            raise InputError(f"program {self.program.name!r} has no objective, so the dual of {con.name!r} is "
+                             "zero: it carries no moments. Try: maximise a bound (gamma with p - gamma SOS)")
+        duals = self.info.get("psd_duals")
+        if duals is None:
+            raise InputError(f"the {self.solver} solve returned no duals. Try: backend='direct' (Clarabel) "
+                             "or a cvxpy solver that reports duals")
+        first = positions(self.data.ids, con.psd.ids[:1])[0]
+        k = next(k for k, (pos, _) in enumerate(self.data.psd) if pos[0] == first)
+        return moments_from_dual(con.basis.vars, con.basis.exps, duals[k], tol)
+
+    def minimizers(self, con, rank_tol: float = 1e-6, tol: float = 1e-6) -> Atoms:
+        """Points where the bound of ``con`` is attained, with weights (flat extension; :mod:`.moments`).
+
+        Each point is checked: ``con.source`` (e.g. p - gamma, at the solution) vanishes there and
+        every constraint of ``add_nonneg_on`` holds (g_i >= 0, h_j = 0), to ``tol`` relative to
+        the largest coefficient. Raises NoAtomsError when the moments are not flat or a point fails.
+        """
+        shift = max([1] + [(m.constraint.degree + 1) // 2 for m in con.multipliers])
+        atoms = self.moments(con, tol).atoms(rank_tol, tol, shift)
+        residual = self.value(con.source)
+        residual = residual if isinstance(residual, Polynomial) else Polynomial.constant(residual)
+        check_atoms(atoms, residual, [m.constraint for m in con.multipliers],
+                    [m.constraint for m in con.eq_multipliers], tol)
+        return atoms
+
+    def sos_decomposition(self, con, digits: int = 6) -> SOSDecomposition:
+        """z^T Q z as sum_k d_k (q_k(x))^2 from the verified Gram matrix Q of ``con`` (a constraint
+        or a multiplier of ``add_nonneg_on``; :mod:`.decomposition`)."""
+        return sos_decomposition(con.basis.vars, con.basis.exps, self.gram_matrix(con), digits)
 
     @property
     def bound(self) -> Bound:

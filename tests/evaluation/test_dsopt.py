@@ -12,6 +12,8 @@ from sosdyn.evaluation.dsopt import (
     evaluate_shape,
     load_seds_published,
     nearest_demo_score,
+    reproduction_scores,
+    select_fit,
     split,
     start_points,
 )
@@ -176,3 +178,34 @@ def test_load_seds_published(tmp_path):
         load_seds_published(path)
     with pytest.raises(InputError, match="Cannot read"):
         load_seds_published(tmp_path / "missing.csv")
+
+
+# ---------------------------------------------------------------- selection on training demos
+
+
+def _decaying_lines(starts, T=400, dt=0.01):
+    """Demonstrations x(t) = x0 exp(-t): exactly the flow of xdot = -x."""
+    t = np.arange(T) * dt
+    return Demonstrations([Demonstration(t, np.outer(np.exp(-t), x0), -np.outer(np.exp(-t), x0), f"d{i}")
+                           for i, x0 in enumerate(starts)], "lines", "mm")
+
+
+def test_select_fit_sees_only_the_training_demos_and_picks_the_closer_field():
+    demos = _decaying_lines([(300, 20), (250, -40), (280, 60), (320, 0), (0, 300), (-200, 100), (10, 10)])
+    train, test = split(demos)
+    seen = []
+
+    def candidate(field):
+        def fit(data):
+            seen.append(data)
+            return field
+        return fit
+    rotate = np.array([[0.0, 1.0], [-1.0, 0.0]])
+    name, model, scores = select_fit({"spiral": candidate(lambda X: -X + X @ rotate.T),
+                                      "exact": candidate(lambda X: -X)}, train)
+    # By construction the candidates only ever get the training demonstrations (1-4).
+    assert len(seen) == 2 and all(d is train for d in seen) and len(train) == 4
+    assert name == "exact" and scores["exact"] < 0.2 * scores["spiral"]
+    assert scores["exact"] == pytest.approx(np.mean(reproduction_scores(model, train)[0]))
+    with pytest.raises(InputError, match="at least one candidate"):
+        select_fit({}, train)

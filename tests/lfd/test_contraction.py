@@ -1,10 +1,14 @@
 """G_k and M as numbers and as polynomial matrices: both agree, and known answers."""
 import numpy as np
 
+import pytest
+
 from sosdyn.lfd.contraction import (certificate_matrices, constant_index, contraction_degree,
-                                    contraction_matrices, contraction_polymatrix, degree, field_exponents,
-                                    margin_degree, metric_exponents, numeric_fields, numeric_metric,
-                                    sample_states, sampled_eigenvalues, state_variables)
+                                    contraction_matrices, contraction_polymatrix, decision_fields,
+                                    decision_metric, degree, field_exponents, margin_degree, metric_exponents,
+                                    numeric_fields, numeric_metric, sample_states, sampled_eigenvalues,
+                                    state_variables, symmetric_pairs)
+from sosdyn.poly import allocate, jacobian
 
 RNG = np.random.default_rng(0)
 FEXPS, MEXPS = field_exponents(2, 3), metric_exponents(2, 2)
@@ -69,3 +73,28 @@ def test_certificate_matrices_are_M_minus_eps_I_then_minus_G_k():
                                atol=1e-12)
     np.testing.assert_allclose(mats[2][1](Z, vars), -contraction_matrices(C, FEXPS, W, MEXPS, Z, 0.3)[:, 1],
                                rtol=1e-10, atol=1e-10)
+
+
+def _entrywise_G(f, M, vars, gamma):
+    """The contraction operator by entry-by-entry Polynomial arithmetic (the reference)."""
+    J = jacobian(f, vars)
+    JtM = J.T @ M
+    return JtM + JtM.T + M.directional_derivative(f, vars) + gamma * M
+
+
+@pytest.mark.parametrize("n, fd, md", [(2, 3, 2), (3, 1, 2), (4, 1, 0)])
+def test_vectorised_G_is_the_entrywise_G_for_decision_fields_and_decision_metrics(n, fd, md):
+    rng = np.random.default_rng(n)
+    vars, fexps, mexps = state_variables(n), field_exponents(n, fd), metric_exponents(n, md)
+    Cn = rng.normal(size=(1, n, fexps.shape[0]))
+    Wn = rng.normal(size=(n, n, mexps.shape[0]))
+    Wn = Wn + Wn.transpose(1, 0, 2)
+    f_dec = decision_fields(allocate(n * fexps.shape[0]).reshape(1, n, -1), fexps, vars)[0]
+    M_dec = decision_metric({p: allocate(mexps.shape[0]) for p in symmetric_pairs(n)}, mexps, vars, n)
+    f_num, M_num = numeric_fields(Cn, fexps, vars)[0], numeric_metric(Wn, mexps, vars)
+    for f, M in ((f_dec, M_num), (f_num, M_dec), (f_num, M_num)):
+        ref, got = _entrywise_G(f, M, vars, 0.7), contraction_polymatrix(f, M, vars, 0.7)
+        for (i, j), p in np.ndenumerate(ref.entries):
+            q = got.entries[i, j]
+            assert np.array_equal(p.exps, q.exps) and np.array_equal(p.ids, q.ids)
+            np.testing.assert_allclose(q.coef, p.coef, rtol=1e-13, atol=1e-13)

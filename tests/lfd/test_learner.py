@@ -24,7 +24,7 @@ def test_learn_gives_the_estimators_numbers_and_history(linear_demos):
 
 def test_settings_and_the_learned_metric_degree():
     s = Settings.from_params(sd.CDSP(metric_degree=2).get_params())
-    assert s.learned_metric_degree == 2 and s.solver_method == "alternating"
+    assert s.learned_metric_degree == 2 and s.solver_method == "ica" and s.metric_prox == 0.01
     assert Settings.from_params(sd.CDSP(metric_degree=2, metric="identity").get_params()).learned_metric_degree == 0
 
 

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
-from sosdyn.lfd.params import MAX_SEED, check_solver, resolve_seed
+from sosdyn.lfd.params import MAX_SEED, PRESETS, check_solver, resolve_seed
 from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.model_io import read_model_file, write_model_file
 
 
 def line_demos(T=60):
@@ -22,6 +23,8 @@ def line_demos(T=60):
 
 BAD = [
     (dict(margin=-1e-4), "margin must be a positive finite number"),
+    (dict(metric_prox=-1e-3), "metric_prox must be a finite number >= 0"),
+    (dict(metric_prox=True), "metric_prox must be a finite number >= 0"),
     (dict(margin="small"), "margin must be a positive finite number"),
     (dict(margin=float("nan")), "margin must be a positive finite number"),
     (dict(gamma=True), "gamma must be a positive finite number"),
@@ -98,3 +101,24 @@ def test_verify_arguments_are_checked(tmp_path):
         model.verify(seed=-1)
     with sd.limits(max_bytes=10**6), pytest.raises(sd.ResourceLimitError, match="sampled certificate check"):
         model.verify(n_samples=10**6)
+
+
+def test_presets_set_their_parameters_and_paper_is_the_former_default():
+    paper = sd.CDSP.preset("paper").get_params()
+    assert (paper["solver_method"], paper["metric_prox"], paper["n_components"]) == ("alternating", 0.0, 6)
+    assert (paper["field_degree"], paper["metric_degree"], paper["gamma"]) == (1, 0, 0.1)
+    default = sd.CDSP().get_params()
+    assert {k: default[k] for k in PRESETS["ica"]} == dict(PRESETS["ica"], n_components=8)   # "ica", K = 8
+    cubic = sd.CDSP.preset("cubic", n_components=4).get_params()
+    assert (cubic["field_degree"], cubic["metric_degree"], cubic["n_components"]) == (3, 2, 4)
+    with pytest.raises(sd.InputError, match="unknown preset 'fast'. Try: one of"):
+        sd.CDSP.preset("fast")
+
+
+def test_a_file_written_before_metric_prox_loads_with_the_plain_metric_step(tmp_path):
+    model = sd.CDSP(n_components=1).fit(line_demos())
+    content = read_model_file(model.save(tmp_path / "new.json"), None)
+    del content["params"]["metric_prox"]
+    old = sd.load_model(write_model_file(content, tmp_path / "old.json", None))
+    assert old.metric_prox == 0.0 and old.certified_
+    np.testing.assert_allclose(old.predict([[1.0, 2.0]]), model.predict([[1.0, 2.0]]))

@@ -19,3 +19,4 @@ def test_polymatrix_algebra_and_symmetry_check():
         PolyMatrix([[x, y], [x, 1]]).check_symmetric()
     with pytest.raises(sd.PolynomialError):
         _ = M @ np.ones((3, 3))
+

@@ -88,7 +88,6 @@ def make_results(shapes=SHAPES, methods=METHODS, figures: dict | None = None, se
         "certificates": certificates,
         "timings": timings,
         "figures": figures or {},
-        "bench": "## Solve time\n\n| degree | time (s) |\n|---|---|\n| 2 | 0.10 |\n| 4 | 0.90 |\n",
     }
 
 

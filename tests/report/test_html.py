@@ -15,7 +15,7 @@ from sosdyn.report import figures as F
 from sosdyn.report import html as H
 
 SECTIONS = ("findings", "figures", "accuracy", "robustness", "certificates", "timings",
-            "methods", "bench", "meta")
+            "methods", "meta")
 
 
 class Tables(HTMLParser):
@@ -76,10 +76,10 @@ def test_full_report_has_every_row(tmp_path, results_factory, figure_files):
     assert len(tables.images) == 2
     assert all(src.startswith("data:image/svg+xml;base64,") for src in tables.images)
     assert 'src="figures/' not in text
-    # bench markdown became a table
-    assert "<table>" in text and "<td>0.90</td>" in text
+    # the benchmarks are another page: named, not linked while it does not exist
+    assert "reports/bench/index.html" in text and 'href="bench/index.html"' not in text
     # every table scrolls sideways in its own box instead of running off the page
-    assert text.count('<div class="table-wrap"><table id=') == len(tables.rows) - 1  # - bench
+    assert text.count('<div class="table-wrap"><table id=') == len(tables.rows)
     assert ".table-wrap { overflow-x: auto;" in text
 
 
@@ -212,3 +212,23 @@ def test_diverged_values_from_json_render_as_text(tmp_path, results):
     (tmp_path / "r.json").write_text(json.dumps(results))
     text = H.render_html(H.load_results(tmp_path / "r.json"), tmp_path).read_text()
     assert "∞ ± nan" in text
+
+
+def test_per_shape_numbers_of_a_finding_become_one_table(tmp_path, results):
+    results["findings"] = [{"title": "collapse", "text": "t", "numbers": {
+        "Angle: max eig.": -6.69e-05, "Angle: cost ratio": 1.128, "Line: max eig.": -5.4e-05,
+        "DTWD identical to SEDS-like": False}}]
+    table, other = H.number_table(results["findings"][0]["numbers"])
+    assert table == {"columns": ["max eig.", "cost ratio"],
+                     "rows": [("Angle", ["-6.69e-05", "1.13"]), ("Line", ["-5.40e-05", "—"])]}
+    assert other == [("DTWD identical to SEDS-like", "no")]
+    text = H.render_html(results, tmp_path).read_text()
+    assert Tables(text).rows[None] == 2
+    assert "<th>cost ratio</th>" in text and "DTWD identical to SEDS-like: <b>no</b>" in text
+
+
+def test_user_report_links_the_benchmark_page_when_it_exists(tmp_path, results):
+    (tmp_path / "bench").mkdir()
+    (tmp_path / "bench" / "index.html").write_text("<html></html>")
+    text = H.render_html(results, tmp_path).read_text()
+    assert '<a href="bench/index.html">' in text

@@ -84,3 +84,21 @@ def test_a_solver_answer_beyond_the_polynomial_bounds_is_a_solver_error(dense_pr
     prog, g = dense_program(4)
     sol = prog.solve()
     assert sol.status == "solver_error" and "above 1e+150" in sol.raw_status
+
+
+@pytest.mark.parametrize("backend,solver", [("direct", "CLARABEL"), ("cvxpy", "CLARABEL"), ("cvxpy", "CVXOPT")])
+def test_psd_duals_are_complementary_to_the_gram_matrices(backend, solver):
+    # max g with x^4 - 3x^2 + 2 - g SOS: at the optimum <Q, S> = 0 (complementary slackness) and
+    # S is the moment matrix of the two minimisers +-sqrt(3/2), weights 1/2: S/S_00 = [[1,0,1.5],[0,1.5,0],[1.5,0,2.25]]
+    if solver == "CVXOPT":
+        pytest.importorskip("cvxopt")
+    (x,) = sd.variables("x")
+    prog = sd.SOSProgram()
+    g = prog.new_var()
+    con = prog.add_sos(x**4 - 3 * x**2 + 2 - g)
+    prog.maximize(g)
+    sol = prog.solve(backend=backend, solver=solver)
+    (S,) = sol.info["psd_duals"]
+    Q = sol.gram_matrix(con)
+    assert abs(np.sum(Q * S)) <= 1e-6 * np.abs(Q).max() * np.abs(S).max()
+    assert S / S[0, 0] == pytest.approx(np.array([[1, 0, 1.5], [0, 1.5, 0], [1.5, 0, 2.25]]), abs=1e-3)

@@ -1,9 +1,10 @@
 """Gram bases from the Newton polytope, and the size check of coefficient matching."""
+import numpy as np
 import pytest
 
 import sosdyn as sd
 from sosdyn.sos import newton_basis
-from sosdyn.sos.newton import gram_matching_bytes
+from sosdyn.sos.newton import HULL_MAX_DIM, gram_matching_bytes, in_hull, in_hull_lp
 
 x, y = sd.variables("x y")
 
@@ -21,3 +22,25 @@ def test_gram_matching_is_checked_before_it_allocates():
         with pytest.raises(sd.ResourceLimitError, match="Gram basis of 66 monomials"):
             sd.SOSProgram().add_sos((1 + x**2 + y**2) ** 10)
     assert len(sd.SOSProgram().add_sos((1 + x**2 + y**2) ** 10).basis) == 66
+
+
+@pytest.mark.parametrize("n", [8, 16])
+def test_newton_basis_of_chained_rosenbrock_by_hull_and_by_lp(n):
+    # support: 4e_i (i <= n-2), 2e_i + e_i+1, 2e_j, e_i, 0. Degree-4 points are only the 4e_i with
+    # i <= n-2, so 2a in N for |a| <= 2 exactly for 0, every e_j, 2e_i and e_i + e_k (i, k <= n-2):
+    # 1 + n + (n - 1) + (n - 1)(n - 2)/2 monomials. n = 8 runs through Qhull, n = 16 through LPs.
+    xs = sd.variables(" ".join(f"x{i}" for i in range(n)))
+    f = sum(100 * (xs[i + 1] - xs[i] ** 2) ** 2 + (1 - xs[i]) ** 2 for i in range(n - 1))
+    assert (n > HULL_MAX_DIM) == (n == 16)           # the support spans n dimensions
+    b = newton_basis(f.exps)
+    assert b.shape[0] == 1 + n + (n - 1) + (n - 1) * (n - 2) // 2
+    assert not (b[:, -1] == 2).any() and b.sum(axis=1).max() == 2
+
+
+def test_hull_membership_by_lp_agrees_with_qhull():
+    rng = np.random.default_rng(0)
+    support = rng.integers(0, 5, size=(12, 4))
+    points = rng.integers(0, 5, size=(200, 4))
+    inside = in_hull(points, support)
+    assert 0 < inside.sum() < 200
+    np.testing.assert_array_equal(in_hull_lp(points, support), inside)

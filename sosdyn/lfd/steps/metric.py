@@ -4,6 +4,11 @@ G_k is linear in the field coefficients: with unit fields u_ij (z^e_j in compone
 -(J_k^T M + M J_k + dM[f_k]) = sum_ij C[k, i, j] (-(J_u^T M + M J_u + dM[u])). The family of
 component k is that sum plus the fixed term -gamma M - t g(z) I; with M - eps I SOS and
 trace M(0) = n (the scale of M is free), maximise t <= t_max.
+
+The maximiser is in general not unique (a face of the feasible set), so the solver's pick can
+jump under a 1e-10 change of the data. With ``prox`` = rho > 0 the step is proximal:
+maximise t - rho |w - w0|^2 over the metric coefficients w (w0: the current metric), strictly
+concave in w, so its maximiser is unique and depends continuously on the fields.
 """
 from __future__ import annotations
 
@@ -13,7 +18,7 @@ from ...poly import PolyMatrix, Polynomial
 from ...sos import SOSProgram
 from ..contraction import (constant_index, contraction_polymatrix, decision_metric, margin_matrix,
                            symmetric_pairs, unit_fields)
-from .common import TermTable, solve_with_fallback
+from .common import TermTable, proximal, solve_with_fallback
 
 FIXED = "fixed"             # the term -gamma M - t g(z) I, weight 1
 
@@ -50,9 +55,22 @@ class MetricStep:
             named = {("field", i, j): C[k, i, j] for i in range(C.shape[1]) for j in range(C.shape[2])}
             con.set_weights(self.table.weights({**named, FIXED: 1.0}))
 
-    def solve(self, C):
-        """Metric coefficients W (n, n, p) for the numeric fields C; returns (W, margin, Solution)."""
+    def objective(self, W0, prox):
+        """-t + prox |w - w0|^2 over the metric ids and t (w0: the coefficients of W0)."""
+        ids = np.concatenate([self.pair_ids[pair] for pair in sorted(self.pair_ids)])
+        center = np.concatenate([W0[a, b] for a, b in sorted(self.pair_ids)])
+        order = np.argsort(ids)
+        return proximal(ids[order], center[order], prox) + (-self.t)
+
+    def solve(self, C, W0=None, prox=0.0):
+        """Metric coefficients W (n, n, p) for the numeric fields C; returns (W, margin, Solution).
+
+        ``prox`` > 0 (with the current metric W0): the proximal step of the module docstring."""
         self.set_fields(C)
+        if prox > 0:
+            self.prog.minimize(self.objective(W0, prox))
+        else:
+            self.prog.maximize(self.t)
         sol = solve_with_fallback(self.prog, self.solver)
         W = np.zeros((self.n, self.n, self.mexps.shape[0]))
         for (a, b), ids in self.pair_ids.items():

@@ -22,7 +22,7 @@ def test_bench_learner_quick(tmp_path, times_ok):
         assert f["sdp_solves"] > 1
         assert f["build"] + f["solve"] + f["steps"] == pytest.approx(f["learn"])
     sweeps = json.loads((tmp_path / "scaling.json").read_text())["sweeps"]
-    assert set(sweeps) == {"K", "n", "metric", "field", "samples"}
+    assert set(sweeps) == {"K", "metric", "field", "samples"}
     for sw in sweeps.values():
         assert (tmp_path / sw["plot"]).exists()
         for r in sw["rows"]:
@@ -32,6 +32,13 @@ def test_bench_learner_quick(tmp_path, times_ok):
         for backend in ("direct", "cvxpy"):
             times_ok(b[backend], ("step_wall", "solver", "overhead_update_solve"))
         assert b["ratios"]["cvxpy_over_direct_step"] > 0
+    scal = json.loads((tmp_path / "scaling_n.json").read_text())
+    assert [r["n"] for r in scal["rows"]] == [2, 3] and (tmp_path / scal["plot"]).exists()
+    for r in scal["rows"]:
+        times_ok(r, ("total", "em", "build", "solve", "verify", "resolve_overhead", "solve_check"))
+        assert r["build"] >= r["sos_build"] > 0 and r["build_over_solve"] == pytest.approx(r["build"] / r["solve"])
+    assert scal["goals"]["ratio"]["value"] == pytest.approx(scal["rows"][1]["total"] / scal["rows"][0]["total"])
+    assert "### state dimension n" in (tmp_path / "summary.md").read_text()
     targets = json.loads((tmp_path / "bench.json").read_text())["targets"]
     assert {"linear_fit", "resolve"} <= set(targets)
     profiles = json.loads((tmp_path / "profiles.json").read_text())["profiles"]

@@ -6,7 +6,8 @@ import pytest
 pytest.importorskip("SumOfSquares")
 pytest.importorskip("pyinstrument")
 
-from problems.bench import sos as bench_sos  # noqa: E402
+from problems.bench import drake_problems, sparse_problems
+from problems.bench import sos as bench_sos
 
 
 def test_bench_sos_quick(tmp_path, times_ok):
@@ -29,5 +30,23 @@ def test_bench_sos_quick(tmp_path, times_ok):
     assert resolved and all(r["overhead"] > 0 and r["update"] > 0 for r in resolved)
     for key in ("build_share", "resolve", "build_speedup"):
         assert "met" in res["summary"][key]
+    drake = drake_problems.available() is not None
+    for p in res["problems"]:
+        d = p["drake"]
+        if not drake:
+            assert d is None
+        elif p["name"] in drake_problems.NOT_WRITTEN:
+            assert "skipped" in d
+        else:
+            times_ok(d, ("build", "canonicalize", "solve"))
+            assert d["ratios"]["total"] > 0 and d["status"] == p["direct"]["status"].replace("_inaccurate", "")
+    assert res["summary"]["drake"]["met"] in ((True, False) if drake else (None,))
+    assert [(r["problem"], r["n"], r["variant"]) for r in res["sparse"]] == [
+        (f, 4, v) for f in sparse_problems.FUNCTIONS for v in sparse_problems.VARIANTS]
+    assert all(r["bound_ok"] for r in res["sparse"] if r["variant"] == "dense")
+    split = res["build_split"]
+    assert split["problem"] in {"Motzkin M", "quartic form"}           # the one-polynomial problems here
+    assert split["stages"]["sosdyn"]["total"]["min"] > 0
     md = (tmp_path / "sos.md").read_text()
-    assert "## Targets" in md and "SumOfSquares" in md
+    assert "## Targets" in md and "SumOfSquares" in md and "## Sparsity" in md
+    assert ("## Side by side with Drake" in md) and ("at least as fast as Drake" in md)

@@ -1,0 +1,89 @@
+"""Single-state prediction for control loops: ``model.predict(x[None])`` against ``model.predictor()(x)``.
+
+Fits one LASA shape (K = 6, 2-D, linear fields; ``--cubic`` adds a degree-3 model), then times
+one call at a time (median over ``--calls`` calls, each timed alone, after a warm-up) at states
+along the demonstrations, and checks that both give the same velocities: the largest relative
+difference |v_fast - v| / max(|v|, tiny) over the rows of a 10^4-state grid twice the data's box.
+Writes ``reports/bench/predict.json``. Run: ``python -m problems.bench.predict [--quick]``.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from sosdyn import CDSP, load_lasa
+
+from ..settings import BENCH
+from .timing import environment, median, write_json
+
+TARGET_S = 50e-6                    # the issue's budget for one state, K = 6, 2-D
+
+
+def time_calls(f, states, calls: int) -> float:
+    """Median seconds of one call f(x), each call timed on its own (after 50 warm-up calls)."""
+    for x in states[:50]:
+        f(x)
+    ts = []
+    for i in range(calls):
+        x = states[i % len(states)]
+        t0 = time.perf_counter()
+        f(x)
+        ts.append(time.perf_counter() - t0)
+    return median(ts)
+
+
+def grid_states(X: np.ndarray, count: int, seed: int = 0) -> np.ndarray:
+    """``count`` uniform states in the data's bounding box doubled about its centre."""
+    lo, hi = X.min(axis=0), X.max(axis=0)
+    mid, half = (lo + hi) / 2, (hi - lo)
+    return mid + np.random.default_rng(seed).uniform(-1, 1, (count, X.shape[1])) * half
+
+
+def measure(shape: str, field_degree: int, calls: int, states: int) -> dict:
+    """Fit ``shape`` and compare the two evaluators (timings in seconds, error relative)."""
+    demos = load_lasa(shape)
+    model = CDSP(n_components=6, field_degree=field_degree, random_state=0).fit(demos)
+    X = np.vstack([d.pos for d in demos])
+    fast = model.predictor()
+    along = X[:: max(1, len(X) // 500)]
+    t_batch = time_calls(lambda x: model.predict(x[None])[0], along, calls)
+    t_fast = time_calls(fast, along, calls)
+    G = grid_states(X, states)
+    V = model.predict(G)
+    F = np.array([fast(x) for x in G])
+    rel = np.abs(F - V).max(axis=1) / np.maximum(np.abs(V).max(axis=1), np.finfo(float).tiny)
+    K, n, m = model.C_.shape
+    return {"shape": shape, "K": K, "n": n, "monomials": m, "field_degree": field_degree,
+            "predict_s": t_batch, "predictor_s": t_fast, "speedup": t_batch / t_fast,
+            "max_rel_diff": float(rel.max()), "states_checked": states, "calls_timed": calls,
+            "within_target": bool(t_fast <= TARGET_S)}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m problems.bench.predict", description=__doc__.split("\n")[0])
+    ap.add_argument("--shape", default="Angle", help="LASA shape (default: %(default)s)")
+    ap.add_argument("--calls", type=int, default=20000, help="timed calls per evaluator (default: %(default)s)")
+    ap.add_argument("--states", type=int, default=10000, help="states of the equality check (default: %(default)s)")
+    ap.add_argument("--cubic", action="store_true", help="also a degree-3 field")
+    ap.add_argument("--quick", action="store_true", help="1000 calls, 1000 states (smoke test)")
+    ap.add_argument("--out", default=str(BENCH), help="output folder (default: reports/bench)")
+    args = ap.parse_args(argv)
+    calls, states = (1000, 1000) if args.quick else (args.calls, args.states)
+    rows = [measure(args.shape, 1, calls, states)]
+    if args.cubic:
+        rows.append(measure(args.shape, 3, calls, states))
+    for r in rows:
+        print(f"{r['shape']} K={r['K']} n={r['n']} degree {r['field_degree']}: predict {r['predict_s'] * 1e6:.0f} us, "
+              f"predictor {r['predictor_s'] * 1e6:.1f} us ({r['speedup']:.0f}x), "
+              f"max rel diff {r['max_rel_diff']:.1e} on {r['states_checked']} states", flush=True)
+    path = write_json(Path(args.out) / "predict.json",
+                      {"target_s": TARGET_S, "rows": rows, "environment": environment()})
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,56 @@
+"""What every ``sosdyn`` command shares: the Typer app, the consoles, the global options'
+state and small option helpers. The commands live in :mod:`sosdyn.cli` (the package),
+:mod:`.fit` and :mod:`.models`."""
+from __future__ import annotations
+
+from contextlib import nullcontext
+
+import numpy as np
+import typer
+from rich.console import Console
+
+from ..errors import InputError
+
+app = typer.Typer(name="sosdyn", no_args_is_help=True, add_completion=False,
+                  help="SOS programming and provably convergent motion learning (CDSP).")
+lasa_app = typer.Typer(no_args_is_help=True, help="The LASA handwriting data set.")
+app.add_typer(lasa_app, name="lasa")
+
+out = Console()
+err = Console(stderr=True)
+
+
+class State:
+    """Global options, set by the app callback."""
+
+    quiet = False
+    debug = False
+
+
+def info(message: str) -> None:
+    """A summary line on stdout, never wrapped (nothing when --quiet)."""
+    if not State.quiet:
+        out.print(message, soft_wrap=True)
+
+
+def status(message: str):
+    """A spinner while a long single call runs (nothing when --quiet)."""
+    return nullcontext() if State.quiet else err.status(message)
+
+
+def positive(value: float | None) -> float | None:
+    """Option callback: a finite number > 0 (or not given)."""
+    if value is not None and not 0 < value < float("inf"):
+        raise typer.BadParameter(f"must be a finite number > 0, got {value}.")
+    return value
+
+
+def parse_point(text: str) -> np.ndarray:
+    """``"10,-5"`` as the array [10, -5]; InputError unless finite numbers."""
+    try:
+        point = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise InputError(f"--from expects comma-separated numbers like 10,-5; got {text!r}.") from None
+    if not np.all(np.isfinite(point)):
+        raise InputError(f"--from must be finite; got {text!r}.")
+    return point

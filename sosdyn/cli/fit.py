@@ -1,0 +1,148 @@
+"""``sosdyn fit``: demonstrations in, a certified model file out.
+
+Inputs: files, folders (their ``*.csv`` / ``*.npy``), quoted patterns (``'demos/*.csv'``), or
+``lasa:NAME``; read by :func:`sosdyn.load_demos` (headers ``t,x,y[,z]``, ``t,x1..xn``,
+optional velocities, or no header with time in column 0; ``--dt`` for files without time).
+``--units`` is recorded, not applied: it names the units of the positions in the model file
+(``state.units_``), on plot axes and in exported code; the numbers are used as they are.
+Progress: one plain line per convex step on stdout (step, cost, seconds since the start)
+when stdout is not a terminal, a live status line when it is; nothing with ``--quiet``.
+"""
+from __future__ import annotations
+
+import enum
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+
+from ..errors import InputError
+from ..lfd.cdsp import DEFAULTS
+from ..lfd.data import GOAL_TOL_FRACTION, MAX_UNITS_CHARS
+from ..lfd.params import PRESETS
+from .base import State, app, err, info, out, positive
+from .paths import check_folder, check_output, demo_inputs
+
+Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
+
+
+class SolverMethod(str, enum.Enum):
+    alternating = "alternating"
+    ica = "ica"
+
+
+def progress_line(row: dict, elapsed: float) -> str:
+    """One convex step of a fit: ``step 3 (metric): cost 12.5, 1.4 s``."""
+    return f"step {row['iteration'] + 1} ({row['step']}): cost {row['cost']:.6g}, {elapsed:.1f} s"
+
+
+class FitProgress:
+    """Shows a fit's steps: plain lines on stdout when it is not a terminal (pipes, logs, CI),
+    a live status line on a terminal; nothing when --quiet. Use as a context manager and pass
+    :meth:`row` as the model's ``progress``."""
+
+    def __init__(self, message: str):
+        self.message, self.start, self._status = message, time.perf_counter(), None
+
+    def __enter__(self):
+        if not State.quiet and out.is_terminal:
+            self._status = err.status(self.message + " ...")
+            self._status.__enter__()
+        elif not State.quiet:
+            out.print(self.message, highlight=False, soft_wrap=True)
+        return self
+
+    def __exit__(self, *exc):
+        if self._status is not None:
+            self._status.__exit__(*exc)
+        return False
+
+    def row(self, row: dict) -> None:
+        line = progress_line(row, time.perf_counter() - self.start)
+        if self._status is not None:
+            self._status.update(f"{self.message}: {line}")
+        elif not State.quiet:
+            out.print(line, highlight=False, soft_wrap=True)
+
+
+def _units(value: str | None) -> str | None:
+    """Option callback: printable, at most MAX_UNITS_CHARS characters."""
+    if value is not None and (len(value) > MAX_UNITS_CHARS or not value.isprintable()):
+        raise typer.BadParameter(f"must be printable and at most {MAX_UNITS_CHARS} characters, e.g. m or mm.")
+    return value
+
+
+def _default(name: str) -> str:
+    return f"{DEFAULTS[name]}, or the preset's"
+
+
+@app.command()
+def fit(
+    demos: Annotated[list[str], typer.Argument(
+        help="Demonstration files (CSV/NPY, one demonstration each, or several with a demo column), "
+             "folders of them, quoted patterns like 'demos/*.csv', or lasa:NAME.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="Where to save the model (JSON).")] = Path("model.json"),
+    preset: Annotated[Preset | None, typer.Option(
+        help="Named parameter set (see CDSP.preset); options given here override it.",
+        show_default="none: CDSP()'s defaults")] = None,
+    components: Annotated[int | None, typer.Option("--components", "-k", min=1, help="Gaussian components K.",
+                                                   show_default=_default("n_components"))] = None,
+    metric_degree: Annotated[int | None, typer.Option(min=0, help="Degree of the polynomial metric M(z) (even).",
+                                                      show_default=_default("metric_degree"))] = None,
+    field_degree: Annotated[int | None, typer.Option(min=1, help="Degree of the polynomial fields f_k (odd).",
+                                                     show_default=_default("field_degree"))] = None,
+    gamma: Annotated[float | None, typer.Option(callback=positive, help="Contraction rate (1/s, > 0).",
+                                                show_default=_default("gamma"))] = None,
+    solver: Annotated[str | None, typer.Option(help="Conic solver, e.g. CLARABEL or SCS.",
+                                               show_default=str(DEFAULTS["solver"]))] = None,
+    solver_method: Annotated[SolverMethod | None, typer.Option(
+        "--solver-method", "--method", help="How the bilinear program is solved (CDSP's solver_method).",
+        show_default=_default("solver_method"))] = None,
+    seed: Annotated[int | None, typer.Option(min=0, max=2**32 - 1, help="Random seed (EM initialisation).",
+                                             show_default=str(DEFAULTS["random_state"]))] = None,
+    dt: Annotated[float | None, typer.Option(
+        callback=positive, help="Sampling step (s) of files without a time column: sample k is at k*dt.",
+        show_default="none: the files' time column")] = None,
+    units: Annotated[str | None, typer.Option(
+        callback=_units, help="Units of the positions, e.g. m or mm: recorded in the model file, shown on "
+                              "plots; the numbers are not rescaled.", show_default="none")] = None,
+    goal_tol: Annotated[float | None, typer.Option(
+        "--goal-tol", min=0.0, help="Largest distance of a demonstration's end point from the mean end point "
+                                    "(data units); demonstrations ending farther apart are refused.",
+        show_default=f"{GOAL_TOL_FRACTION:.0%} of the data's bounding-box diagonal")] = None,
+) -> None:
+    """Learn a certified CDSP model from demonstrations and save it.
+
+    Options left out use CDSP()'s defaults (shown), or the preset's.
+    """
+    import sosdyn as sd
+
+    lasa = len(demos) == 1 and demos[0].startswith("lasa:")
+    if lasa and (dt, units, goal_tol) != (None, None, None):
+        raise InputError("--dt, --units and --goal-tol apply to files, not to lasa:NAME (time in s, "
+                            "positions in mm). Try: drop them.")
+    paths = [] if lasa else demo_inputs(demos)
+    check_output(out_path, paths, "demonstration file")
+    check_folder(out_path.parent)
+    folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
+    read = {"dt": dt, "units": units, "goal_tol": goal_tol, "name": Path(demos[0]).resolve().name if folder else None}
+    data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
+        paths, **{k: v for k, v in read.items() if v is not None})
+    options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
+               "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
+               "random_state": seed}
+    given = {k: v for k, v in options.items() if v is not None}
+    model = sd.CDSP.preset(preset.value, **given) if preset else sd.CDSP(**given)
+    with FitProgress(f"fitting CDSP to {len(data)} demonstrations of {data.name}") as progress:
+        model.progress = progress.row
+        model.fit(data)
+    model.progress = None
+    model.save(out_path)
+    report = model.verification_
+    info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} demonstrations, "
+         f"fit in {time.perf_counter() - progress.start:.1f} s, {len(model.history_)} convex steps)")
+    info(f"certificate: {'[green]passed[/]' if report.passed else '[red]FAILED[/]'} — min Gram eigenvalue "
+         f"{report.min_gram_eig:.2e}, max sampled generalised eigenvalue {report.max_sampled_eig:.2e} "
+         f"over {report.n_samples} states")

@@ -1,0 +1,140 @@
+"""The commands on a saved model: ``sosdyn rollout``, ``sosdyn export`` and ``sosdyn plot``."""
+from __future__ import annotations
+
+import enum
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.markup import escape
+
+from ..errors import InputError
+from .base import app, info, out, parse_point, positive, status
+from .paths import check_folder, check_output, demo_inputs, existing
+
+
+@app.command()
+def rollout(
+    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
+    start: Annotated[str, typer.Option("--from", help="Start state, comma-separated, e.g. 10,-5.",
+                                       show_default=False)],
+    duration: Annotated[float, typer.Option(callback=positive, help="Seconds to integrate.")] = 10.0,
+    dt: Annotated[float | None, typer.Option(callback=positive, help="Time step (s); default: the model's.")] = None,
+    out_path: Annotated[Path | None, typer.Option("--out", "-o", help="Write t and positions as CSV.")] = None,
+) -> None:
+    """Integrate a saved model from a start state and print the end point.
+
+    With --out also write the trajectory as CSV (columns t,x1..xn: loadable again as a
+    demonstration)."""
+    import sosdyn as sd
+
+    x0 = parse_point(start)
+    existing(model_path, "model file")
+    if out_path is not None:
+        check_output(out_path, [model_path], "model file")
+        check_folder(out_path.parent)
+    model = sd.load_model(model_path)
+    traj = model.rollout(x0, duration, **({} if dt is None else {"dt": dt}))
+    t, pos = np.asarray(traj.t), np.asarray(traj.pos)
+    if out_path is not None:                     # the layout load_demos reads
+        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="",
+                   header=",".join(["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]))
+        info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
+    end = ", ".join(f"{v:.4g}" for v in pos[-1])
+    out.print(f"t = {t[-1]:.3g} s: x = ({end})")
+
+
+
+class ExportTarget(str, enum.Enum):
+    python = "python"
+    cpp = "cpp"
+
+
+@app.command("export")
+def export_model(
+    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
+    target: Annotated[ExportTarget, typer.Option("--to", help="python: one numpy-only module; cpp: a "
+                                                "header-only C++17 evaluator.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="The file to write (.py or .hpp).",
+                                           show_default=False)],
+) -> None:
+    """Write a standalone evaluator of a saved model (Python + numpy, or C++17).
+
+    No sosdyn is needed to run it: Python `predict(X) -> Xdot` with numpy only, or C++17
+    `bool predict(const double* x, double* xdot)`."""
+    import sosdyn as sd
+
+    from ..lfd.export import export as generate
+    from ..lfd.model_io import replace_atomically
+
+    existing(model_path, "model file")
+    check_output(out_path, [model_path], "model file")
+    check_folder(out_path.parent)
+    source = generate(sd.load_model(model_path), target.value)
+    replace_atomically(out_path, source.encode("utf-8"))
+    info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
+
+
+PLOT_FORMATS = (".png", ".svg")
+
+
+@app.command()
+def plot(
+    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="The figure (.png or .svg).", show_default=False)],
+    demos: Annotated[list[str] | None, typer.Option(
+        "--demos", help="Demonstrations to draw (CSV/NPY files, folders, quoted patterns, or lasa:NAME); "
+                        "repeat the option for several. Reproductions start from their first states.", show_default=False)] = None,
+    duration: Annotated[float | None, typer.Option(callback=positive, help="Seconds per reproduction; "
+                                                   "default: the demonstrations' longest (10 s without).")] = None,
+    dt: Annotated[float | None, typer.Option(
+        callback=positive, help="Sampling step (s) of demonstration files without a time column.",
+        show_default="none: the files' time column")] = None,
+) -> None:
+    """Plot a saved model: streamlines, 3-D trajectories or time series.
+
+    Streamlines for n = 2, 3-D trajectories with plane projections for n = 3, each dimension of
+    the reproductions over time for n > 3. Without --demos the reproductions start at the
+    mixture's means."""
+    import matplotlib as mpl
+
+    import sosdyn as sd
+
+    from ..report.figures import STYLE, streamlines, time_series, trajectories_3d
+
+    if out_path.suffix.lower() not in PLOT_FORMATS:
+        raise InputError(f"--out {out_path} must end in .png or .svg. Try: --out {out_path.with_suffix('.png')}.")
+    demos = demos or []
+    lasa = len(demos) == 1 and demos[0].startswith("lasa:")
+    paths = [] if lasa else demo_inputs(demos)
+    existing(model_path, "model file")
+    check_output(out_path, [model_path, *paths], "input")
+    check_folder(out_path.parent)
+    model = sd.load_model(model_path)
+    data = (sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa
+            else sd.load_demos(paths, **({} if dt is None else {"dt": dt}))) if demos else None
+    if data is not None and data.dim != model.dim_:
+        raise InputError(f"the demonstrations are {data.dim}-D but the model is {model.dim_}-D. "
+                         "Try: the demonstrations the model was fitted to.")
+    demo_pos = [d.pos for d in data] if data is not None else []
+    starts = [p[0] for p in demo_pos] or list(model.goal_ + model.scale_ * model.mixture_.means)
+    horizon = duration or (max(float(d.t[-1] - d.t[0]) for d in data) if data is not None else 10.0)
+    with status(f"rolling out {len(starts)} reproductions ..."):
+        runs = [model.rollout(x0, horizon) for x0 in starts]
+    title = model_path.stem
+    if model.dim_ == 2:
+        fig = streamlines(None, model.predict, demo_pos, [r.pos for r in runs], model.goal_, title=title,
+                          units=model.units_)
+    elif model.dim_ == 3:
+        fig = trajectories_3d(demo_pos, [r.pos for r in runs], model.goal_, title=title, units=model.units_)
+    else:
+        fig = time_series([(r.t, r.pos) for r in runs], model.goal_, model.units_, title)
+    with mpl.rc_context(STYLE):
+        fig.savefig(out_path, format=out_path.suffix.lower()[1:], dpi=150, metadata=_no_date(out_path))
+    info(f"[green]wrote[/] {escape(str(out_path))}  ({model.dim_}-D model, {len(runs)} reproductions)")
+
+
+def _no_date(path: Path) -> dict:
+    """savefig metadata: no creation date in an SVG, so equal inputs give equal files."""
+    return {"Date": None} if path.suffix.lower() == ".svg" else {}

@@ -1,0 +1,67 @@
+"""The benchmark report: ``reports/bench/index.html``, apart from the user report.
+
+The user report (:mod:`sosdyn.report.html`) holds what a user of a fitted model needs:
+findings, figures, accuracy, robustness, certificates and fit timings. Solver tables,
+profiles, scaling sweeps and the one-state prediction timings go on this page instead, built
+from what the benchmarks wrote into one folder:
+
+* ``summary.md`` (``make bench``) and ``sos.md`` (``make bench-sos``), then every other
+  ``*.md`` of the folder (by name), rendered as they are; their images (``scaling_K.png``, ...)
+  are linked relative to the folder, and links between these files become links within the page;
+* ``predict.json`` (``python -m problems.bench.predict``): one table row per model, the
+  median seconds of ``model.predict`` on one row and of ``model.predictor()``, the speed-up
+  and the largest relative difference;
+* every other ``*.json`` of the folder, linked as raw data.
+
+A missing input is listed as "not run"; nothing else is read.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from .html import jinja_environment, markdown_html
+
+BENCH_PAGES = (("summary.md", "Learner benchmarks", "make bench"),
+               ("sos.md", "SOS layer benchmarks", "make bench-sos"))
+PREDICT_FILE = "predict.json"
+PREDICT_COLUMNS = ("model", "model.predict, one row", "model.predictor()", "speed-up", "max. relative difference",
+                   "within 50 µs")
+
+
+def _micro(seconds) -> str:
+    return "—" if seconds is None else f"{seconds * 1e6:.1f} µs"
+
+
+def predict_rows(data: dict) -> list[list[str]]:
+    """The cells of the one-state prediction table from a ``predict.json``."""
+    return [[f"{r['shape']}, K = {r['K']}, n = {r['n']}, field degree {r['field_degree']}",
+             _micro(r.get("predict_s")), _micro(r.get("predictor_s")),
+             "—" if r.get("speedup") is None else f"{r['speedup']:.1f}×",
+             "—" if r.get("max_rel_diff") is None else f"{r['max_rel_diff']:.1e}",
+             "yes" if r.get("within_target") else "no"] for r in data.get("rows", [])]
+
+
+def render_bench(bench_dir: str | Path) -> Path:
+    """Write ``bench_dir/index.html`` from the benchmark outputs in ``bench_dir``."""
+    bench_dir = Path(bench_dir)
+    known = {name for name, _, _ in BENCH_PAGES}
+    extra = [(p.name, p.stem, None) for p in sorted(bench_dir.glob("*.md")) if p.name not in known]
+    pages = [*BENCH_PAGES, *extra]
+    sections = []
+    for name, title, command in pages:
+        path = bench_dir / name
+        text = path.read_text(encoding="utf-8") if path.is_file() else None
+        if text is not None:
+            for other, _, _ in pages:
+                text = text.replace(f"]({other})", f"](#{Path(other).stem})")
+        sections.append({"id": Path(name).stem, "title": title, "command": command,
+                         "html": None if text is None else markdown_html(text)})
+    predict = bench_dir / PREDICT_FILE
+    rows = predict_rows(json.loads(predict.read_text(encoding="utf-8"))) if predict.is_file() else None
+    raw = sorted(p.name for p in bench_dir.glob("*.json"))
+    html = jinja_environment().get_template("bench.html.j2").render(
+        sections=sections, predict={"headers": PREDICT_COLUMNS, "rows": rows}, raw=raw)
+    out = bench_dir / "index.html"
+    out.write_text(html, encoding="utf-8")
+    return out

@@ -1,0 +1,153 @@
+"""Basic semialgebraic sets K = {x : g_i(x) >= 0, h_j(x) = 0} and their Putinar terms.
+
+``add_nonneg_on(p, K, degree)`` certifies p >= 0 on K by (Putinar 1993; the S-procedure when
+every multiplier is a constant)
+
+    p = sigma_0 + sum_S sigma_S g_S + sum_j lambda_j h_j,   sigma SOS, lambda free,
+
+where S runs over the single inequalities and, with ``products``, over products
+g_S = prod_{i in S} g_i of up to ``products`` of them (Schmuedgen's preorder: products can
+certify at a lower degree what single terms need a higher degree for). Each multiplier has
+the largest degree with deg(multiplier * constraint) <= its degree bound: ``degree`` as one
+int for all, or a list/dict giving the bound per constraint (index into ineqs + eqs).
+
+:class:`BasicSet` holds the constraints; :func:`putinar_terms` lists (constraint, its SOS or
+free multiplier's degree) for a relaxation degree.
+"""
+from __future__ import annotations
+
+from itertools import combinations
+
+import numpy as np
+
+from ..errors import InputError, PolynomialError
+from ..poly import Polynomial, variables
+
+
+def _as_poly(g, what) -> Polynomial:
+    if isinstance(g, (int, float)):
+        g = Polynomial.constant(float(g))
+    if not isinstance(g, Polynomial) or not g.is_numeric:
+        raise PolynomialError(f"{what} must be a numeric Polynomial, got {g!r}. Try: x**2 + y**2 - 1")
+    return g
+
+
+class BasicSet:
+    """K = {x : g_i(x) >= 0 for g in ``ineqs``, h_j(x) = 0 for h in ``eqs``}.
+
+    >>> x, y = variables("x y"); K = BasicSet(ineqs=[1 - x**2 - y**2])       # the unit disk
+    """
+
+    def __init__(self, ineqs=(), eqs=()):
+        self.ineqs = tuple(_as_poly(g, f"inequality {k}") for k, g in enumerate(ineqs))
+        self.eqs = tuple(_as_poly(h, f"equality {k}") for k, h in enumerate(eqs))
+        names: tuple = ()
+        for g in self.ineqs + self.eqs:
+            names = names + tuple(v for v in g.vars if v not in names)
+        self.vars = names
+
+    @classmethod
+    def box(cls, vars, lower, upper) -> BasicSet:
+        """The box lower_i <= x_i <= upper_i as (x_i - lower_i)(upper_i - x_i) >= 0 per variable."""
+        xs = variables(vars) if isinstance(vars, str) else list(vars)
+        lo, hi = np.broadcast_to(lower, len(xs)), np.broadcast_to(upper, len(xs))
+        return cls(ineqs=[(x - float(a)) * (float(b) - x) for x, a, b in zip(xs, lo, hi)])
+
+    @classmethod
+    def ball(cls, vars, radius=1.0, center=None) -> BasicSet:
+        """The ball ||x - center|| <= radius as radius^2 - ||x - center||^2 >= 0."""
+        xs = variables(vars) if isinstance(vars, str) else list(vars)
+        c = np.zeros(len(xs)) if center is None else np.broadcast_to(center, len(xs))
+        return cls(ineqs=[float(radius) ** 2 - sum((x - float(ci)) ** 2 for x, ci in zip(xs, c))])
+
+    def __and__(self, other: BasicSet) -> BasicSet:
+        """The intersection: both sets' constraints."""
+        return BasicSet(self.ineqs + other.ineqs, self.eqs + other.eqs)
+
+    def contains(self, points, tol: float = 1e-9) -> np.ndarray:
+        """Boolean mask of the rows of ``points`` (columns in ``self.vars`` order) lying in K."""
+        X = np.atleast_2d(np.asarray(points, dtype=float))
+        ok = np.ones(X.shape[0], dtype=bool)
+        for g in self.ineqs:
+            ok &= g(X, self.vars) >= -tol
+        for h in self.eqs:
+            ok &= np.abs(h(X, self.vars)) <= tol
+        return ok
+
+    def __repr__(self) -> str:
+        parts = [f"{g!r} >= 0" for g in self.ineqs] + [f"{h!r} = 0" for h in self.eqs]
+        return "BasicSet{" + ", ".join(parts) + "}"
+
+
+def as_set(ineqs=(), eqs=()) -> BasicSet:
+    """A BasicSet from either a BasicSet (then ``eqs`` must be empty) or lists of polynomials."""
+    if isinstance(ineqs, BasicSet):
+        if len(eqs):
+            raise InputError("pass the equalities inside the BasicSet, not next to it. "
+                             "Try: BasicSet(ineqs=[...], eqs=[...])")
+        return ineqs
+    if isinstance(ineqs, Polynomial):
+        raise InputError("ineqs is a list of polynomials. Try: [g] instead of g")
+    return BasicSet(ineqs, eqs)
+
+
+def preorder(ineqs, products) -> list:
+    """(index tuple S, g_S) for every S of size 1..order: order 1 for products=False,
+    all sizes for products=True, at most ``products`` for an int."""
+    order = 1 if products is False or products is None else (len(ineqs) if products is True else int(products))
+    if order < 1:
+        raise InputError(f"products must be True, False or an order >= 1, got {products!r}")
+    out = []
+    for size in range(1, min(order, len(ineqs)) + 1):
+        for S in combinations(range(len(ineqs)), size):
+            g = ineqs[S[0]]
+            for i in S[1:]:
+                g = g * ineqs[i]
+            out.append((S, g))
+    return out
+
+
+def degree_bounds(degree, count: int, default: int) -> list:
+    """The degree bound of each of ``count`` constraints: ``degree`` an int, None (``default``),
+    a list of ``count`` ints, or a dict {index: int} (others ``default``)."""
+    if degree is None or isinstance(degree, (int, np.integer)):
+        return [int(default if degree is None else degree)] * count
+    if isinstance(degree, dict):
+        bad = [k for k in degree if not (isinstance(k, int) and 0 <= k < count)]
+        if bad:
+            raise InputError(f"degree dict keys {bad} are not constraint indices 0..{count - 1} "
+                             "(inequalities first, then equalities)")
+        return [int(degree.get(k, default)) for k in range(count)]
+    degree = list(degree)
+    if len(degree) != count:
+        raise InputError(f"degree list has {len(degree)} entries for {count} constraints. Try: one "
+                         "degree per inequality then per equality, or a dict {index: degree}")
+    return [int(d) for d in degree]
+
+
+def putinar_terms(K: BasicSet, degree, products, default: int) -> list:
+    """(kind, label, constraint, multiplier degree) of every Putinar term of K.
+
+    kind "sos" for an inequality product g_S (even multiplier degree, the largest with
+    deg(sigma) + deg(g_S) <= the bound: for a product, the largest bound of its factors), "free"
+    for an equality. Single constraints whose degree exceeds their bound raise; products that
+    do not fit are left out (they only strengthen a certificate).
+    """
+    m = len(K.ineqs)
+    bounds = degree_bounds(degree, m + len(K.eqs), default)
+    out = []
+    for S, g in preorder(K.ineqs, products):
+        d = max(bounds[i] for i in S) - g.degree
+        d -= d % 2
+        if d < 0 and len(S) == 1:
+            raise PolynomialError(f"degree {bounds[S[0]]} is below the degree of constraint g{S[0]} "
+                                  f"({g.degree}). Try: degree >= {g.degree}")
+        if d >= 0:
+            out.append(("sos", "sigma" + "_".join(str(i) for i in S), g, d))
+    for k, h in enumerate(K.eqs):
+        d = bounds[m + k] - h.degree
+        if d < 0:
+            raise PolynomialError(f"degree {bounds[m + k]} is below the degree of equality h{k} "
+                                  f"({h.degree}). Try: degree >= {h.degree}")
+        out.append(("free", f"lambda{k}", h, d))
+    return out

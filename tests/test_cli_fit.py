@@ -1,0 +1,158 @@
+"""``sosdyn fit`` as a newcomer uses it: folders and patterns of CSVs, x,y / t,x,y,z headers,
+--dt, --units, --goal-tol, visible progress, and the whole CSV -> fit -> plot -> export path."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import re
+import typing
+
+import numpy as np
+import pytest
+from cli_support import assert_one_error_line, run
+
+import sosdyn as sd
+from sosdyn.cli.fit import progress_line
+
+DT = 0.02
+
+
+def spiral(start, T=120, rate=(0.9, 2.0)):
+    """x(t) = exp(-a t) R(w t) start: a spiral into the origin, sampled every DT s."""
+    t = np.arange(T) * DT * 3
+    a, w = rate
+    c, s = np.cos(w * t), np.sin(w * t)
+    x0, y0 = start
+    return t, np.exp(-a * t)[:, None] * np.column_stack([c * x0 - s * y0, s * x0 + c * y0])
+
+
+def write_xy(folder, starts, header="x,y", T=120):
+    """One CSV per start: positions only (no time column), header ``header``."""
+    folder.mkdir(exist_ok=True)
+    paths = []
+    for i, s in enumerate(starts):
+        _, pos = spiral(s, T)
+        path = folder / f"demo_{i}.csv"
+        np.savetxt(path, pos, delimiter=",", header=header, comments="")
+        paths.append(path)
+    return paths
+
+
+class Captured:
+    """A stand-in CDSP that records its parameters and the data it is given (no optimisation)."""
+
+    made: typing.ClassVar[dict] = {}
+
+    def __init__(self, **kwargs):
+        Captured.made.clear()
+        Captured.made["kwargs"] = kwargs
+
+    history_: typing.ClassVar[list] = [{"step": "dynamics", "cost": 1.0}]
+    verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3, "max_sampled_eig": -1e-3,
+                                        "n_samples": 10})()
+
+    @classmethod
+    def preset(cls, name, **kwargs):
+        return cls(preset=name, **kwargs)
+
+    def fit(self, demos):
+        Captured.made["demos"] = demos
+        return self
+
+    def save(self, path):
+        path.write_text("{}")
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    monkeypatch.setattr(sd, "CDSP", Captured)
+    Captured.made.clear()
+    return Captured.made
+
+
+def test_newcomer_csv_folder_fit_plot_export(capsys, tmp_path):
+    """The README's path: CSVs without a time column in a folder -> fit -> plot -> export."""
+    starts = [(8, 2), (-6, 7), (5, -8)]
+    folder = tmp_path / "demos"
+    write_xy(folder, starts)
+    model = tmp_path / "model.json"
+    code, out, err = run(capsys, "fit", folder, "--dt", DT * 3, "--units", "m", "--components", "2",
+                         "--out", model)
+    assert code == 0, err
+    steps = re.findall(r"^step (\d+) \((.+)\): cost ([-\d.e+]+), ([\d.]+) s$", out, flags=re.MULTILINE)
+    content = json.loads(model.read_text())
+    assert len(steps) == len(content["state"]["history_"]) >= 2     # one plain line per convex step
+    assert [int(s[0]) for s in steps] == list(range(1, len(steps) + 1))
+    assert "3 demonstrations of demos" in out and "certificate: passed" in out
+    assert content["state"]["units_"] == "m" and content["state"]["dt_"] == pytest.approx(DT * 3)
+    code, _, err = run(capsys, "plot", model, "--demos", folder, "--dt", DT * 3, "--out", tmp_path / "fig.png")
+    assert code == 0, err
+    assert (tmp_path / "fig.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    code, _, err = run(capsys, "export", model, "--to", "python", "--out", tmp_path / "field.py")
+    assert code == 0, err
+    spec = importlib.util.spec_from_file_location("field_newcomer", tmp_path / "field.py")
+    field = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(field)
+    fitted = sd.load_model(model)
+    X = np.array([s for s in starts], dtype=float)
+    np.testing.assert_allclose(field.predict(X), fitted.predict(X), rtol=1e-9)
+    assert "units m" in (tmp_path / "field.py").read_text()
+    # the reproductions reach the goal: the demonstrations end within 1e-3 of the origin
+    end = fitted.rollout(np.array(starts[0], float), 30.0).pos[-1]
+    assert np.linalg.norm(end - fitted.goal_) < 0.02 * np.linalg.norm(starts[0])
+
+
+def test_pattern_and_3d_t_x_y_z_header(capsys, tmp_path, captured):
+    t = np.linspace(0, 2, 40)
+    for i, start in enumerate(([3, 1, 2], [-2, 4, 1])):
+        pos = np.outer(1 - t / 2, start)
+        np.savetxt(tmp_path / f"run{i}.csv", np.column_stack([t, pos]), delimiter=",", header="t,x,y,z",
+                   comments="")
+    (tmp_path / "notes.txt").write_text("not a demo")
+    code, _, err = run(capsys, "fit", str(tmp_path / "run*.csv"), "--out", tmp_path / "m.json", "--preset", "cubic")
+    assert code == 0, err
+    demos = captured["demos"]
+    assert len(demos) == 2 and demos.dim == 3 and [d.source for d in demos] == ["run0.csv", "run1.csv"]
+    np.testing.assert_allclose(demos[1].pos[0], [-2, 4, 1])
+    assert captured["kwargs"] == {"preset": "cubic"}
+
+
+def test_goal_tol_refuses_with_a_hint_and_accepts_when_raised(capsys, tmp_path, captured):
+    paths = write_xy(tmp_path / "d", [(8, 2), (-6, 7)])
+    shifted = np.loadtxt(paths[1], delimiter=",", skiprows=1) + [1.0, 0.0]   # 1 apart: each about 0.5 off the mean
+    np.savetxt(paths[1], shifted, delimiter=",", header="x,y", comments="")
+    code, _, err = run(capsys, "fit", *paths, "--dt", 0.1, "--goal-tol", 0.4, "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "ends 0.49", "goal_tol = 0.4", "--goal-tol", need_try=True)
+    code, _, err = run(capsys, "fit", *paths, "--dt", 0.1, "--goal-tol", 0.6, "--out", tmp_path / "m.json")
+    assert code == 0, err and len(captured["demos"]) == 2
+
+
+@pytest.mark.parametrize("argv, fragments", [
+    (["{tmp}/empty"], ["holds no .csv or .npy file"]),
+    (["{tmp}/nothing*.csv"], ["no file matches", "Try:"]),
+    (["lasa:Angle", "--dt", "0.1"], ["apply to files, not to lasa:NAME"]),
+])
+def test_inputs_that_name_nothing_are_refused(capsys, tmp_path, captured, argv, fragments):
+    (tmp_path / "empty").mkdir()
+    code, _, err = run(capsys, "fit", *[a.format(tmp=tmp_path) for a in argv], "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, *fragments)
+    assert captured == {}
+
+
+def test_units_too_long_is_a_usage_error(capsys, tmp_path):
+    code, _, err = run(capsys, "fit", "a.csv", "--units", "m" * 40)
+    assert code == 2 and "at most 32 characters" in err
+
+
+def test_help_shows_the_defaults(capsys):
+    code, out, _ = run(capsys, "fit", "--help")
+    text = " ".join(out.replace("│", " ").split())
+    assert code == 0
+    for default in (f"default: ({sd.CDSP().n_components}, or the preset's)", "default: model.json",
+                    "5% of the data's bounding-box diagonal"):
+        assert default in text, default
+
+
+def test_progress_line_reads_step_cost_elapsed():
+    assert progress_line({"iteration": 2, "step": "metric", "cost": 12.5}, 1.44) == \
+        "step 3 (metric): cost 12.5, 1.4 s"
