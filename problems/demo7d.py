@@ -90,8 +90,7 @@ def run(out_dir: Path, quick: bool = False) -> dict:
                "max_final_goal_error_rad": float(max(e["final_goal_error_rad"] for e in errors))}
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json(out_dir / "demo7d.json", results)
-    shown = [(d.t, d.pos) for d in demos] + runs
-    fig = time_series(shown, model.goal_, units="rad",
+    fig = time_series(runs, model.goal_, units="rad", demos=[(d.t, d.pos) for d in demos],
                       title=f"7-D joint space: {len(demos)} noisy demonstrations and their\nCDSP reproductions "
                             f"(K = {model.n_components_}, certified: {'yes' if model.certified_ else 'NO'})")
     paths = save_figure(fig, out_dir / "demo7d")

@@ -129,7 +129,8 @@ def plot(
     elif model.dim_ == 3:
         fig = trajectories_3d(demo_pos, [r.pos for r in runs], model.goal_, title=title, units=model.units_)
     else:
-        fig = time_series([(r.t, r.pos) for r in runs], model.goal_, model.units_, title)
+        fig = time_series([(r.t, r.pos) for r in runs], model.goal_, model.units_, title,
+                          demos=[(d.t, d.pos) for d in data] if data is not None else ())
     with mpl.rc_context(STYLE):
         fig.savefig(out_path, format=out_path.suffix.lower()[1:], dpi=150, metadata=_no_date(out_path))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({model.dim_}-D model, {len(runs)} reproductions)")

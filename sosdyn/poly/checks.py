@@ -51,7 +51,7 @@ def finite_points(X, what: str = "evaluation points") -> np.ndarray:
 
 def check_coefficients(coef: np.ndarray) -> None:
     """Raise PolynomialError unless every entry is finite with |c| <= MAX_COEFFICIENT."""
-    if not coef.size or (coef.max() <= MAX_COEFFICIENT and coef.min() >= -MAX_COEFFICIENT):
+    if not coef.size or np.abs(coef).max() <= MAX_COEFFICIENT:     # False for NaN too
         return
     if np.isnan(coef).any():
         raise PolynomialError("a coefficient is NaN: a polynomial needs finite numbers. "

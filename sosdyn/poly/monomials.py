@@ -29,7 +29,7 @@ def monomial_keys(exps: np.ndarray, base: int | None = None) -> np.ndarray | Non
     if float(base) ** n >= _MAX_KEY:
         return None
     weights = base ** np.arange(n - 1, -1, -1, dtype=np.int64)
-    return exps.astype(np.int64) @ weights
+    return exps.astype(np.int64, copy=False) @ weights
 
 
 def unique_rows(exps: np.ndarray):
@@ -53,6 +53,8 @@ def sum_rows(exps: np.ndarray, coef: np.ndarray):
         order = np.argsort(keys, kind="stable")
         sk = keys[order]
         starts = np.flatnonzero(np.concatenate(([True], sk[1:] != sk[:-1])))
+        if starts.size == keys.size:           # no like terms: a sort
+            return exps[order], coef[order]
         return exps[order[starts]], np.add.reduceat(coef[order], starts, axis=0)
     uniq, inv = unique_rows(exps)
     order = np.argsort(inv, kind="stable")

@@ -106,14 +106,18 @@ def _stack(ids, parts, kind, scale):
         rhs.append(p.rhs)
         n_rows += p.rhs.size
     cat = lambda xs, dt: np.concatenate(xs) if xs else np.zeros(0, dtype=dt)  # noqa: E731
-    A = sp.csr_matrix((cat(v, float), (cat(r, np.int64), cat(c, np.int64))), shape=(n_rows, ids.size))
-    b = cat(rhs, float)
+    r, c, v, b = cat(r, np.int64), cat(c, np.int64), cat(v, float), cat(rhs, float)
     owner = np.arange(n_rows)
-    empty = np.diff(A.indptr) == 0
     if kind == "eq":      # 0 = 0 rows carry nothing; 0 = b != 0 rows are caught as infeasible
-        keep = ~(empty & (b == 0))
-        A, b, owner = A[keep], b[keep], owner[keep]
-    norms = abs(A).max(axis=1).toarray().ravel() if A.nnz else np.zeros(A.shape[0])
+        keep = (np.bincount(r, minlength=n_rows) > 0) | (b != 0)
+        r, b, owner = (np.cumsum(keep) - 1)[r], b[keep], owner[keep]
+    if r.size:            # the CSC layout: entries by column, then row; duplicates summed
+        order = np.lexsort((r, c))
+        r, c, v = r[order], c[order], v[order]
+        first = np.flatnonzero(np.r_[True, (r[1:] != r[:-1]) | (c[1:] != c[:-1])])
+        r, c, v = r[first], c[first], np.add.reduceat(v, first)
+    norms = np.zeros(b.size)                # largest |A_ij| of each row
+    np.maximum.at(norms, r, np.abs(v))
     has = norms > 0
     ratio, source = 0.0, ""
     if has.any():
@@ -121,11 +125,12 @@ def _stack(ids, parts, kind, scale):
         worst = int(np.argmax(np.where(np.isnan(rel), np.inf, rel)))
         ratio = float(rel[worst])
         source = parts[int(np.searchsorted(starts, owner[has][worst], side="right")) - 1].name
-    if scale and A.nnz and kind != "soc":
+    if scale and r.size and kind != "soc":
         norms = np.where(has, norms, 1.0)
-        A = sp.diags(1.0 / norms) @ A
+        v = v * (1.0 / norms)[r]
         b = b / norms
-    return A.tocsc(), b, ratio, source
+    indptr = np.concatenate(([0], np.cumsum(np.bincount(c, minlength=ids.size))))
+    return sp.csc_matrix((v, r, indptr), shape=(b.size, ids.size)), b, ratio, source
 
 
 def _objective(program, ids):

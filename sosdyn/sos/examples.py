@@ -41,6 +41,20 @@ def probability_bound():
     return prog, (a, b, c)
 
 
+def disc_minimum():
+    """max g with x - g >= 0 on the unit disc x^2 + y^2 <= 1 (Putinar, degree 2); answer -1,
+    attained at (-1, 0), certificate x + 1 = (1 + x)^2/2 + y^2/2 + (1 - x^2 - y^2)/2.
+
+    Returns (program, g, constraint).
+    """
+    x, y = variables("x y")
+    prog = SOSProgram("disc minimum")
+    g = prog.new_var(name="g")
+    con = prog.add_nonneg_on(x - g, ineqs=[1 - x**2 - y**2], degree=2)
+    prog.maximize(g)
+    return prog, g, con
+
+
 def moore_greitzer_field(x1, x2):
     return [-x2 - 1.5 * x1**2 - 0.5 * x1**3, 3 * x1 - x2]
 

@@ -10,16 +10,22 @@ what the certificate needs, and the solver's split into 2x2 blocks is never trus
 and cvxpy constraint. With e = p - z^T Q z and every monomial of e in the Gram monomial set,
 p = z^T (Q + E) z with ||E||_2 <= sqrt(2) ||e||_2, so lambda_min(Q) >= sqrt(2) ||e||_2 proves
 p SOS (up to floating point) -- ``strict``.
+
+The monomial structure of z^T Q z against p (:class:`GramStructure`: where each product
+z_i z_j and each monomial of p lands in their union) depends only on the basis and on p's
+monomials, so it is computed once per (basis, monomials) and reused by every later check of
+a re-solved program; the numbers -- Q, p at x, e, lambda_min(Q) -- are recomputed every time.
 """
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..poly import MAX_COEFFICIENT, Polynomial, match_rows
-from .conic import assign_at, cvxpy_block_vars, positions
+from ..poly import MAX_COEFFICIENT, unique_rows
+from .conic import cvxpy_block_vars, positions
 from .gram import svec_to_matrix
 
 
@@ -61,21 +67,75 @@ def _cone_check(Q, cone, eig_tol):
     return min_eig, math.nan, ok, reason
 
 
+@dataclass(frozen=True)
+class GramStructure:
+    """Monomials of p and of z z^T in their union U (rows of neither are repeated).
+
+    ``p_at[r]``: the row of U of p's monomial r; ``pair_at[i * N + j]``: the row of U of
+    z_i z_j (N = basis size); ``in_gram[u]``: some z_i z_j is the monomial u."""
+
+    p_at: np.ndarray
+    pair_at: np.ndarray
+    in_gram: np.ndarray
+
+
+def gram_structure(p_exps, basis_exps) -> GramStructure:
+    """The :class:`GramStructure` of p's exponent rows (distinct) against the basis rows."""
+    B = basis_exps
+    pairs = (B[:, None, :] + B[None, :, :]).reshape(-1, B.shape[1])
+    U, inv = unique_rows(np.vstack([p_exps, pairs]))
+    inv = np.asarray(inv).ravel()
+    in_gram = np.zeros(U.shape[0], dtype=bool)
+    in_gram[inv[p_exps.shape[0]:]] = True
+    return GramStructure(inv[:p_exps.shape[0]], inv[p_exps.shape[0]:], in_gram)
+
+
+_STRUCTURES: OrderedDict = OrderedDict()      # (ids of the arrays) -> (arrays, structure), bounded
+_STRUCTURES_KEPT = 256
+
+
+def cached_gram_structure(p_exps, basis_exps) -> GramStructure:
+    """:func:`gram_structure`, remembered for the last few hundred (p, basis) exponent arrays.
+
+    Exponent arrays are never changed in place; an entry keeps its arrays alive, so their ids
+    cannot be reused by other arrays while it is kept."""
+    key = (id(p_exps), id(basis_exps))
+    hit = _STRUCTURES.get(key)
+    if hit is not None and hit[0] is p_exps and hit[1] is basis_exps:
+        _STRUCTURES.move_to_end(key)
+        return hit[2]
+    out = gram_structure(p_exps, basis_exps)
+    _STRUCTURES[key] = (p_exps, basis_exps, out)
+    if len(_STRUCTURES) > _STRUCTURES_KEPT:
+        _STRUCTURES.popitem(last=False)
+    return out
+
+
 def check_gram(name, kind, p, basis_exps, Q, eig_tol=1e-7, rel_tol=1e-6, cone="psd") -> CertificateCheck:
     """Check p = z^T Q z and Q in its cone for a numeric polynomial p and basis exponents."""
+    return check_gram_values(name, kind, p.coef[:, 0], gram_structure(p.exps, basis_exps), Q,
+                             eig_tol, rel_tol, cone)
+
+
+def check_gram_values(name, kind, p_coef, structure: GramStructure, Q, eig_tol=1e-7, rel_tol=1e-6,
+                      cone="psd") -> CertificateCheck:
+    """:func:`check_gram` for p given by its coefficients ``p_coef`` on the monomials of ``structure``.
+
+    e = p - z^T Q z on the union U of monomials (each z_i z_j adds Q_ij to its monomial);
+    ``strict`` needs e = 0 off the Gram monomial set and lambda_min(Q) >= sqrt(2) ||e||_2."""
     min_eig, dd, cone_ok, reason = _cone_check(Q, cone, eig_tol)
-    B = basis_exps
-    zQz = Polynomial(p.vars, (B[:, None, :] + B[None, :, :]).reshape(-1, B.shape[1]), Q.ravel())
-    e = p - zQz
-    scale = max(1.0, float(np.abs(p.coef).max(initial=0.0)))
-    res = float(np.abs(e.coef).max(initial=0.0))
-    representable = bool((match_rows(zQz.exps, e.exps) >= 0).all()) if e.nterms else True
-    strict = representable and min_eig >= np.sqrt(2.0) * float(np.linalg.norm(e.coef))
+    size = structure.in_gram.size
+    e = np.bincount(structure.p_at, weights=p_coef, minlength=size) \
+        - np.bincount(structure.pair_at, weights=Q.ravel(), minlength=size)
+    scale = max(1.0, float(np.abs(p_coef).max(initial=0.0)))
+    res = float(np.abs(e).max(initial=0.0))
+    representable = not np.any(e[~structure.in_gram] != 0.0)
+    strict = representable and min_eig >= np.sqrt(2.0) * float(np.linalg.norm(e))
     res_ok = res <= rel_tol * scale
     if not res_ok:
         reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
                                        f"{rel_tol:.0e} x {scale:.3g}") if r)
-    return CertificateCheck(name, kind, B.shape[0], min_eig, res, res / scale, bool(strict),
+    return CertificateCheck(name, kind, Q.shape[0], min_eig, res, res / scale, bool(strict),
                             bool(cone_ok and res_ok), cone, dd, reason)
 
 
@@ -177,8 +237,10 @@ def verify_certificate(program, ids, x, eig_tol=1e-7, rel_tol=1e-6) -> Verificat
     for con in program.sos_constraints:
         owned.add(id(con.psd))
         Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
-        p = assign_at(con.poly.with_vars(con.basis.vars), ids, x)
-        checks.append(check_gram(con.name, con.kind, p, con.basis.exps, Q, eig_tol, rel_tol, con.psd.cone))
+        p = con.poly.with_vars(con.basis.vars)
+        coef = p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids)               # p at x
+        checks.append(check_gram_values(con.name, con.kind, coef, cached_gram_structure(p.exps, con.basis.exps),
+                                        Q, eig_tol, rel_tol, con.psd.cone))
     for b in program.blocks:
         if b.psd is not None and id(b.psd) not in owned:
             Q = svec_to_matrix(at(b.psd.ids), b.psd.size)

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
+from sosdyn.sos.examples import disc_minimum
 from sosdyn.sos.moments import check_atoms, extract_atoms, moments_from_dual
 
 CAMEL_MIN = -1.0316284535
@@ -67,12 +68,8 @@ def test_six_hump_camel_two_global_minimisers(xy, backend, solver):
     assert sol.moments(con).expectation(p) == pytest.approx(CAMEL_MIN, abs=1e-6)
 
 
-def test_min_x_on_the_unit_disc_is_attained_at_minus_one_zero(xy):
-    x, y = xy
-    prog = sd.SOSProgram()
-    g = prog.new_var(name="g")
-    con = prog.add_nonneg_on(x - g, ineqs=[1 - x**2 - y**2], degree=2)
-    prog.maximize(g)
+def test_min_x_on_the_unit_disc_is_attained_at_minus_one_zero():
+    prog, g, con = disc_minimum()
     sol = prog.solve()
     assert sol.value(g) == pytest.approx(-1.0, abs=1e-7)
     atoms = sol.minimizers(con)

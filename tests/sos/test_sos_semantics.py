@@ -6,6 +6,7 @@ import sympy
 
 import sosdyn as sd
 from sosdyn.sos.decomposition import sos_decomposition
+from sosdyn.sos.examples import disc_minimum
 
 
 @pytest.fixture
@@ -48,10 +49,7 @@ def test_decomposition_of_an_exact_gram_matrix():
 def test_decomposition_of_a_putinar_certificate(xy):
     # x + 1 = 1/2 (1 + x)^2 + 1/2 y^2 + 1/2 (1 - x^2 - y^2): the certificate of min x = -1 on the disc
     x, y = xy
-    prog = sd.SOSProgram()
-    g = prog.new_var(name="g")
-    con = prog.add_nonneg_on(x - g, ineqs=[1 - x**2 - y**2], degree=2)
-    prog.maximize(g)
+    prog, g, con = disc_minimum()
     sol = prog.solve()
     main, mult = sol.sos_decomposition(con), sol.sos_decomposition(con.multipliers[0])
     assert main.weights == pytest.approx([0.5, 0.5], abs=1e-4) and mult.weights == pytest.approx([0.5], abs=1e-4)

@@ -14,21 +14,26 @@ from __future__ import annotations
 import numpy as np
 
 from ...poly import PolyMatrix, Polynomial, jacobian
+from ...poly.termarrays import concat_terms
 from ...sos import SOSProgram
 from ..contraction import (contraction_degree, degree, margin_matrix, metric_exponents, symmetric_pairs,
                            unit_fields, unit_metrics)
 from .common import LeastSquaresData, TermTable, proximal, solve_with_fallback
 
 
-def _blocks(n, parts):
-    """A symmetric 3n x 3n PolyMatrix with the given (row, col) blocks and their transposes."""
-    out = np.empty((3 * n, 3 * n), dtype=object)
-    zero = PolyMatrix(np.zeros((n, n)))
-    for r in range(3):
-        for c in range(3):
-            block = parts.get((r, c)) or (parts[(c, r)].T if (c, r) in parts else zero)
-            out[r * n:(r + 1) * n, c * n:(c + 1) * n] = block.entries
-    return PolyMatrix(out)
+def _blocks(n, parts, vars):
+    """A symmetric 3n x 3n PolyMatrix over ``vars`` with the given (row, col) blocks (the
+    diagonal ones symmetric), their transposes at (col, row) and zeros elsewhere.
+
+    Built from the blocks' term arrays (shifted rows and columns, one sort), so the result
+    keeps its terms for the SOS layer instead of being re-read entry by entry."""
+    pieces = []
+    for (r, c), block in parts.items():
+        t = block.terms(vars)
+        pieces.append(t._replace(row=t.row + r * n, col=t.col + c * n))
+        if r != c:
+            pieces.append(t._replace(row=t.col + c * n, col=t.row + r * n))
+    return PolyMatrix.from_terms(concat_terms(*pieces), (3 * n, 3 * n), vars)
 
 
 class ICAStep:
@@ -49,17 +54,22 @@ class ICAStep:
     "margin"                    block (0,0) -g(z) I                         delta
     ("J P0", ab)                block (0,0) -(J^T E_ab + E_ab J)            P0_ab
     ("J0 P", c)                 block (0,0) -(J_c^T P + P J_c)              C0_c
-    ("J0 P0", c, ab)            block (0,0) J_c^T E_ab + E_ab J_c           C0_c P0_ab
+    ("J0 P0", ab)               block (0,0) E_ab                            (J0^T P0 + P0 J0)_ab
     ("J0", c)                   block (1,0) -J_c (linear c only)            C0_c
     ("P0", ab)                  block (2,0) -E_ab                           P0_ab
     "1/a", "a"                  blocks (1,1) I, (2,2) I                     1/a, a
     ==========================  ==========================================  ==============
+
+    J0 = sum_c C0_c J_c over the linear c is a number matrix, so the terms J_c^T E_ab + E_ab J_c
+    (weights C0_c P0_ab) are summed into n(n+1)/2 terms E_ab: one per entry of the symmetric
+    J0^T P0 + P0 J0 = sum_{a <= b} (J0^T P0 + P0 J0)_ab E_ab.
     """
 
     def __init__(self, data: LeastSquaresData, fexps, vars, gamma, margin, eps, solver="CLARABEL"):
         K, n, m = data.shape
         self.solver, self.data, self.n = solver, data, n
         self.linear = fexps.sum(axis=1) == 1
+        self.lin_exps = fexps[self.linear]                              # rows e_l: J0 = C0_lin @ lin_exps
         self.free = np.broadcast_to(self.linear, (K, n, m))
         self.prog = SOSProgram("ICA step")
         self.ids = self.prog.new_ids(int(self.free.sum()), name="linear fields")
@@ -74,21 +84,20 @@ class ICAStep:
         self.lin_units = [c for c, ((_, j), _) in enumerate(units) if self.linear[j]]
         I = PolyMatrix.identity(n)
         grow = margin_matrix(vars, n, contraction_degree(0, degree(fexps)))
-        margin_term = _blocks(n, {(0, 0): -grow})
-        shared = {("J0 P", c): _blocks(n, {(0, 0): -(Jc.T @ P + P @ Jc)}) for c, Jc in enumerate(Ju)}
-        shared.update({("J0 P0", c, ab): _blocks(n, {(0, 0): Ju[c].T @ E[ab] + E[ab] @ Ju[c]})
-                       for c in self.lin_units for ab in self.pairs})
-        shared.update({("J0", c): _blocks(n, {(1, 0): -Ju[c]}) for c in self.lin_units})
-        shared.update({("P0", ab): _blocks(n, {(2, 0): -E[ab]}) for ab in self.pairs})
-        shared.update({"1/a": _blocks(n, {(1, 1): I}), "a": _blocks(n, {(2, 2): I})})
+        margin_term = _blocks(n, {(0, 0): -grow}, vars)
+        shared = {("J0 P", c): _blocks(n, {(0, 0): -(Jc.T @ P + P @ Jc)}, vars) for c, Jc in enumerate(Ju)}
+        shared.update({("J0 P0", ab): _blocks(n, {(0, 0): E[ab]}, vars) for ab in self.pairs})
+        shared.update({("J0", c): _blocks(n, {(1, 0): -Ju[c]}, vars) for c in self.lin_units})
+        shared.update({("P0", ab): _blocks(n, {(2, 0): -E[ab]}, vars) for ab in self.pairs})
+        shared.update({"1/a": _blocks(n, {(1, 1): I}, vars), "a": _blocks(n, {(2, 2): I}, vars)})
         self.tables, self.cons = [], []
         lin_ids = self.ids.reshape(K, n, -1)
         for k in range(K):
             f_lin = [Polynomial(vars, fexps[self.linear], np.hstack([np.zeros((n, 1)), np.eye(n)]), lin_ids[k, i])
                      for i in range(n)]
             J = jacobian(f_lin, vars)
-            own = _blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P})
-            own_p0 = {("J P0", ab): _blocks(n, {(0, 0): -(J.T @ E[ab] + E[ab] @ J)}) for ab in self.pairs}
+            own = _blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P}, vars)
+            own_p0 = {("J P0", ab): _blocks(n, {(0, 0): -(J.T @ E[ab] + E[ab] @ J)}, vars) for ab in self.pairs}
             table = TermTable({"own": own, "margin": margin_term, **own_p0, **shared})
             self.tables.append(table)
             self.cons.append(table.add(self.prog, f"ica[{k}]"))
@@ -100,7 +109,9 @@ class ICAStep:
         out = {"own": 1.0, "margin": self.margin, "1/a": 1.0 / alpha, "a": alpha}
         out.update({("J P0", ab): p0[ab] for ab in self.pairs})
         out.update({("J0 P", c): c0[c] for c in range(c0.size)})
-        out.update({("J0 P0", c, ab): c0[c] * p0[ab] for c in self.lin_units for ab in self.pairs})
+        J0 = c0.reshape(self.n, -1)[:, self.linear] @ self.lin_exps
+        S = J0.T @ P0 + P0 @ J0
+        out.update({("J0 P0", ab): S[ab] for ab in self.pairs})
         out.update({("J0", c): c0[c] for c in self.lin_units})
         out.update({("P0", ab): p0[ab] for ab in self.pairs})
         return out

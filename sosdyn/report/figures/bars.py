@@ -6,7 +6,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.ticker import FuncFormatter
+from matplotlib.ticker import FuncFormatter, NullFormatter
 
 from .style import METRIC_LABELS, median_iqr, method_color, new_figure, ordered_methods, styled
 
@@ -177,6 +177,10 @@ def scaling_plot(series: Mapping[str, Mapping[str, Sequence[float]]], *,
     ax.set_yscale("log")
     for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
         _plain_log_ticks(axis, lim)
+    sizes = np.unique(np.concatenate([np.asarray(s["x"], dtype=float) for s in series.values()]))
+    if 0 < sizes.size <= 10 and np.all(sizes > 0) and np.all(sizes == np.round(sizes)):
+        ax.set_xticks(sizes, [f"{v:g}" for v in sizes])     # few integer sizes (n = 2..7): label each
+        ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(which="major", color="0.88", lw=0.6)

@@ -118,18 +118,25 @@ def trajectories_3d(demos: Sequence[np.ndarray], reproductions: Sequence[np.ndar
 
 @styled
 def time_series(runs: Sequence[tuple[np.ndarray, np.ndarray]], goal, units: str = "mm",
-                title: str | None = None) -> Figure:
-    """One panel per dimension: x_i(t) of every run ``(t, pos)``, the goal's x_i dotted
-    (the view of a model in more than three dimensions)."""
+                title: str | None = None, demos: Sequence[tuple[np.ndarray, np.ndarray]] = ()) -> Figure:
+    """One panel per dimension: x_i(t) of every reproduction ``(t, pos)`` in ``runs`` (dashed
+    blue) over the demonstrations ``demos`` (solid red, as in the 2-D figures), the goal's x_i
+    dotted (the view of a model in more than three dimensions)."""
     n = len(goal)
-    fig = new_figure(6.0, 1.6 * n + 0.6)
+    fig = new_figure(6.0, 1.6 * n + 0.9)
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
     for i, ax in enumerate(axes):
+        for t, pos in demos:
+            ax.plot(t, pos[:, i], color=DEMO_COLOR, lw=1.0, alpha=0.8)
         for t, pos in runs:
-            ax.plot(t, pos[:, i], lw=1.2)
+            ax.plot(t, pos[:, i], color=REPRO_COLOR, lw=1.3, ls="--")
         ax.axhline(goal[i], color="black", ls=":", lw=1.0)
         ax.set_ylabel(f"$x_{{{i + 1}}}$ ({units})")
     axes[-1].set_xlabel("t (s)")
     if title:
         axes[0].set_title(title)
+    handles = ([Line2D([], [], color=DEMO_COLOR, lw=1.0, label="demonstrations")] if len(demos) else []) + [
+        Line2D([], [], color=REPRO_COLOR, lw=1.3, ls="--", label="reproductions"),
+        Line2D([], [], color="black", ls=":", lw=1.0, label="goal")]
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles))
     return fig
