@@ -29,6 +29,7 @@ from sosdyn.lfd.params import PRESETS
 from sosdyn.report.figures import save_figure
 from sosdyn.report.figures.style import method_color, new_figure, styled
 
+from . import lasa_corrective as corrective
 from .cache import key_hash
 from .jobs import add_scheduler_argument, parallel_map
 from .jsonio import jsonable, write_json
@@ -45,17 +46,16 @@ VARIANTS = {
     "CDSP-ICA": PRESETS["ica"],
     "CDSP-ICA g0.02": dict(PRESETS["ica"], gamma=0.02),
     "CDSP-ICA K10": dict(PRESETS["ica"], n_components=10),
-    "CDSP-cubic-prox": PRESETS["cubic"],
+    "CDSP-cubic-prox": PRESETS["cubic"], **corrective.VARIANTS,
 }
 #: Selection variants: name -> the variants it chooses from, per shape, by the training demos'
 #: reproduction DTWD (sosdyn.evaluation.dsopt.select_fit's rule, applied to the cached fits).
 #: "CDSP selected": the three linear configurations with the lowest 26-shape TRAINING mean
 #: (K = 10, K = 8, gamma = 0.02: 1508, 1511, 1692 mm at random_state 0), together within the 10 s budget;
 #: "+cubic" adds the cubic preset (over the budget).
-SELECTIONS = {"CDSP selected": ("CDSP default", "CDSP-ICA K10", "CDSP-ICA g0.02"),
+SELECTIONS = {"CDSP selected": ("CDSP default", "CDSP-ICA K10", "CDSP-ICA g0.02"), **corrective.SELECTIONS,
               "CDSP selected+cubic": ("CDSP default", "CDSP-ICA K10", "CDSP-ICA g0.02", "CDSP-cubic-prox")}
 ALL_VARIANTS = tuple(VARIANTS) + tuple(SELECTIONS)
-#: Smaller fits for --quick (as problems.settings does for its CDSP methods).
 #: One line on the protocol for the report (its definition: sosdyn.evaluation.dsopt).
 PROTOCOL = (f"ds-opt LASA protocol (sosdyn.evaluation.dsopt): train on demos "
             f"{', '.join(str(i + 1) for i in dsopt.TRAIN_DEMOS)}, test on "
@@ -97,7 +97,7 @@ def run_job(shape: str, variant: str, seed: int, quick: bool, cache_dir: Path, f
     if variant in SELECTIONS:
         return select_job(shape, variant, seed, quick, cache_dir, force)
     kwargs = settings(variant, seed, quick)
-    params = dict(sd.CDSP(**kwargs).get_params())          # every parameter, defaults resolved
+    params = corrective.estimator_params(kwargs)           # every parameter, defaults resolved
     key = key_hash({"version": CACHE_VERSION, "shape": shape, "settings": params})
     path = cache_file(cache_dir, shape, variant, seed, quick)
     if not force:
@@ -110,7 +110,7 @@ def run_job(shape: str, variant: str, seed: int, quick: bool, cache_dir: Path, f
     fitted = []
 
     def fit(train):
-        fitted.append(sd.CDSP(**kwargs).fit(train))
+        fitted.append(corrective.make_estimator(kwargs).fit(train))
         return fitted[-1]
 
     entry = {"shape": shape, "variant": variant, "seed": seed, "key_hash": key, "error": None}

@@ -288,27 +288,35 @@ def main(argv=None):
     t_start = now()
     res = {"benchmark": "bench", "quick": args.quick, "environment": environment(), "targets_def": TARGETS}
     res["fits"] = [] if "shapes" in skip else run_shapes(args.quick)
-    write_json(out_dir / "fits.json", {"environment": res["environment"], "fits": res["fits"]})
+
+    def keep(part, name, data):             # a skipped part keeps the file of its last run
+        if part not in skip:
+            write_json(out_dir / name, data)
+    keep("shapes", "fits.json", {"environment": res["environment"], "fits": res["fits"]})
     res["sweeps"] = {} if "sweeps" in skip else run_sweeps(args.quick)
     res["scaling_n"] = None if "scaling_n" in skip else scaling_n.run((2, 3) if args.quick else (2, 3, 4, 5, 6, 7),
                                                                        args.quick, log)
     if res["scaling_n"]:
         res["scaling_n"]["plot"] = scaling_n.plot(res["scaling_n"], out_dir)
         write_json(out_dir / "scaling_n.json", {"environment": res["environment"], **res["scaling_n"]})
-    plot_sweeps(res["sweeps"], out_dir)
-    write_json(out_dir / "scaling.json", {"environment": res["environment"], "sweeps": res["sweeps"]})
+    if "sweeps" not in skip:
+        plot_sweeps(res["sweeps"], out_dir)
+    keep("sweeps", "scaling.json", {"environment": res["environment"], "sweeps": res["sweeps"]})
     res["backends"] = [] if "backends" in skip else run_backends(args.quick)
-    write_json(out_dir / "backends.json", {"environment": res["environment"], "dynamics_step": res["backends"]})
+    keep("backends", "backends.json", {"environment": res["environment"], "dynamics_step": res["backends"]})
     res["targets"] = evaluate_targets(res["fits"], res["backends"])
     res["profiles"] = [] if "profiles" in skip else run_profiles(res["fits"], res["targets"], res["backends"],
                                                                   args.quick)
-    write_json(out_dir / "profiles.json", {"profiles": res["profiles"]})
+    keep("profiles", "profiles.json", {"profiles": res["profiles"]})
     if "predict" not in skip:          # the one-state evaluator against model.predict (predict.json)
         predict.main(["--out", str(out_dir)] + (["--quick"] if args.quick else ["--cubic"]))
     sos_json = out_dir / "sos.json"
     if sos_json.exists():
         res["sos_summary"] = json.loads(sos_json.read_text()).get("summary")
     res["elapsed_s"] = now() - t_start
+    if skip:        # a partial run leaves the whole-run summary of the last full run in place
+        log(f"skipped {sorted(skip)}: bench.json and summary.md not rewritten ({now() - t_start:.0f} s)")
+        return 0
     write_json(out_dir / "bench.json", {k: res[k] for k in ("benchmark", "quick", "environment", "targets_def",
                                                             "targets", "elapsed_s")})
     (out_dir / "summary.md").write_text(summary_markdown(res, out_dir))

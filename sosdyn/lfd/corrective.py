@@ -132,4 +132,4 @@ class CorrectiveCDSP:
         return self.model_.predict(X)
 
 
-__all__ = ["nearest", "corrective_pairs", "rollout_deviation", "CorrectiveCDSP"]
+__all__ = ["CorrectiveCDSP", "corrective_pairs", "nearest", "rollout_deviation"]

@@ -40,12 +40,16 @@ def fit_joint_gmm(Z, Zdot, n_components, seed: int):
     ``n_components`` is K, or "bic" for the K in 1..MAX_BIC_COMPONENTS (at most one per
     MIN_SAMPLES_PER_COMPONENT samples) with the lowest Bayesian information criterion."""
     from sklearn.mixture import GaussianMixture     # lazy: importing sklearn takes seconds; only fits need it
+    from threadpoolctl import threadpool_limits     # (sklearn's own dependency)
 
     data = np.hstack([Z, Zdot])
 
     def em(k):
-        return GaussianMixture(k, covariance_type="full", random_state=seed, reg_covar=1e-6,
-                               max_iter=500).fit(data)
+        # one OpenMP thread: k-means on a few thousand samples gains nothing from more, and on a
+        # busy machine its spinning threads cost ~1 s per fit (issue 14); the result is identical
+        with threadpool_limits(1, user_api="openmp"):
+            return GaussianMixture(k, covariance_type="full", random_state=seed, reg_covar=1e-6,
+                                   max_iter=500).fit(data)
     if n_components != "bic":
         return em(n_components), None
     top = min(MAX_BIC_COMPONENTS, Z.shape[0] // MIN_SAMPLES_PER_COMPONENT)

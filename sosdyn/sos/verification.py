@@ -24,6 +24,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..errors import PolynomialError
 from ..poly import MAX_COEFFICIENT, unique_rows
 from .conic import cvxpy_block_vars, positions
 from .gram import svec_to_matrix
@@ -87,7 +88,10 @@ def gram_structure(p_exps, basis_exps) -> GramStructure:
     inv = np.asarray(inv).ravel()
     in_gram = np.zeros(U.shape[0], dtype=bool)
     in_gram[inv[p_exps.shape[0]:]] = True
-    return GramStructure(inv[:p_exps.shape[0]], inv[p_exps.shape[0]:], in_gram)
+    parts = (inv[:p_exps.shape[0]].copy(), inv[p_exps.shape[0]:].copy(), in_gram)
+    for a in parts:
+        a.flags.writeable = False                   # shared by every later check (cached)
+    return GramStructure(*parts)
 
 
 _STRUCTURES: OrderedDict = OrderedDict()      # (ids of the arrays) -> (arrays, structure), bounded
@@ -113,6 +117,9 @@ def cached_gram_structure(p_exps, basis_exps) -> GramStructure:
 
 def check_gram(name, kind, p, basis_exps, Q, eig_tol=1e-7, rel_tol=1e-6, cone="psd") -> CertificateCheck:
     """Check p = z^T Q z and Q in its cone for a numeric polynomial p and basis exponents."""
+    if p.ids.size:
+        raise PolynomialError(f"check_gram needs a numeric polynomial; {name!r} has decision variables. "
+                              "Try: assign the solution's values first, e.g. sol.value(p)")
     return check_gram_values(name, kind, p.coef[:, 0], gram_structure(p.exps, basis_exps), Q,
                              eig_tol, rel_tol, cone)
 

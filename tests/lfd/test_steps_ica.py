@@ -1,8 +1,11 @@
 """ICAStep: every iterate is certified and the cost does not increase."""
 import numpy as np
 
-from sosdyn.lfd.contraction import field_exponents, metric_exponents, state_variables
+from sosdyn.lfd.contraction import (contraction_degree, field_exponents, margin_matrix, metric_exponents,
+                                    state_variables)
 from sosdyn.lfd.steps import DynamicsStep, ICAStep, LeastSquaresData
+from sosdyn.poly import PolyMatrix, Polynomial, jacobian, monomial_values
+from sosdyn.sos import matrix_form
 
 A = np.array([[-1.0, 4.0], [0.0, -1.0]])
 
@@ -23,3 +26,48 @@ def test_ica_iterates_stay_certified_and_lower_the_cost():
     assert all(b <= a + 1e-9 for a, b in zip(costs, costs[1:])) and costs[-1] < 0.5 * costs[0]
     names = ica.tables[0].names
     assert names[:3] == ("own", "margin", ("J P0", (0, 0))) and names[-2:] == ("1/a", "a")
+
+
+def test_ica_family_is_the_schur_matrix_at_the_iterate():
+    """sum_t w_t T_t at (C0, P0, a) equals [[-(L + gamma P) - delta g I, dJ^T, dP], [dJ, I/a, 0],
+    [dP, 0, a I]] built entry by entry (cubic fields: J0 depends on z)."""
+    n, gamma, margin, alpha = 2, 0.1, 1e-3, 0.7
+    rng = np.random.default_rng(1)
+    Z = rng.uniform(-1, 1, size=(50, n))
+    fexps, vars = field_exponents(n, 3), state_variables(n)
+    data = LeastSquaresData(np.ones((50, 1)), monomial_values(Z, fexps), Z)
+    ica = ICAStep(data, fexps, vars, gamma=gamma, margin=margin, eps=1e-3)
+    C0 = rng.normal(size=data.shape)
+    P0 = np.array([[1.2, 0.3], [0.3, 0.8]])
+    table, con = ica.tables[0], ica.cons[0]
+    con.set_weights(table.weights(ica.weights(C0[0].ravel(), P0, alpha)))
+
+    lin = fexps.sum(axis=1) == 1
+    ids = ica.ids.reshape(1, n, -1)[0]
+    Jd = jacobian([Polynomial(vars, fexps[lin], np.hstack([np.zeros((n, 1)), np.eye(n)]), ids[i])
+                   for i in range(n)], vars)
+    J0 = jacobian([Polynomial(vars, fexps, C0[0, i]) for i in range(n)], vars)
+    J0l = C0[0][:, lin] @ fexps[lin]
+    P, I = ica.P, PolyMatrix.identity(n)
+    grow = margin_matrix(vars, n, contraction_degree(0, 3))
+    A00 = -(Jd.T @ P0 + P0 @ Jd) - (J0.T @ P + P @ J0) + (J0l.T @ P0 + P0 @ J0l) - gamma * P - margin * grow
+    A10, A20 = Jd - J0l, P - P0
+    Z0 = PolyMatrix(np.zeros((n, n)))
+    M = PolyMatrix(np.block([[A00.entries, A10.T.entries, A20.T.entries],
+                             [A10.entries, (I * (1 / alpha)).entries, Z0.entries],
+                             [A20.entries, Z0.entries, (I * alpha).entries]]))
+    q, _ = matrix_form(M, with_basis=False)
+    assert q.vars == con.poly.vars
+    diff = con.poly - q
+    assert np.abs(diff.coef).max(initial=0.0) < 1e-12 and np.abs(q.coef).max() > 0.5
+
+
+def test_ica_term_count_is_quadratic_in_n():
+    """One "J0 P0" term per entry of the symmetric J0^T P0 + P0 J0 (not one per (c, ab))."""
+    n = 4
+    Z = np.random.default_rng(2).uniform(-1, 1, size=(50, n))
+    fexps, vars = field_exponents(n, 1), state_variables(n)
+    ica = ICAStep(LeastSquaresData(np.ones((50, 1)), Z, Z), fexps, vars, gamma=0.1, margin=1e-4, eps=1e-3)
+    pairs, units = n * (n + 1) // 2, n * n
+    # own, margin, J P0, J0 P, J0 P0, J0, P0, 1/a, a
+    assert len(ica.tables[0].names) == 2 + pairs + units + pairs + units + pairs + 2 == 66

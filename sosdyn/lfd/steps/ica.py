@@ -14,22 +14,34 @@ from __future__ import annotations
 import numpy as np
 
 from ...poly import PolyMatrix, Polynomial, jacobian
-from ...poly.termarrays import concat_terms
+from ...poly.termarrays import Terms, concat_terms, terms_scale, terms_transpose
 from ...sos import SOSProgram
 from ..contraction import (contraction_degree, degree, margin_matrix, metric_exponents, symmetric_pairs,
                            unit_fields, unit_metrics)
 from .common import LeastSquaresData, TermTable, proximal, solve_with_fallback
 
 
+def unit_sandwich(J: Terms, a, b) -> Terms:
+    """The terms of J^T E_ab + E_ab J for the terms of an n x n matrix J, E_ab the unit symmetric
+    matrix with ones at (a, b) and (b, a): J^T e_u e_v^T has row u of J (transposed) as column v."""
+    pieces = []
+    for u, v in dict.fromkeys([(a, b), (b, a)]):         # one pair when a = b
+        s = J.select(J.row == u)
+        pieces.append(s._replace(row=s.col, col=np.full(s.row.size, v)))
+    X = concat_terms(*pieces)
+    return concat_terms(X, terms_transpose(X))
+
+
 def _blocks(n, parts, vars):
-    """A symmetric 3n x 3n PolyMatrix over ``vars`` with the given (row, col) blocks (the
-    diagonal ones symmetric), their transposes at (col, row) and zeros elsewhere.
+    """A symmetric 3n x 3n PolyMatrix over ``vars`` with the given (row, col) blocks (PolyMatrix
+    or their Terms over ``vars``; the diagonal ones symmetric), their transposes at (col, row)
+    and zeros elsewhere.
 
     Built from the blocks' term arrays (shifted rows and columns, one sort), so the result
     keeps its terms for the SOS layer instead of being re-read entry by entry."""
     pieces = []
     for (r, c), block in parts.items():
-        t = block.terms(vars)
+        t = block if isinstance(block, Terms) else block.terms(vars)
         pieces.append(t._replace(row=t.row + r * n, col=t.col + c * n))
         if r != c:
             pieces.append(t._replace(row=t.col + c * n, col=t.row + r * n))
@@ -54,22 +66,22 @@ class ICAStep:
     "margin"                    block (0,0) -g(z) I                         delta
     ("J P0", ab)                block (0,0) -(J^T E_ab + E_ab J)            P0_ab
     ("J0 P", c)                 block (0,0) -(J_c^T P + P J_c)              C0_c
-    ("J0 P0", ab)               block (0,0) E_ab                            (J0^T P0 + P0 J0)_ab
+    ("J0 P0", ab)               block (0,0) E_ab                            S_ab (below)
     ("J0", c)                   block (1,0) -J_c (linear c only)            C0_c
     ("P0", ab)                  block (2,0) -E_ab                           P0_ab
     "1/a", "a"                  blocks (1,1) I, (2,2) I                     1/a, a
     ==========================  ==========================================  ==============
 
-    J0 = sum_c C0_c J_c over the linear c is a number matrix, so the terms J_c^T E_ab + E_ab J_c
+    J0l = sum_c C0_c J_c over the linear c is a number matrix, so the terms J_c^T E_ab + E_ab J_c
     (weights C0_c P0_ab) are summed into n(n+1)/2 terms E_ab: one per entry of the symmetric
-    J0^T P0 + P0 J0 = sum_{a <= b} (J0^T P0 + P0 J0)_ab E_ab.
+    S = J0l^T P0 + P0 J0l = sum_{a <= b} S_ab E_ab.
     """
 
     def __init__(self, data: LeastSquaresData, fexps, vars, gamma, margin, eps, solver="CLARABEL"):
         K, n, m = data.shape
         self.solver, self.data, self.n = solver, data, n
         self.linear = fexps.sum(axis=1) == 1
-        self.lin_exps = fexps[self.linear]                              # rows e_l: J0 = C0_lin @ lin_exps
+        self.lin_exps = fexps[self.linear]                              # rows e_l: J0l = C0_lin @ lin_exps
         self.free = np.broadcast_to(self.linear, (K, n, m))
         self.prog = SOSProgram("ICA step")
         self.ids = self.prog.new_ids(int(self.free.sum()), name="linear fields")
@@ -97,7 +109,9 @@ class ICAStep:
                      for i in range(n)]
             J = jacobian(f_lin, vars)
             own = _blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P}, vars)
-            own_p0 = {("J P0", ab): _blocks(n, {(0, 0): -(J.T @ E[ab] + E[ab] @ J)}, vars) for ab in self.pairs}
+            Jt = J.terms(vars)
+            own_p0 = {("J P0", ab): _blocks(n, {(0, 0): terms_scale(unit_sandwich(Jt, *ab), -1.0)}, vars)
+                      for ab in self.pairs}
             table = TermTable({"own": own, "margin": margin_term, **own_p0, **shared})
             self.tables.append(table)
             self.cons.append(table.add(self.prog, f"ica[{k}]"))
@@ -109,8 +123,8 @@ class ICAStep:
         out = {"own": 1.0, "margin": self.margin, "1/a": 1.0 / alpha, "a": alpha}
         out.update({("J P0", ab): p0[ab] for ab in self.pairs})
         out.update({("J0 P", c): c0[c] for c in range(c0.size)})
-        J0 = c0.reshape(self.n, -1)[:, self.linear] @ self.lin_exps
-        S = J0.T @ P0 + P0 @ J0
+        J0l = c0.reshape(self.n, -1)[:, self.linear] @ self.lin_exps
+        S = J0l.T @ P0 + P0 @ J0l
         out.update({("J0 P0", ab): S[ab] for ab in self.pairs})
         out.update({("J0", c): c0[c] for c in self.lin_units})
         out.update({("P0", ab): p0[ab] for ab in self.pairs})

@@ -50,3 +50,13 @@ def test_a_missing_timing_is_an_error_not_zero():
     assert timing({"solve": 0.25}, "solve", "Solution.timings") == 0.25
     with pytest.raises(KeyError, match="Solution.timings records no 'canonicalize' timing"):
         timing({"solve": 0.25}, "canonicalize", "Solution.timings")
+
+
+def test_a_partial_run_leaves_the_skipped_parts_files_alone(tmp_path):
+    before = {name: f"{{\"kept\": \"{name}\"}}" for name in
+              ("fits.json", "scaling.json", "backends.json", "profiles.json", "bench.json", "summary.md")}
+    for name, text in before.items():
+        (tmp_path / name).write_text(text)
+    parts = "shapes,sweeps,scaling_n,backends,profiles,predict"
+    assert learner.main(["--quick", "--skip", parts, "--out", str(tmp_path)]) == 0
+    assert {name: (tmp_path / name).read_text() for name in before} == before
