@@ -210,8 +210,8 @@ def read_seds(path: Path = SEDS_CSV) -> dict | None:
 
 
 def figure_caption(seeds: int, with_seds: bool) -> str:
-    return ("Per-shape test DTWD (log scale) of the paper's CDSP, the default and the training-only "
-            "selections (every variant is in the table)"
+    return ("Per-shape test DTWD (log scale) of the paper's CDSP, the default, its corrective refit and the "
+            "training-only selection among corrective refits (every variant is in the table)"
             + (" (mean ± std over seeds)" if seeds > 1 else "") + ", the nearest training demo (open diamonds)"
             + (" and SEDS as published (crosses)" if with_seds else "")
             + f"; dashed: LPV-DS (PC-GMM) 26-shape mean {REFERENCE['LPV-DS PC-GMM']:.0f}, "
@@ -219,7 +219,7 @@ def figure_caption(seeds: int, with_seds: bool) -> str:
 
 
 #: The variants the figure draws when present (the per-shape table lists every variant).
-FIGURE_VARIANTS = ("CDSP paper", "CDSP default", "CDSP selected", "CDSP selected+cubic")
+FIGURE_VARIANTS = ("CDSP paper", "CDSP default", "CDSP corrective", "CDSP corrective selected")
 MARKERS = "os^v<>ph"
 
 

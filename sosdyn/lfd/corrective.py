@@ -22,6 +22,7 @@ evaluation layer). Training data only.
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..errors import InputError, NotFittedError
 from .cdsp import CDSP
@@ -31,10 +32,9 @@ from .rollout import euler_until_rest
 
 def nearest(points: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For each row q of ``queries`` (m, n): (index j of the nearest row of ``points`` (T, n),
-    distance |q - points_j|). Memory m x T floats."""
-    d2 = ((queries[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
-    j = np.argmin(d2, axis=1)
-    return j, np.sqrt(d2[np.arange(len(queries)), j])
+    distance |q - points_j|), by a k-d tree (memory O(T + m))."""
+    dist, j = cKDTree(points).query(queries)
+    return j, dist
 
 
 def corrective_pairs(states, P, V, tau: float, min_dist: float) -> tuple[np.ndarray, np.ndarray]:
@@ -105,13 +105,12 @@ class CorrectiveCDSP:
         for r in range(self.rounds + 1):
             train = Demonstrations(list(demos) + extra, demos.name, demos.units)
             models.append(CDSP(**self.cdsp_params).fit(train))
-            reps = self._rollouts(models[-1], demos)
+            reps = self._rollouts(models[-1], demos) if self.score is None or r < self.rounds else None
             self.scores_.append(float(np.mean([rollout_deviation(x, d.pos) for x, d in zip(reps, demos)]))
                                 if self.score is None else float(self.score(models[-1], demos)))
             if r == self.rounds:
                 break
-            scale = models[-1].scale_
-            X, Xdot = corrective_pairs(np.vstack(reps), P, V, self.tau, self.min_dist * scale)
+            X, Xdot = corrective_pairs(np.vstack(reps), P, V, self.tau, self.min_dist * models[0].scale_)
             if len(X) > self.max_extra:
                 keep = np.linspace(0, len(X) - 1, self.max_extra).round().astype(int)
                 X, Xdot = X[keep], Xdot[keep]
