@@ -34,7 +34,7 @@ from .checks import (check_coefficients, check_degree, check_exponents, check_te
                      real_array)
 from .evaluation import monomial_values
 from .monomials import MAX_DEGREE, combine_terms, match_rows, sum_rows
-from .terms import canonical_key, format_terms, merged_vars
+from .canonical import canonical_key, format_terms, merged_vars
 
 
 def _scalar(value) -> float:

@@ -6,7 +6,8 @@ profiles, scaling sweeps and the one-state prediction timings go on this page in
 from what the benchmarks wrote into one folder:
 
 * ``summary.md`` (``make bench``) and ``sos.md`` (``make bench-sos``), then every other
-  ``*.md`` of the folder (by name), rendered as they are; their images (``scaling_K.png``, ...)
+  ``*.md`` of the folder (by name) that is not already copied into those two (the n-scaling
+  tables are), rendered as they are; their images (``scaling_K.png``, ...)
   are linked relative to the folder, and links between these files become links within the page;
 * ``predict.json`` (``python -m problems.bench.predict``): one table row per model, the
   median seconds of ``model.predict`` on one row and of ``model.predictor()``, the speed-up
@@ -46,7 +47,10 @@ def render_bench(bench_dir: str | Path) -> Path:
     """Write ``bench_dir/index.html`` from the benchmark outputs in ``bench_dir``."""
     bench_dir = Path(bench_dir)
     known = {name for name, _, _ in BENCH_PAGES}
-    extra = [(p.name, p.stem, None) for p in sorted(bench_dir.glob("*.md")) if p.name not in known]
+    main_text = "".join((bench_dir / name).read_text(encoding="utf-8") for name in known
+                        if (bench_dir / name).is_file())
+    extra = [(p.name, p.stem, None) for p in sorted(bench_dir.glob("*.md"))
+             if p.name not in known and p.read_text(encoding="utf-8").strip() not in main_text]
     pages = [*BENCH_PAGES, *extra]
     sections = []
     for name, title, command in pages:

@@ -6,7 +6,7 @@ import pytest
 import sosdyn as sd
 from sosdyn.poly import Polynomial, allocate
 from sosdyn.poly.decision import decision_name
-from sosdyn.poly.terms import merged_vars, natural_key
+from sosdyn.poly.canonical import merged_vars, natural_key
 
 
 @pytest.fixture

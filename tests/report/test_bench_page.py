@@ -34,3 +34,13 @@ def test_page_from_summary_predict_and_raw_json(tmp_path):
 def test_empty_folder_says_what_to_run(tmp_path):
     text = render_bench(tmp_path).read_text()
     assert text.count("Not run") == 3 and "No JSON files." in text
+
+
+def test_a_file_already_copied_into_the_summary_is_not_repeated(tmp_path):
+    part = "### state dimension n\n\n| n | total |\n|---|---|\n| 2 | 0.77 s |\n"
+    (tmp_path / "summary.md").write_text(SUMMARY + "\n" + part)
+    (tmp_path / "scaling_n.md").write_text(part)
+    (tmp_path / "profile_n7.md").write_text("## cProfile at n = 7\n")
+    text = render_bench(tmp_path).read_text()
+    assert text.count("<h3>state dimension n</h3>") == 1 and '<section id="scaling_n">' not in text
+    assert '<section id="profile_n7">' in text

@@ -1,4 +1,4 @@
-"""Helpers of :class:`~.polynomial.Polynomial` on its arrays: variable order, identity, printing.
+"""Canonical forms of a :class:`~.polynomial.Polynomial` on its arrays: variable order, identity, printing.
 
 * Variable order of a result (:func:`merged_vars`): when one operand's variables include the
   other's, the larger tuple's order is kept; otherwise the union in natural order (``x2`` before
