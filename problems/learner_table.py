@@ -16,6 +16,7 @@ import numpy as np
 import sosdyn as sd
 from sosdyn.evaluation.baselines import GMR
 from sosdyn.evaluation.metrics import dtwd, velocity_rmse
+from sosdyn.lfd.params import PLAIN
 
 from .settings import PAPER_SHAPES, REPORTS
 
@@ -44,7 +45,7 @@ def run_one(shape, name, kwargs, refine):
         model = GMR(n_components=K).fit(demos)
         certified, collapse = None, None
     else:
-        model = sd.CDSP(n_components=K, refine_gmm=refine, **kwargs).fit(demos)
+        model = sd.CDSP(**dict(PLAIN, n_components=K, refine_gmm=refine, **kwargs)).fit(demos)   # one plain fit each
         certified = bool(model.certified_)
         collapse = model.metric_collapse_ and model.metric_collapse_["constant_metric_certifies"]
     fit_s = time.perf_counter() - t0

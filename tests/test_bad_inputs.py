@@ -25,7 +25,7 @@ def _demos(goals=((0.0, 0.0), (0.0, 0.0)), T=50, nan=False, dims=None):
 
 @pytest.fixture(scope="module")
 def fitted():
-    return sd.CDSP(n_components=1, gamma=0.5).fit(_demos())
+    return sd.CDSP(n_components=1, gamma=0.5, warp="none").fit(_demos())
 
 
 x, y = sd.variables("x y")

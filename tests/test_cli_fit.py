@@ -13,6 +13,7 @@ from cli_support import assert_one_error_line, run
 
 import sosdyn as sd
 from sosdyn.cli.fit import progress_line
+from sosdyn.lfd.warp import AUTO_WARPS
 
 DT = 0.02
 
@@ -48,6 +49,7 @@ class Captured:
         Captured.made["kwargs"] = kwargs
 
     history_: typing.ClassVar[list] = [{"step": "dynamics", "cost": 1.0}]
+    warp_ = None
     verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3, "max_sampled_eig": -1e-3,
                                         "n_samples": 10})()
 
@@ -79,10 +81,13 @@ def test_newcomer_csv_folder_fit_plot_export(capsys, tmp_path):
     code, out, err = run(capsys, "fit", folder, "--dt", DT * 3, "--units", "m", "--components", "2",
                          "--out", model)
     assert code == 0, err
-    steps = re.findall(r"^step (\d+) \((.+)\): cost ([-\d.e+]+), ([\d.]+) s$", out, flags=re.MULTILINE)
+    steps = re.findall(r"^warp (.+?), step (\d+) \((.+)\): cost ([-\d.e+]+), ([\d.]+) s$", out, flags=re.MULTILINE)
     content = json.loads(model.read_text())
-    assert len(steps) == len(content["state"]["history_"]) >= 2     # one plain line per convex step
-    assert [int(s[0]) for s in steps] == list(range(1, len(steps) + 1))
+    history = content["state"]["history_"]
+    per_warp = {w: [int(s[1]) for s in steps if s[0] == w] for w in ("none", *AUTO_WARPS)}
+    assert {s[0] for s in steps} == set(per_warp) and len(steps) == sum(map(len, per_warp.values()))
+    # one plain line per convex step of every candidate of warp="auto"; the kept one's are the file's history
+    assert [r["iteration"] + 1 for r in history] in per_warp.values() and len(history) >= 2
     assert "3 demonstrations of demos" in out and "certificate: passed" in out
     assert content["state"]["units_"] == "m" and content["state"]["dt_"] == pytest.approx(DT * 3)
     code, _, err = run(capsys, "plot", model, "--demos", folder, "--dt", DT * 3, "--out", tmp_path / "fig.png")
@@ -115,6 +120,9 @@ def test_pattern_and_3d_t_x_y_z_header(capsys, tmp_path, captured):
     assert len(demos) == 2 and demos.dim == 3 and [d.source for d in demos] == ["run0.csv", "run1.csv"]
     np.testing.assert_allclose(demos[1].pos[0], [-2, 4, 1])
     assert captured["kwargs"] == {"preset": "cubic"}
+    code, _, err = run(capsys, "fit", str(tmp_path / "run*.csv"), "--out", tmp_path / "m.json", "--warp", "none")
+    assert code == 0, err
+    assert captured["kwargs"] == {"warp": "none"}
 
 
 def test_goal_tol_refuses_with_a_hint_and_accepts_when_raised(capsys, tmp_path, captured):
@@ -149,6 +157,8 @@ def test_help_shows_the_defaults(capsys):
     text = " ".join(out.replace("│", " ").split())
     assert code == 0
     for default in (f"default: ({sd.CDSP().n_components}, or the preset's)", "default: model.json",
+                    "--corrective-rounds", f"default: ({sd.CDSP().corrective_rounds}, or the preset's)",
+                    "--warp", "<auto|none>", "default: (auto, or the preset's)",
                     "5% of the data's bounding-box diagonal"):
         assert default in text, default
 
@@ -156,3 +166,7 @@ def test_help_shows_the_defaults(capsys):
 def test_progress_line_reads_step_cost_elapsed():
     assert progress_line({"iteration": 2, "step": "metric", "cost": 12.5}, 1.44) == \
         "step 3 (metric): cost 12.5, 1.4 s"
+    assert progress_line({"iteration": 0, "step": "dynamics", "cost": 2.0, "round": 1}, 3.0) == \
+        "corrective round 1, step 1 (dynamics): cost 2, 3.0 s"
+    assert progress_line({"iteration": 0, "step": "metric", "cost": 2.0, "round": 2, "warp": "none"}, 3.0) == \
+        "warp none, corrective round 2, step 1 (metric): cost 2, 3.0 s"

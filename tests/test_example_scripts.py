@@ -89,5 +89,5 @@ def test_quickstart_notebook(tmp_path, monkeypatch):
     nbclient.NotebookClient(nb, timeout=60, kernel_name="python3",
                             resources={"metadata": {"path": str(tmp_path)}}).execute()
     outputs = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs)
-    assert "PASSED" in outputs and "distance to the goal after 5 s" in outputs
+    assert "PASSED" in outputs and "distance to the goal after 12 s" in outputs
     assert list(tmp_path.iterdir()) == []

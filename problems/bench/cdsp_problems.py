@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from sosdyn.lfd import CDSP, load_lasa
 from sosdyn.lfd.contraction import contraction_degree, degree, metric_exponents, state_variables
+from sosdyn.lfd.params import PLAIN
 from sosdyn.lfd.steps import MetricStep
 
 from .sos_problems import SPARSE
@@ -15,7 +16,7 @@ def cdsp_fields(shape="Leaf_1", K=6):
     """Fields (C, fexps) and parameters of a linear CDSP model fitted on a LASA shape (cached)."""
     key = (shape, K)
     if key not in _CDSP_CACHE:
-        model = CDSP(n_components=K, random_state=0, verify_samples=500).fit(load_lasa(shape))
+        model = CDSP(n_components=K, random_state=0, verify_samples=500, **PLAIN).fit(load_lasa(shape))
         _CDSP_CACHE[key] = {"C": model.C_, "fexps": model.field_exps_, "gamma": model.gamma,
                             "eps": model.eps, "n": model.dim_}
     return _CDSP_CACHE[key]

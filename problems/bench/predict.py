@@ -1,6 +1,7 @@
 """Single-state prediction for control loops: ``model.predict(x[None])`` against ``model.predictor()(x)``.
 
-Fits one LASA shape (K = 6, 2-D, linear fields; ``--cubic`` adds a degree-3 model), then times
+Fits one LASA shape (K = 6, 2-D, linear fields: one plain fit and the default's warped model;
+``--cubic`` adds a plain degree-3 model), then times
 one call at a time (median over ``--calls`` calls, each timed alone, after a warm-up) at states
 along the demonstrations, and checks that both give the same velocities: the largest relative
 difference |v_fast - v| / max(|v|, tiny) over the rows of a 10^4-state grid twice the data's box.
@@ -15,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from sosdyn import CDSP, load_lasa
+from sosdyn.lfd.params import PLAIN
 
 from ..settings import BENCH
 from .timing import environment, median, write_json
@@ -42,10 +44,11 @@ def grid_states(X: np.ndarray, count: int, seed: int = 0) -> np.ndarray:
     return mid + np.random.default_rng(seed).uniform(-1, 1, (count, X.shape[1])) * half
 
 
-def measure(shape: str, field_degree: int, calls: int, states: int) -> dict:
-    """Fit ``shape`` and compare the two evaluators (timings in seconds, error relative)."""
+def measure(shape: str, field_degree: int, calls: int, states: int, warp: str = "none") -> dict:
+    """Fit ``shape`` (one plain fit, or with ``warp="auto"`` the default's choice of warp) and compare
+    the two evaluators (timings in seconds, error relative)."""
     demos = load_lasa(shape)
-    model = CDSP(n_components=6, field_degree=field_degree, random_state=0).fit(demos)
+    model = CDSP(**dict(PLAIN, n_components=6, field_degree=field_degree, random_state=0, warp=warp)).fit(demos)
     X = np.vstack([d.pos for d in demos])
     fast = model.predictor()
     along = X[:: max(1, len(X) // 500)]
@@ -56,7 +59,8 @@ def measure(shape: str, field_degree: int, calls: int, states: int) -> dict:
     F = np.array([fast(x) for x in G])
     rel = np.abs(F - V).max(axis=1) / np.maximum(np.abs(V).max(axis=1), np.finfo(float).tiny)
     K, n, m = model.C_.shape
-    return {"shape": shape, "K": K, "n": n, "monomials": m, "field_degree": field_degree,
+    bumps = 0 if model.warp_ is None else len(model.warp_["sigmas"])
+    return {"shape": shape, "K": K, "n": n, "monomials": m, "field_degree": field_degree, "warp_bumps": bumps,
             "predict_s": t_batch, "predictor_s": t_fast, "speedup": t_batch / t_fast,
             "max_rel_diff": float(rel.max()), "states_checked": states, "calls_timed": calls,
             "within_target": bool(t_fast <= TARGET_S)}
@@ -72,11 +76,11 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(BENCH), help="output folder (default: reports/bench)")
     args = ap.parse_args(argv)
     calls, states = (1000, 1000) if args.quick else (args.calls, args.states)
-    rows = [measure(args.shape, 1, calls, states)]
+    rows = [measure(args.shape, 1, calls, states), measure(args.shape, 1, calls, states, warp="auto")]
     if args.cubic:
         rows.append(measure(args.shape, 3, calls, states))
     for r in rows:
-        print(f"{r['shape']} K={r['K']} n={r['n']} degree {r['field_degree']}: predict {r['predict_s'] * 1e6:.0f} us, "
+        print(f"{r['shape']} K={r['K']} n={r['n']} degree {r['field_degree']}, {r['warp_bumps']} warp bumps: predict {r['predict_s'] * 1e6:.0f} us, "
               f"predictor {r['predictor_s'] * 1e6:.1f} us ({r['speedup']:.0f}x), "
               f"max rel diff {r['max_rel_diff']:.1e} on {r['states_checked']} states", flush=True)
     path = write_json(Path(args.out) / "predict.json",

@@ -21,7 +21,7 @@ from rich.markup import escape
 from ..errors import InputError
 from ..lfd.cdsp import DEFAULTS
 from ..lfd.data import GOAL_TOL_FRACTION, MAX_UNITS_CHARS
-from ..lfd.params import PRESETS
+from ..lfd.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from .base import State, app, err, info, out, positive
 from .paths import check_folder, check_output, demo_inputs
 
@@ -33,9 +33,16 @@ class SolverMethod(str, enum.Enum):
     ica = "ica"
 
 
+Warp = enum.Enum("Warp", {name: name for name in WARPS}, type=str)
+
+
 def progress_line(row: dict, elapsed: float) -> str:
-    """One convex step of a fit: ``step 3 (metric): cost 12.5, 1.4 s``."""
-    return f"step {row['iteration'] + 1} ({row['step']}): cost {row['cost']:.6g}, {elapsed:.1f} s"
+    """One convex step of a fit: ``step 3 (metric): cost 12.5, 1.4 s``, prefixed by
+    ``warp 60 maps, decay 1, `` for a candidate of warp="auto" and ``corrective round 1, `` during
+    a refit on corrective data."""
+    head = (f"warp {row['warp']}, " if row.get("warp") else "") + \
+        (f"corrective round {row['round']}, " if row.get("round") else "")
+    return f"{head}step {row['iteration'] + 1} ({row['step']}): cost {row['cost']:.6g}, {elapsed:.1f} s"
 
 
 class FitProgress:
@@ -100,6 +107,13 @@ def fit(
     solver_method: Annotated[SolverMethod | None, typer.Option(
         "--solver-method", "--method", help="How the bilinear program is solved (CDSP's solver_method).",
         show_default=_default("solver_method"))] = None,
+    corrective_rounds: Annotated[int | None, typer.Option(
+        min=0, max=MAX_CORRECTIVE_ROUNDS, help="Refits on corrective data from the model's own rollouts of the demonstrations (0 = plain "
+                    "fit; each round is a whole fit).", show_default=_default("corrective_rounds"))] = None,
+    warp: Annotated[Warp | None, typer.Option(
+        help="Fit through a diffeomorphic pre-warp: auto = fit without and with each candidate warp, keep "
+             "the one that reproduces the demonstrations best; none = no warp.",
+        show_default=_default("warp"))] = None,
     seed: Annotated[int | None, typer.Option(min=0, max=2**32 - 1, help="Random seed (EM initialisation).",
                                              show_default=str(DEFAULTS["random_state"]))] = None,
     dt: Annotated[float | None, typer.Option(
@@ -132,7 +146,7 @@ def fit(
         paths, **{k: v for k, v in read.items() if v is not None})
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
-               "random_state": seed}
+               "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value}
     given = {k: v for k, v in options.items() if v is not None}
     model = sd.CDSP.preset(preset.value, **given) if preset else sd.CDSP(**given)
     with FitProgress(f"fitting CDSP to {len(data)} demonstrations of {data.name}") as progress:
@@ -146,3 +160,5 @@ def fit(
     info(f"certificate: {'[green]passed[/]' if report.passed else '[red]FAILED[/]'} — min Gram eigenvalue "
          f"{report.min_gram_eig:.2e}, max sampled generalised eigenvalue {report.max_sampled_eig:.2e} "
          f"over {report.n_samples} states")
+    if model.warp_ is not None:
+        info(f"warp: {report.warp['n_maps']} maps, max Lipschitz number {report.warp['max_lipschitz']:.3f} (< 1)")

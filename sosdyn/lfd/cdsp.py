@@ -4,14 +4,16 @@ Model (eq. 2, goal-shifted and scaled, z = (x - x*)/s):  zdot = sum_k h_k(z) f_k
 f_k(0) = 0 (eq. 5). Guarantee (eq. 4/9, SOS form eq. 14-19): for every k,
 -G_k(z) = -(J_k^T M + M J_k + dM[f_k] + gamma M) is an SOS matrix and M - eps I is an SOS
 matrix, so the virtual system ydot = sum_k h_k(x) f_k(y) contracts in the metric M at rate
-gamma whatever the weights h_k, and every trajectory converges to x* (Theorem 1).
+gamma whatever the weights h_k, and every trajectory converges to x* (Theorem 1). With a warp
+(parameter ``warp``, :mod:`.warp`) the same holds in u = phi(z) and carries over to z (class docstring).
 
 The estimator holds parameters and learned state; the mathematics is in functions on arrays:
 :mod:`.learner` (the stages), :mod:`.steps` (the convex steps), :mod:`.contraction` (G_k and M),
-:mod:`.certificate` (certify and check), :mod:`.refine` (the mixture), :mod:`.gmm` (EM).
+:mod:`.certificate` (certify and check), :mod:`.refine` (the mixture), :mod:`.gmm` (EM),
+:mod:`.warp` (the pre-warp), :mod:`.rounds` (fits made of several fits).
 
-Model files (:func:`save_model`, :func:`load_model`; the file in :mod:`.model_io`, its state
-in :mod:`.model_state`): loading validates every field and re-checks the certificate from the
+Model files (:meth:`CDSP.save`, :func:`~.model_files.load_model`; the file in :mod:`.model_io`, its
+state in :mod:`.model_state`): loading validates every field and re-checks the certificate from the
 model's own coefficients with the library's DEFAULT_SAMPLES states. The certificate lives in
 z-coordinates and does not involve the weights h_k, so an edited goal, scale or mixture leaves
 it valid while changing the motion: only the checksum (accidents) or the keyed signature
@@ -22,26 +24,43 @@ from __future__ import annotations
 import inspect
 import time
 import warnings
+from dataclasses import replace
 from numbers import Integral
 from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from ..errors import InputError, ModelFileError, NotCertifiedError, NotFittedError, SosdynError
-from .certificate import (DEFAULT_SAMPLES, CertificateReport, certify, check_certificate, collapse_diagnostic,
-                          extract_certificate)
+from ..errors import InputError, NotCertifiedError, NotFittedError
+from .certificate import (
+    DEFAULT_SAMPLES,
+    CertificateReport,
+    certify,
+    check_certificate,
+    collapse_diagnostic,
+    extract_certificate,
+)
 from .contraction import eval_fields, field_exponents, metric_exponents
+from .corrective import MIN_DIST, ROUNDS, TAU, sample_step
 from .data import check_demonstrations
 from .evaluator import StatePredictor
 from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost
 from .learner import History, Settings, learn, subsample
-from .model_io import FORMAT, REFIT_HINT, VERSION, read_model_file, write_model_file
-from .model_state import STATE_FIELDS, check_param_names, need, state_record, validate_state
-from .params import LEGACY_PARAMS, MAX_SEED, PARAMS, check_params, check_solver, preset_params, resolve_seed
+from .model_io import FORMAT, VERSION, write_model_file
+from .model_state import STATE_FIELDS, state_record
+from .params import (
+    MAX_SEED,
+    PARAMS,
+    check_params,
+    check_solver,
+    preset_params,
+    resolve_seed,
+    warp_settings,
+)
 from .rollout import rollout as integrate
+from .rounds import corrective_fits, warp_choice
+from .warp import AUTO_WARPS, check_warp, fit_warp, jacobian, pulled_back
 
-LOAD_SEED = 0                   # the states of the sampled check when loading a file
 METRIC_PROX = 1e-2              # default proximal weight of the metric step (well-posed alternation)
 
 
@@ -71,24 +90,44 @@ class CDSP:
     verify_samples : int         states of the sampled certificate check, in [100, 10^6].
     allow_uncertified : bool     return a model whose check failed (flagged) instead of raising.
     progress : callable or None  called with each history row while fitting.
+    corrective_rounds : int      refits on corrective data from the model's own training rollouts
+                                 (:mod:`.corrective`, :func:`~.rounds.corrective_fits`), 0..10; 0 = none.
+    corrective_tau, corrective_min_dist   the corrective labels' time constant (s) and the distance
+                                 (x the data's scale) below which a rollout state gets no label.
+    warp : "auto", "none" or dict   fit in warped coordinates u = phi(z), phi a diffeomorphism of
+                                 Gaussian bumps fixing the goal (:mod:`.warp`); a dict (keys of
+                                 :data:`~.warp.WARP_DEFAULTS`) is one fixed warp; "auto" fits no warp
+                                 and each :data:`~.warp.AUTO_WARPS` candidate and keeps the one whose
+                                 rollouts from the training demos' starts deviate least from them.
 
-    Defaults: ``CDSP()`` is the "ica" preset with K = 8 Gaussians. On the ds-opt LASA protocol,
-    of the single configurations tried, K = 8 and K = 10 had the lowest 26-shape mean DTWD of
-    reproductions of the training demonstrations (1511 and 1508 mm, a tie; K = 8 is faster);
-    its test mean is 1919 mm, against 2880 for "paper".
-    Presets (``CDSP.preset(name, **overrides)``, :data:`~sosdyn.lfd.params.PRESETS`):
-    ``"paper"`` is the paper's alternating formulation, the former default (the reproduction
-    ``python -m problems run`` sets its parameters explicitly, with ``metric_prox=0``);
-    ``"ica"`` the same linear model by the inner convex approximation, K = 6; ``"cubic"`` cubic
-    sub-systems and a degree-2 metric. A choice per data set among configurations from the
-    training demonstrations alone: :func:`sosdyn.evaluation.dsopt.select_fit` (the
-    "CDSP selected" variants of ``make lasa-dsopt``).
+    Warp (z = (x - x*)/s): the core f is fitted on (phi(z_i), J_phi(z_i) zdot_i) and certified in
+    u as always; the model is zdot = J_phi(z)^{-1} f(phi(z)). Since du = J_phi dz, the x-system
+    contracts at rate gamma in the metric J_phi^T M J_phi, uniformly definite because every bump's
+    Lipschitz number l_j < 1 (prod (1 - l_j)^2 M <= J^T M J <= prod (1 + l_j)^2 M); phi(0) = 0 keeps
+    the goal, and goal changes and rescaling work as without a warp. ``verify`` adds the warp's
+    check (every l_j < 1 recomputed, sampled sigma_min(J_phi) >= prod (1 - l_j)) to the report.
+
+    Defaults: ``CDSP()`` is the "ica" preset with K = 8 Gaussians and warp="auto", no corrective
+    rounds. On the ds-opt LASA protocol (26 shapes, random_state 0): test mean DTWD 796 mm
+    (median 764, worst 4.1x copying the nearest demo), ~4 s per shape for the three fits (no
+    warp: 1919; 3 corrective rounds instead of the warp: 1438; "paper": 2880); corrective rounds
+    inside the warps did not help (1257 vs 1258). K = 8 and K = 10 had the lowest training means
+    of the single plain configurations (1511, 1508 mm; K = 8 is faster).
+    Presets (``CDSP.preset(name, **overrides)``, :data:`~sosdyn.lfd.params.PRESETS`) are one plain
+    fit each (warp="none", corrective_rounds=0): ``"paper"`` the paper's alternating formulation
+    (the reproduction ``python -m problems run`` sets its parameters explicitly); ``"ica"`` the
+    same linear model by the inner convex approximation, K = 6; ``"cubic"`` cubic sub-systems and
+    a degree-2 metric. A choice per data set among configurations from the training demonstrations
+    alone: :func:`sosdyn.evaluation.dsopt.select_fit` (the "CDSP selected" variants).
 
     Numbers may be Python or numpy scalars (np.float32, np.int64); booleans are not numbers
     here. Every parameter is checked before any optimisation (InputError saying what to try).
 
     Learned attributes end in ``_``: ``goal_``, ``scale_``, ``mixture_``, ``C_`` (K, n, m),
-    ``W_`` (n, n, p), ``history_``, ``certificate_``, ``verification_``, ``metric_collapse_``.
+    ``W_`` (n, n, p), ``warp_`` (None or the bumps' z-unit centers, vectors, sigmas), ``history_``,
+    ``certificate_``, ``verification_``, ``metric_collapse_``; set by ``fit`` only (not in a
+    model file): ``warp_scores_`` (each "auto" candidate's training deviation, data units),
+    ``corrective_round_``, ``corrective_scores_``, ``corrective_pairs_`` (per round).
     """
 
     name = "CDSP"
@@ -96,7 +135,8 @@ class CDSP:
     def __init__(self, n_components=8, metric_degree=0, field_degree=1, gamma=0.1, metric="learned",
                  solver="CLARABEL", solver_method="ica", max_iter=20, tol=1e-4, eps=1e-3,
                  margin=1e-4, metric_prox=METRIC_PROX, refine_gmm=False, max_samples=3000, random_state=0,
-                 verify_samples=DEFAULT_SAMPLES, allow_uncertified=False, progress=None):
+                 verify_samples=DEFAULT_SAMPLES, allow_uncertified=False, progress=None,
+                 corrective_rounds=ROUNDS, corrective_tau=TAU, corrective_min_dist=MIN_DIST, warp="auto"):
         self.n_components = n_components
         self.metric_degree = metric_degree
         self.field_degree = field_degree
@@ -115,6 +155,10 @@ class CDSP:
         self.verify_samples = verify_samples
         self.allow_uncertified = allow_uncertified
         self.progress = progress
+        self.corrective_rounds = corrective_rounds
+        self.corrective_tau = corrective_tau
+        self.corrective_min_dist = corrective_min_dist
+        self.warp = warp
 
     @classmethod
     def preset(cls, name: str, **overrides) -> CDSP:
@@ -143,6 +187,54 @@ class CDSP:
         t_start = time.perf_counter()
         self.check_params()
         demos = check_demonstrations(demos)
+        if self.warp == "auto":
+            return self._fit_auto(demos, t_start)
+        settings = warp_settings(self.warp)
+        self.warp_scores_ = {}
+        return self._fit_core(demos, None if settings is None else
+                              fit_warp([(d.t, d.pos) for d in demos], demos.goal, settings), t_start)
+
+    def _fit_auto(self, demos, t_start):
+        """warp="auto": :func:`~.rounds.warp_choice` among no warp and AUTO_WARPS (same seed)."""
+        seed = resolve_seed(self.random_state)
+
+        def fit_candidate(name, settings):
+            tagged = None if self.progress is None else (lambda row: self.progress(dict(row, warp=name)))
+            maps = None if settings is None else fit_warp([(d.t, d.pos) for d in demos], demos.goal, settings)
+            return CDSP(**dict(self.get_params(), random_state=seed, progress=tagged))._fit_core(
+                demos, maps, time.perf_counter())
+
+        kept, self.warp_scores_ = warp_choice(fit_candidate, {"none": None, **AUTO_WARPS}, demos)
+        self.__dict__.update({k: v for k, v in vars(kept).items() if k.endswith("_") and k != "warp_scores_"})
+        self.timings_ = dict(kept.timings_, total_s=time.perf_counter() - t_start)
+        return self
+
+    def _fit_core(self, demos, maps, t_start):
+        """One fit, plain or with corrective rounds (:func:`~.rounds.corrective_fits`; the kept
+        round's learned state becomes this model's, ``history_`` holds every round's rows), through
+        the warp ``maps`` (data units, or None)."""
+        if self.corrective_rounds == 0:
+            self.corrective_round_, self.corrective_scores_, self.corrective_pairs_ = 0, [], []
+            return self._fit_plain(demos, t_start, maps)
+        seed = resolve_seed(self.random_state)
+
+        def fit_round(r, data):
+            tagged = None if self.progress is None else (lambda row: self.progress(dict(row, round=r)))
+            return CDSP(**dict(self.get_params(), random_state=seed, corrective_rounds=0, progress=tagged)
+                        )._fit_plain(data, time.perf_counter(), maps)
+
+        self.corrective_round_, kept, self.corrective_scores_, self.corrective_pairs_, history = corrective_fits(
+            fit_round, demos, self.corrective_rounds, self.corrective_tau, self.corrective_min_dist)
+        self.__dict__.update({k: v for k, v in vars(kept).items() if k.endswith("_")
+                              and not k.startswith("corrective_")})
+        self.history_, self.dt_ = history, sample_step(demos)
+        self.timings_ = dict(kept.timings_, total_s=time.perf_counter() - t_start)
+        return self
+
+    def _fit_plain(self, demos, t_start, maps=None):
+        """One fit of the mixture, the fields and the metric, then the certificate and its check;
+        with ``maps`` (a warp in data units, :func:`~.warp.fit_warp`) in u = phi(z) on (phi(z_i),
+        J_phi(z_i) zdot_i), the warp stored in z-units as ``warp_`` (None if it has no bump)."""
         K = 1 if self.n_components == "bic" else int(self.n_components)
         X, Xdot, subsampled = subsample(*demos.stacked(), self.max_samples)
         if X.shape[0] < MIN_SAMPLES_PER_COMPONENT * K:
@@ -152,9 +244,15 @@ class CDSP:
         self.seed_ = resolve_seed(self.random_state)
         self.dim_, self.goal_ = demos.dim, np.asarray(demos.goal, dtype=float)
         self.scale_ = float(np.abs(X - self.goal_).max()) or 1.0
-        self.dt_ = float(np.median(np.concatenate([np.diff(d.t) for d in demos])))
+        self.dt_ = sample_step(demos)
         self.units_ = demos.units
         Z, Zdot = (X - self.goal_) / self.scale_, Xdot / self.scale_
+        self.warp_ = None if maps is None or not len(maps[2]) else {
+            "centers": (maps[0] - self.goal_) / self.scale_, "vectors": maps[1] / self.scale_,
+            "sigmas": maps[2] / self.scale_}
+        if self.warp_ is not None:
+            Z, J = jacobian(Z, *self._maps(), np.zeros(self.dim_))
+            Zdot = np.einsum("tij,tj->ti", J, Zdot)
         history = History(self.progress)
         self.history_, self.timings_ = history.rows, {}
         settings = Settings.from_params(self.get_params())
@@ -208,12 +306,18 @@ class CDSP:
             raise InputError(f"{what} contains NaN or inf")
         return X
 
+    def _maps(self):
+        return self.warp_["centers"], self.warp_["vectors"], self.warp_["sigmas"]
+
+    def _core(self, U):
+        """udot = sum_k h_k(u) f_k(u) at the rows of U (the certified system)."""
+        return np.einsum("tk,tki->ti", self.mixture_.responsibilities(U), eval_fields(self.C_, self.field_exps_, U))
+
     def field(self, X, goal):
-        """xdot at the rows of X for the goal ``goal`` (the field translated to the goal)."""
+        """xdot at the rows of X for the goal ``goal`` (the field translated to the goal):
+        s f(z), or through the warp s J_phi(z)^{-1} f(phi(z)), z = (x - goal) / s."""
         Z = (X - goal) / self.scale_
-        H = self.mixture_.responsibilities(Z)
-        F = eval_fields(self.C_, self.field_exps_, Z)
-        return np.einsum("tk,tki->ti", H, F) * self.scale_
+        return (self._core(Z) if self.warp_ is None else pulled_back(Z, self._maps(), self._core)) * self.scale_
 
     def predict(self, X):
         """Velocities (m, n) at the states X (m, n), in the data's units."""
@@ -231,7 +335,8 @@ class CDSP:
     def predictor(self) -> StatePredictor:
         """A fast one-state evaluator, ``predictor(x) -> xdot`` (see :mod:`.evaluator`)."""
         self._check_fitted()
-        return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_)
+        return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
+                              None if self.warp_ is None else self._maps())
 
     def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=()):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.
@@ -251,14 +356,24 @@ class CDSP:
         if seed is not None and (isinstance(seed, (bool, np.bool_)) or not isinstance(seed, Integral)
                                  or not 0 <= seed <= MAX_SEED):
             raise InputError(f"seed must be None or an integer in [0, {MAX_SEED}], got {seed!r}")
-        return check_certificate(self.C_, self.field_exps_, self.W_, self.metric_exps_, self.gamma,
-                                 self.certificate_, self.verify_samples if n_samples is None else n_samples,
-                                 self.seed_ if seed is None else int(seed))
+        n_samples = self.verify_samples if n_samples is None else n_samples
+        seed = self.seed_ if seed is None else int(seed)
+        report = check_certificate(self.C_, self.field_exps_, self.W_, self.metric_exps_, self.gamma,
+                                   self.certificate_, n_samples, seed)
+        if self.warp_ is None:
+            return report
+        warp = check_warp(self._maps(), n_samples, seed)
+        return replace(report, warp=warp, passed=report.passed and warp["passed"])
 
     def save(self, path, key=None) -> Path:
-        """Write the model to ``path`` (JSON, atomically); with ``key`` (or $SOSDYN_MODEL_KEY)
-        also an HMAC-SHA256 signature. See :func:`save_model`."""
-        return save_model(self, path, key)
+        """Write the model to ``path`` (JSON, atomically): format, version, parameters, learned state,
+        checksum and, with ``key`` (bytes or str; default $SOSDYN_MODEL_KEY), an HMAC-SHA256 signature.
+        A failing save leaves any previous file intact. ``random_state`` is recorded as ``seed_``."""
+        self._check_fitted()
+        state = state_record({k: getattr(self, k) for k in STATE_FIELDS})
+        params = dict(self.get_params(), random_state=self.seed_)
+        return write_model_file({"format": FORMAT, "version": VERSION, "params": params, "state": state},
+                                path, key)
 
     @property
     def n_iter_(self) -> int:
@@ -266,61 +381,3 @@ class CDSP:
 
 
 DEFAULTS = {name: p.default for name, p in inspect.signature(CDSP).parameters.items()}
-
-
-# ---------------------------------------------------------------------- model files
-def save_model(model: CDSP, path, key=None) -> Path:
-    """Write a fitted CDSP to ``path``: format, version, parameters, learned state, checksum and,
-    with ``key`` (bytes or str; default $SOSDYN_MODEL_KEY), an HMAC-SHA256 signature. Atomic: a
-    failing save leaves any previous file at ``path`` intact. The parameter ``random_state`` is
-    recorded as the integer seed the fit used (``seed_``)."""
-    model._check_fitted()
-    state = state_record({k: getattr(model, k) for k in STATE_FIELDS})
-    params = dict(model.get_params(), random_state=model.seed_)
-    return write_model_file({"format": FORMAT, "version": VERSION, "params": params, "state": state},
-                            path, key)
-
-
-def load_model(path, key=None) -> CDSP:
-    """Read a model written by :func:`save_model`: every field validated, certificate re-checked.
-
-    With ``key`` (bytes or str; default $SOSDYN_MODEL_KEY) the file must carry a matching HMAC.
-    The certificate is re-checked from the model's own coefficients (Gram matrices, and
-    DEFAULT_SAMPLES sampled states with a fixed seed): the file's ``verify_samples`` and
-    ``random_state`` do not make this check weaker. Every failure is a ModelFileError.
-    """
-    path = Path(path)
-    content = read_model_file(path, key)
-    try:
-        model = model_from_content(content)
-    except ModelFileError as exc:
-        text = str(exc).rstrip(".")
-        raise ModelFileError(f"{path}: {text}." + ("" if "Try:" in text else f" {REFIT_HINT}")) from None
-    try:
-        report = model.verify(DEFAULT_SAMPLES, LOAD_SEED)
-    except (SosdynError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-        raise ModelFileError(f"{path}: its certificate cannot be re-checked from its coefficients "
-                             f"({type(exc).__name__}: {exc}); refusing to load. {REFIT_HINT}") from None
-    if not report.passed:
-        raise ModelFileError(f"{path}: the stored certificate does not check out; refusing to load.\n"
-                             f"{report}\n{REFIT_HINT}")
-    model.verification_, model.certified_ = report, True
-    return model
-
-
-def model_from_content(content: dict) -> CDSP:
-    """A CDSP (not yet verified) from a file's content; ModelFileError naming the first bad field."""
-    params = dict(LEGACY_PARAMS, **need(content, "params", "", dict))   # files older than a parameter
-    check_param_names(params, PARAMS)
-    model = CDSP(**params)
-    try:
-        check_params(params, DEFAULTS)
-    except InputError as exc:
-        raise ModelFileError(f"invalid params: {exc}") from None
-    model.seed_ = resolve_seed(model.random_state)
-    metric_degree = Settings.from_params(params).learned_metric_degree
-    state = validate_state(need(content, "state", "", dict), model.n_components, model.field_degree,
-                           metric_degree, 0.5 * model.eps)
-    for name, value in state.items():
-        setattr(model, name, value)
-    return model

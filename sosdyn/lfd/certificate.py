@@ -58,15 +58,20 @@ class CertificateReport:
     n_samples: int
     passed: bool
     checks: list = field(default_factory=list)
+    warp: dict | None = None        # a warped model's map check (:func:`~sosdyn.lfd.warp.check_warp`)
 
     def as_dict(self) -> dict:
         return asdict(self)
 
     def __str__(self) -> str:
+        w = self.warp
         return (f"certificate ({self.solver_status}): min Gram eigenvalue {self.min_gram_eig:.3e}, "
                 f"max coefficient residual {self.max_coeff_residual:.2e}; sampled ({self.n_samples} "
                 f"states): max generalised eigenvalue {self.max_sampled_eig:.3e}, min eig M "
-                f"{self.min_metric_eig:.3e} -> {'PASSED' if self.passed else 'FAILED'}")
+                f"{self.min_metric_eig:.3e}" + ("" if w is None else
+                f"; warp: {w['n_maps']} maps, max Lipschitz number {w['max_lipschitz']:.4f} (< 1), sampled "
+                f"min singular value of J_phi {w['min_singular']:.3e} >= bound {w['singular_bound']:.3e}") +
+                f" -> {'PASSED' if self.passed else 'FAILED'}")
 
 
 def certify(C, fexps, W, mexps, gamma, eps, solver="CLARABEL"):

@@ -156,18 +156,19 @@ def numeric_metric(W, exps, vars):
     return PolyMatrix([[Polynomial(vars, exps, W[a, b]) for b in range(n)] for a in range(n)])
 
 
-def contraction_polymatrix(f, M, vars, gamma):
-    """G(z) = J^T M + M J + dM[f] + gamma M as a PolyMatrix (f: list of n Polynomials).
+def contraction_polymatrix(f, M, vars, gamma, scale=1.0):
+    """scale * G(z), G = J^T M + M J + dM[f] + gamma M, as a PolyMatrix (f: list of n Polynomials).
 
     Computed on term arrays (:class:`~sosdyn.poly.termarrays.Terms`): J^T M is one join of the
     Jacobian's terms with M's on the inner index, dM[f] one join of dM/dz_l with f_l, and like
-    terms are combined once for the whole matrix -- no loop over its n x n entries."""
+    terms are combined once for the whole matrix -- no loop over its n x n entries. ``scale=-1``
+    gives -G exactly, keeping its term arrays for the SOS layer (unlike negating the matrix)."""
     vars = variable_names(vars)
     n = len(vars)
     ft, mt = matrix_terms(list(f), vars), M.terms(vars)
     JtM = terms_matmul(terms_transpose(terms_jacobian(ft, n)), mt)
     G = concat_terms(JtM, terms_transpose(JtM), terms_directional_derivative(mt, ft, n), terms_scale(mt, gamma))
-    return PolyMatrix.from_terms(G, (n, n), vars)
+    return PolyMatrix.from_terms(G if scale == 1.0 else terms_scale(G, scale), (n, n), vars)
 
 
 def certificate_matrices(C, fexps, W, mexps, gamma, eps) -> list:
@@ -176,7 +177,7 @@ def certificate_matrices(C, fexps, W, mexps, gamma, eps) -> list:
     vars, n = state_variables(W.shape[0]), W.shape[0]
     M = numeric_metric(W, mexps, vars)
     mats = [("M - eps I", M - eps * PolyMatrix.identity(n))]
-    mats += [(f"-G[{k}]", -contraction_polymatrix(f, M, vars, gamma))
+    mats += [(f"-G[{k}]", contraction_polymatrix(f, M, vars, gamma, scale=-1.0))
              for k, f in enumerate(numeric_fields(C, fexps, vars))]
     return mats
 

@@ -149,7 +149,7 @@ def stage_a(data: LeastSquaresData, fexps, mexps, s: Settings, history: History)
     """Linear fields and a constant metric: (C, P, the dynamics step)."""
     n = data.shape[1]
     vars = state_variables(n)
-    dyn = DynamicsStep(data, fexps, mexps, vars, s.gamma, s.margin, s.solver)
+    dyn = DynamicsStep(data, fexps, mexps, vars, s.gamma, s.margin, s.solver, affine_psd=s.solver_method == "ica")
     W = np.eye(n)[:, :, None]
     C, sol = dyn.solve(W)
     history.record("dynamics (M = I)", data.cost(C), sol)

@@ -252,24 +252,25 @@ def parse_json(data: bytes, path: Path):
                              f"{REFIT_HINT}") from None
 
 
-def read_model_file(path, key=None) -> dict:
+def read_model_file(path, key=None, fmt: str = FORMAT, fmt_version: int = VERSION) -> dict:
     """The content (format, version, params, state) of a model file, after every check that
-    does not need the estimator: size, type, JSON, format and version, finite numbers, the
-    checksum, and the signature when a key is given (or set in $SOSDYN_MODEL_KEY)."""
+    does not need the estimator: size, type, JSON, format ``fmt`` and version ``fmt_version``, finite
+    numbers, the checksum, and the signature when a key is given (or set in $SOSDYN_MODEL_KEY)."""
     key = resolve_key(key)
     path = Path(path)
     doc = parse_json(read_bytes_capped(path), path)
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-        raise ModelFileError(f"{path} is not a {FORMAT} file (no \"format\": \"{FORMAT}\" field). "
-                             "Try: the JSON written by CDSP.save or `sosdyn fit`.")
+    if not isinstance(doc, dict) or doc.get("format") != fmt:
+        raise ModelFileError(f"{path} is not a {fmt} file (no \"format\": \"{fmt}\" field). "
+                             "Try: the JSON written by " + ("CDSP.save or `sosdyn fit`." if fmt == FORMAT
+                                                            else "the model's save()."))
     version = doc.get("version")
-    if version != VERSION:
-        if isinstance(version, int) and not isinstance(version, bool) and version < VERSION:
+    if version != fmt_version:
+        if isinstance(version, int) and not isinstance(version, bool) and version < fmt_version:
             advice = "it was written by an older sosdyn. Try: refit the model and save it again."
         else:
             advice = "Try: a newer sosdyn, or refit the model with this one."
         raise ModelFileError(f"{path} has format version {version!r}; this sosdyn reads version "
-                             f"{VERSION} only: {advice}")
+                             f"{fmt_version} only: {advice}")
     bad = first_bad_value(doc)
     if bad is not None:
         raise ModelFileError(f"{path}: the field {bad[0]} is {bad[1]}; a model file holds finite "

@@ -11,13 +11,15 @@ import math
 
 import numpy as np
 
-from ..errors import ModelFileError
+from ..errors import InputError, ModelFileError
 from .contraction import field_exponents, metric_exponents
 from .gmm import PositionMixture
+from .warp import check_maps
 
 STATE_FIELDS = ("dim_", "goal_", "scale_", "dt_", "units_", "n_components_", "gmr_cost_", "C_", "W_",
                 "field_exps_", "metric_exps_", "mixture_", "certificate_", "history_", "metric_collapse_",
-                "timings_")
+                "timings_", "warp_")
+WARP_KEYS = ("centers", "vectors", "sigmas")          # warp_: null, or these arrays (z-units)
 
 
 def need(mapping: dict, name: str, where: str, kind=None):
@@ -119,9 +121,28 @@ def validate_state(st: dict, n_components, field_degree: int, metric_degree: int
     collapse = out["metric_collapse_"] = need(st, "metric_collapse_", "state")
     if not (collapse is None or isinstance(collapse, dict)):
         raise ModelFileError("malformed: state.metric_collapse_ must be null or an object")
+    out["warp_"] = _warp(st.get("warp_"), n)              # absent in files older than the warp: none
     unknown = sorted(set(st) - set(STATE_FIELDS))
     if unknown:
         raise ModelFileError(f"malformed: state has unknown fields {unknown}")
+    return out
+
+
+def _warp(w, n) -> dict | None:
+    """None, or {centers (m, n), vectors (m, n), sigmas (m,)}: finite, sigma_j > 0, every l_j < 1."""
+    if w is None:
+        return None
+    if not isinstance(w, dict) or set(w) != set(WARP_KEYS):
+        raise ModelFileError(f"malformed: state.warp_ must be null or an object with exactly {list(WARP_KEYS)}")
+    sigmas = need(w, "sigmas", "state.warp_", list)
+    m = len(sigmas)
+    out = {"sigmas": array(sigmas, "state.warp_.sigmas", (m,))}
+    for key in ("centers", "vectors"):
+        out[key] = array(need(w, key, "state.warp_"), f"state.warp_.{key}", (m, n))
+    try:
+        check_maps(out["centers"], out["vectors"], out["sigmas"], np.zeros(n), what="state.warp_")
+    except InputError as exc:
+        raise ModelFileError(f"invalid {exc}") from None
     return out
 
 

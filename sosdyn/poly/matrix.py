@@ -13,7 +13,6 @@ matrix used in many products is decomposed once.
 from __future__ import annotations
 
 from numbers import Number
-from typing import NamedTuple
 
 import numpy as np
 

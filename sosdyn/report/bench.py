@@ -36,7 +36,8 @@ def _micro(seconds) -> str:
 
 def predict_rows(data: dict) -> list[list[str]]:
     """The cells of the one-state prediction table from a ``predict.json``."""
-    return [[f"{r['shape']}, K = {r['K']}, n = {r['n']}, field degree {r['field_degree']}",
+    return [[f"{r['shape']}, K = {r['K']}, n = {r['n']}, field degree {r['field_degree']}"
+             + (f", warp of {r['warp_bumps']} bumps" if r.get("warp_bumps") else ""),
              _micro(r.get("predict_s")), _micro(r.get("predictor_s")),
              "—" if r.get("speedup") is None else f"{r['speedup']:.1f}×",
              "—" if r.get("max_rel_diff") is None else f"{r['max_rel_diff']:.1e}",

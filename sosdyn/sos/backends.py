@@ -30,7 +30,7 @@ import scipy.sparse as sp
 from ..errors import InputError
 from ..limits import check_bytes
 from ..poly import MAX_COEFFICIENT
-from .conic import check_data, coupled_psd_sizes, cvxpy_block_vars
+from .conic import affine_cones, check_data, coupled_psd_sizes, cvxpy_block_vars
 from .gram import svec_pairs, svec_to_matrix
 from .objective import is_cvxpy
 from .solution import Solution
@@ -60,23 +60,31 @@ _CVXPY_STATUS = {
 
 
 def _clarabel(data, verbose, settings):
-    blocks = [sp.csc_matrix(data.A_eq), -sp.csc_matrix(data.A_ge)]
-    rhs = [data.b_eq, -data.b_ge]
-    cones = []
-    if data.A_eq.shape[0]:
-        cones.append(clarabel.ZeroConeT(data.A_eq.shape[0]))
-    if data.A_ge.shape[0]:
-        cones.append(clarabel.NonnegativeConeT(data.A_ge.shape[0]))
-    for pos, size in data.psd:
-        blocks.append(sp.csc_matrix((-np.ones(pos.size), (np.arange(pos.size), pos)), shape=(pos.size, data.n)))
-        rhs.append(np.zeros(pos.size))
-        cones.append(clarabel.PSDTriangleConeT(size))
+    """Solve ``data`` with Clarabel: A x + s = b, s in (zero, nonnegative, PSD, SOC) cones.
+
+    ``settings`` are Clarabel's, except sosdyn's own ``affine_psd``: if true, PSD blocks fixed
+    by their equality rows (:func:`~.conic.affine_cones`) are imposed on their affine
+    expressions; their entries are read back from the cone's s, so x is still the full vector
+    of the program and the independent check sees every block and every row. The answer is the
+    same problem's to the solver's tolerance, not bit for bit (another KKT system), hence
+    opt-in."""
+    settings = dict(settings)
+    red = affine_cones(data, enabled=settings.pop("affine_psd", False))
+    A_eq, b_eq, A_ge, G, h, soc, P, q = red.lower(data)
+    blocks, rhs, cones = [sp.csc_matrix(A_eq), -sp.csc_matrix(A_ge)], [b_eq, -data.b_ge], []
+    if A_eq.shape[0]:
+        cones.append(clarabel.ZeroConeT(A_eq.shape[0]))
+    if A_ge.shape[0]:
+        cones.append(clarabel.NonnegativeConeT(A_ge.shape[0]))
+    blocks.append(G)                        # s = h - G y in each PSD block
+    rhs.append(h)
+    cones += [clarabel.PSDTriangleConeT(size) for _, size in data.psd]
     if data.n_soc:                          # s = G x in each 3-dim second-order cone
-        blocks.append(-data.soc)
-        rhs.append(np.zeros(data.soc.shape[0]))
+        blocks.append(-soc)
+        rhs.append(np.zeros(soc.shape[0]))
         cones += [clarabel.SecondOrderConeT(3)] * data.n_soc
     A = sp.vstack(blocks).tocsc()
-    P = sp.triu(2.0 * data.P).tocsc() if data.P is not None else sp.csc_matrix((data.n, data.n))
+    P = sp.triu(2.0 * P).tocsc() if P is not None else sp.csc_matrix((q.size, q.size))
     opts = clarabel.DefaultSettings()
     opts.verbose = verbose
     for k, v in settings.items():
@@ -84,16 +92,17 @@ def _clarabel(data, verbose, settings):
             raise InputError(f"unknown Clarabel setting {k!r}")
         setattr(opts, k, v)
     t0 = time.perf_counter()
-    result = clarabel.DefaultSolver(P, data.q, A, np.concatenate(rhs), cones, opts).solve()
+    result = clarabel.DefaultSolver(P, q, A, np.concatenate(rhs), cones, opts).solve()
     seconds = time.perf_counter() - t0
     status = _CLARABEL_STATUS.get(str(result.status), "solver_error")
-    x = np.asarray(result.x, dtype=float)
-    z = np.asarray(result.z, dtype=float)
-    start = data.A_eq.shape[0] + data.A_ge.shape[0]
-    duals = []
+    z, s = np.asarray(result.z, dtype=float), np.asarray(result.s, dtype=float)
+    start = A_eq.shape[0] + A_ge.shape[0]
+    duals, s_blocks = [], []
     for pos, size in data.psd:          # z's PSD parts: svec of each block's dual matrix
         duals.append(svec_to_matrix(z[start:start + pos.size], size))
+        s_blocks.append(s[start:start + pos.size])
         start += pos.size
+    x = red.values(data, np.asarray(result.x, dtype=float), s_blocks)
     return status, x, str(result.status), seconds, {"iterations": int(result.iterations), "psd_duals": duals}
 
 
@@ -206,7 +215,11 @@ def solve_program(program, solver, backend, scale, verbose, build=0.0, **setting
     """Assemble ``program`` (its cached conic form) and solve it with the chosen back end.
 
     ``build`` is the declaration time reported in ``Solution.timings["build"]``. The program
-    is not changed (``program.compile`` only caches its conic form).
+    is not changed (``program.compile`` only caches its conic form). ``settings`` go to the
+    solver, except ``affine_psd=True`` (direct back end only): PSD blocks fixed by their
+    equality rows go to Clarabel as cones on affine expressions (:func:`~.conic.affine_cones`;
+    e.g. a constant SOS-matrix constraint's Gram block: its variables and rows leave the KKT
+    system).
     """
     solver = check_solver(solver)
     needs_cvxpy = bool(program.cvxpy_constraints) or (
@@ -218,6 +231,9 @@ def solve_program(program, solver, backend, scale, verbose, build=0.0, **setting
                          "objectives; use backend='cvxpy'")
     if backend not in ("direct", "cvxpy"):
         raise InputError(f"unknown backend {backend!r}: use 'auto', 'direct' or 'cvxpy'")
+    if backend != "direct" and settings.pop("affine_psd", False):
+        raise InputError(f"affine_psd is a setting of the direct Clarabel back end, not of backend={backend!r}. "
+                         "Try: backend='direct' (or 'auto' with Clarabel), or drop affine_psd")
     t0 = time.perf_counter()
     data = program.compile(scale=scale)
     canon = time.perf_counter() - t0

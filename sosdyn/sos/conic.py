@@ -184,6 +184,117 @@ def check_data(data: ConicData) -> None:
                          "the objective")
 
 
+@dataclass
+class AffineCones:
+    """PSD blocks imposed on affine expressions instead of on Gram variables.
+
+    A PSD block each of whose svec entries q_i occurs in exactly one equality row r_i, as the
+    only entry of such a block in that row, and nowhere else (no inequality, cone or objective
+    term) is fixed by its rows: d_i q_i + a_r^T y = b_r gives q = D^-1 (b_R - A_R y) with y the
+    other variables. The solver then sees svec^-1(D^-1 (b_R - A_R y)) >= 0 directly: the
+    block's variables and rows are gone (for a Gram block of a constant matrix, e.g. the
+    learner's ICA step, a third of the KKT system). ``rows[k]`` are the rows fixing block k
+    (in svec order) or None; ``keep_rows`` / ``keep_cols`` mark what the solver still sees.
+    """
+
+    keep_rows: np.ndarray         # equality rows kept (bool)
+    keep_cols: np.ndarray         # variables kept (bool)
+    rows: list                    # per PSD block: its fixing equality rows, or None
+
+    def lower(self, data: ConicData):
+        """The problem the solver sees, over the kept variables y:
+
+            A_eq y = b_eq (kept rows),  A_ge y >= b_ge,  h - G y in the PSD blocks (in order,
+            each svec sized), soc y in the second-order cones,  objective y^T P y + q^T y,
+
+        with h - G y = y[pos] for a kept block and D^-1 (b_R - A_R y) for an eliminated one.
+        Returns (A_eq, b_eq, A_ge, G, h, soc, P, q); nothing is copied if nothing is eliminated.
+        """
+        keep, n_keep = self.keep_cols, int(self.keep_cols.sum())
+        col = np.cumsum(keep) - 1                        # a kept variable's position among the kept
+        sizes = np.array([pos.size for pos, _ in data.psd], dtype=np.int64)
+        start = np.concatenate(([0], np.cumsum(sizes)))
+        h = np.zeros(start[-1])
+        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, dtype=np.int64)  # noqa: E731
+        kept = [k for k, r in enumerate(self.rows) if r is None]
+        r = cat([start[k] + np.arange(sizes[k]) for k in kept])
+        c = col[cat([data.psd[k][0] for k in kept])]
+        v = -np.ones(r.size)
+        gone = [k for k, rows in enumerate(self.rows) if rows is not None]
+        if not gone:
+            G = sp.csc_matrix((v, (r, c)), shape=(h.size, n_keep))
+            return data.A_eq, data.b_eq, data.A_ge, G, h, data.soc, data.P, data.q
+        A = data.A_eq.tocsc()
+        R = cat([self.rows[k] for k in gone])
+        target, d = np.full(A.shape[0], -1), np.ones(A.shape[0])
+        target[R] = cat([start[k] + np.arange(sizes[k]) for k in gone])
+        d[R] = A.data[A.indptr[cat([data.psd[k][0] for k in gone])]]
+        h[target[R]] = data.b_eq[R] / d[R]
+        A_col = np.repeat(np.arange(data.n), np.diff(A.indptr))
+        e = ~self.keep_rows[A.indices] & keep[A_col]     # entries of eliminated rows on kept variables
+        r = np.concatenate([r, target[A.indices[e]]])
+        c = np.concatenate([c, col[A_col[e]]])
+        v = np.concatenate([v, A.data[e] / d[A.indices[e]]])
+        G = sp.csc_matrix((v, (r, c)), shape=(h.size, n_keep))
+        A_eq = _submatrix(A, self.keep_rows, keep)
+        P = None if data.P is None else _submatrix(data.P.tocsc(), keep, keep)
+        soc = None if data.soc is None else _submatrix(data.soc.tocsc(), None, keep)
+        return (A_eq, data.b_eq[self.keep_rows], _submatrix(data.A_ge.tocsc(), None, keep), G, h, soc, P,
+                data.q[keep])
+
+    def values(self, data: ConicData, y: np.ndarray, s_blocks: list) -> np.ndarray:
+        """The full x from the kept variables y and each eliminated block's cone value s."""
+        x = np.zeros(data.n)
+        x[self.keep_cols] = y
+        for (pos, _), rows, s in zip(data.psd, self.rows, s_blocks):
+            if rows is not None:
+                x[pos] = s
+        return x
+
+
+def _submatrix(M: sp.csc_matrix, rows, cols) -> sp.csc_matrix:
+    """M[rows][:, cols] of a CSC matrix for boolean masks (rows None: all), order kept."""
+    M_col = np.repeat(np.arange(M.shape[1]), np.diff(M.indptr))
+    on = cols[M_col] if rows is None else cols[M_col] & rows[M.indices]
+    new_row = M.indices[on] if rows is None else (np.cumsum(rows) - 1)[M.indices[on]]
+    n_cols = int(cols.sum())
+    indptr = np.concatenate(([0], np.cumsum(np.bincount((np.cumsum(cols) - 1)[M_col[on]], minlength=n_cols))))
+    n_rows = M.shape[0] if rows is None else int(rows.sum())
+    return sp.csc_matrix((M.data[on], new_row, indptr), shape=(n_rows, n_cols))
+
+
+def affine_cones(data: ConicData, enabled: bool = True) -> AffineCones:
+    """Which PSD blocks of ``data`` are fixed by their equality rows (:class:`AffineCones`);
+    none if not ``enabled``."""
+    A = data.A_eq.tocsc()
+    if not enabled:
+        return AffineCones(np.ones(A.shape[0], dtype=bool), np.ones(data.n, dtype=bool), [None] * len(data.psd))
+    elsewhere = data.q != 0                           # used outside the equality rows
+    for M in (data.A_ge, data.soc, data.P):
+        if M is not None:
+            elsewhere[np.diff(M.tocsc().indptr) > 0] = True          # columns with entries
+    if data.P is not None:
+        elsewhere[data.P.tocsc().indices] = True                     # and the rows of P
+    once = (np.diff(A.indptr) == 1) & ~elsewhere
+    once[once] = A.data[A.indptr[:-1][once]] != 0
+    candidate = np.zeros(data.n, dtype=bool)
+    for pos, _ in data.psd:
+        if pos.size and once[pos].all():
+            candidate[pos] = True
+    row_of = np.full(data.n, -1)
+    row_of[candidate] = A.indices[A.indptr[:-1][candidate]]
+    per_row = np.bincount(row_of[candidate], minlength=A.shape[0])
+    keep_rows, keep_cols, rows = np.ones(A.shape[0], dtype=bool), np.ones(data.n, dtype=bool), []
+    for pos, _ in data.psd:
+        r = row_of[pos] if pos.size and candidate[pos].all() else None
+        if r is not None and (per_row[r] == 1).all():
+            keep_rows[r], keep_cols[pos] = False, False
+            rows.append(r)
+        else:
+            rows.append(None)
+    return AffineCones(keep_rows, keep_cols, rows)
+
+
 def coupled_psd_sizes(data: ConicData) -> np.ndarray:
     """Size D of each group of PSD blocks coupled through shared equality rows.
 

@@ -157,16 +157,26 @@ class SOSConstraint:
         self.eq_multipliers: list[EqualityMultiplier] = list(eq_multipliers)
         self.source: Polynomial = poly if source is None else source
         self._gram_exps, self._gram_rows, self._gram_weights = gram_matching(basis.exps)
+        self._layout_memo = None
         self.rows: LinearRows | None = None
         self.infeasible_reason: str | None = None
         self._match()
 
+    def _layout(self, exps):
+        """(U, rows of p's monomials ``exps`` in U, rows of the Gram products in U), U their
+        union; remembered while p's monomials stay the same (a re-solve with new numbers)."""
+        memo = self._layout_memo
+        if memo is not None and np.array_equal(memo[0], exps):
+            return memo[1]
+        U, _ = unique_rows(np.vstack([exps, self._gram_exps]))
+        layout = (U, match_rows(U, exps), match_rows(U, self._gram_exps))
+        self._layout_memo = (exps, layout)
+        return layout
+
     def _match(self):
         """Coefficient matching coef(poly) = G svec(Q) as one block of sparse rows."""
         p = self.poly.with_vars(self.basis.vars)
-        U, _ = unique_rows(np.vstack([p.exps, self._gram_exps]))
-        idx_p = match_rows(U, p.exps)
-        idx_g = match_rows(U, self._gram_exps)
+        U, idx_p, idx_g = self._layout(p.exps)
         prows = LinearRows.from_affine(self.name, "eq", p.coef, p.ids, idx_p)
         rhs = np.zeros(U.shape[0])
         rhs[idx_p] = p.coef[:, 0]
@@ -213,6 +223,7 @@ class SOSConstraint:
             self.basis = Basis(poly.vars, exps if exps.shape[1] == len(poly.vars) else newton_basis(poly.exps))
             self.psd = self.program.replace_gram_block(self.psd, len(self.basis))
             self._gram_exps, self._gram_rows, self._gram_weights = gram_matching(self.basis.exps)
+            self._layout_memo = None
         self.poly, self.source = poly, source.with_vars(vars)
         self._match()
         self.program.mark_changed()

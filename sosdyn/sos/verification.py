@@ -14,13 +14,15 @@ p SOS (up to floating point) -- ``strict``.
 The monomial structure of z^T Q z against p (:class:`GramStructure`: where each product
 z_i z_j and each monomial of p lands in their union) depends only on the basis and on p's
 monomials, so it is computed once per (basis, monomials) and reused by every later check of
-a re-solved program; the numbers -- Q, p at x, e, lambda_min(Q) -- are recomputed every time.
+a re-solved program (and per constraint while its monomials stay, compared by value); the
+numbers -- Q, p at x, e, lambda_min(Q) -- are recomputed every time.
 """
 from __future__ import annotations
 
 import math
 from collections import OrderedDict
 from dataclasses import asdict, dataclass
+from weakref import WeakKeyDictionary
 
 import numpy as np
 
@@ -112,6 +114,21 @@ def cached_gram_structure(p_exps, basis_exps) -> GramStructure:
     _STRUCTURES[key] = (p_exps, basis_exps, out)
     if len(_STRUCTURES) > _STRUCTURES_KEPT:
         _STRUCTURES.popitem(last=False)
+    return out
+
+
+_BY_CONSTRAINT: WeakKeyDictionary = WeakKeyDictionary()   # constraint -> (p exps, basis exps, structure)
+
+
+def constraint_gram_structure(con, p_exps) -> GramStructure:
+    """:func:`cached_gram_structure` of a constraint's current polynomial, also remembered per
+    constraint while its monomials (compared by value) and its basis (the same array) stay:
+    a family re-solved with new weights builds a new polynomial with the same monomials."""
+    memo = _BY_CONSTRAINT.get(con)
+    if memo is not None and memo[1] is con.basis.exps and np.array_equal(memo[0], p_exps):
+        return memo[2]
+    out = cached_gram_structure(p_exps, con.basis.exps)
+    _BY_CONSTRAINT[con] = (p_exps, con.basis.exps, out)
     return out
 
 
@@ -246,7 +263,7 @@ def verify_certificate(program, ids, x, eig_tol=1e-7, rel_tol=1e-6) -> Verificat
         Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
         p = con.poly.with_vars(con.basis.vars)
         coef = p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids)               # p at x
-        checks.append(check_gram_values(con.name, con.kind, coef, cached_gram_structure(p.exps, con.basis.exps),
+        checks.append(check_gram_values(con.name, con.kind, coef, constraint_gram_structure(con, p.exps),
                                         Q, eig_tol, rel_tol, con.psd.cone))
     for b in program.blocks:
         if b.psd is not None and id(b.psd) not in owned:

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from sosdyn.errors import InputError, SolverError
+from sosdyn.errors import InputError, SolverError, SosdynError
 from sosdyn.evaluation.dsopt import (
     SINGLE_PATTERN_SHAPES,
     euler_reproduce,

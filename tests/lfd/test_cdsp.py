@@ -9,7 +9,7 @@ import sosdyn as sd
 
 @pytest.fixture(scope="module")
 def linear_fit(linear_demos):
-    return sd.CDSP(n_components=1, gamma=0.5, solver_method="ica", max_iter=40).fit(linear_demos)
+    return sd.CDSP(warp="none", n_components=1, gamma=0.5, solver_method="ica", max_iter=40).fit(linear_demos)
 
 
 def test_recovers_a_system_that_needs_a_learned_metric(linear_fit, linear_demos, linear_system):
@@ -25,7 +25,7 @@ def test_recovers_a_system_that_needs_a_learned_metric(linear_fit, linear_demos,
     assert np.linalg.eigvals(np.linalg.solve(P, G)).real.max() < 1e-3
     assert not np.allclose(P / np.trace(P), np.eye(2) / 2, atol=0.05)
     # the identity metric (SEDS-like) cannot fit it
-    seds = sd.CDSP(n_components=1, gamma=0.5, metric="identity").fit(demos)
+    seds = sd.CDSP(warp="none", n_components=1, gamma=0.5, metric="identity").fit(demos)
     rel_seds = np.linalg.norm(seds.predict(X) - Xd) / np.linalg.norm(Xd)
     assert rel_seds > 5 * rel
 
@@ -39,7 +39,7 @@ def test_ica_cost_never_increases_and_history_is_recorded(linear_fit):
 
 
 def test_paper_polynomial_metric_collapses_for_linear_subsystems(linear_demos):
-    m = sd.CDSP(n_components=1, gamma=0.5, metric_degree=2, max_iter=5).fit(linear_demos)
+    m = sd.CDSP(warp="none", n_components=1, gamma=0.5, metric_degree=2, max_iter=5).fit(linear_demos)
     diag = m.metric_collapse_
     assert diag["constant_metric_certifies"] is True
     assert diag["max_eig_with_constant_metric"] <= 1e-7
@@ -73,8 +73,8 @@ def test_save_load_round_trip_is_exact_and_tampering_is_refused(linear_fit, tmp_
 
 def test_same_seed_same_model(tmp_path, linear_demos):
     demos = linear_demos
-    a = sd.CDSP(n_components=2, gamma=0.5, random_state=3).fit(demos)
-    b = sd.CDSP(n_components=2, gamma=0.5, random_state=3).fit(demos)
+    a = sd.CDSP(warp="none", n_components=2, gamma=0.5, random_state=3).fit(demos)
+    b = sd.CDSP(warp="none", n_components=2, gamma=0.5, random_state=3).fit(demos)
     a.save(tmp_path / "a.json")
     b.save(tmp_path / "b.json")
     strip = lambda p: {k: v for k, v in json.loads(p.read_text())["state"].items() if k != "timings_" and k != "history_"}  # noqa: E731
@@ -91,7 +91,7 @@ def batched_final_states(model, starts, horizon):
 
 def test_lasa_fit_converges_from_a_grid_over_twice_the_data_box():
     demos = sd.load_lasa("Leaf_2").subsample(10)
-    model = sd.CDSP(n_components=3, field_degree=3, metric_degree=2, solver_method="ica",
+    model = sd.CDSP(warp="none", n_components=3, field_degree=3, metric_degree=2, solver_method="ica",
                     max_iter=6).fit(demos)
     assert model.certified_
     X = np.vstack([d.pos for d in demos])
@@ -104,14 +104,14 @@ def test_lasa_fit_converges_from_a_grid_over_twice_the_data_box():
     assert (dist < 1.0).all(), f"{(dist >= 1.0).sum()} of 100 starts did not reach the goal (mm)"
     # cubic fields under a learned polynomial metric beat the identity metric (SEDS-like)
     Xa, Xd = demos.stacked()
-    seds = sd.CDSP(n_components=3, metric="identity").fit(demos)
+    seds = sd.CDSP(warp="none", n_components=3, metric="identity").fit(demos)
     rmse = lambda m: np.sqrt(((m.predict(Xa) - Xd) ** 2).sum(1).mean())  # noqa: E731
     assert rmse(model) < 0.9 * rmse(seds)
 
 
 def test_cubic_fields_with_polynomial_metric_are_certified():
     demos = sd.load_lasa("Leaf_1").subsample(20)
-    model = sd.CDSP(n_components=2, field_degree=3, metric_degree=2, solver_method="ica",
+    model = sd.CDSP(warp="none", n_components=2, field_degree=3, metric_degree=2, solver_method="ica",
                     max_iter=4).fit(demos)
     assert model.certified_
     report = model.verify(n_samples=20_000, seed=1)
@@ -158,6 +158,6 @@ def test_an_impossible_metric_bound_gives_a_typed_error_with_advice(linear_demos
 
 def test_number_of_components_by_bic():
     demos = sd.load_lasa("Angle").subsample(10)
-    model = sd.CDSP(n_components="bic", solver_method="ica", max_iter=3).fit(demos)
+    model = sd.CDSP(warp="none", n_components="bic", solver_method="ica", max_iter=3).fit(demos)
     assert model.n_components_ == 1 + int(np.argmin(model.bic_))
     assert len(model.bic_) == 10 and model.certified_

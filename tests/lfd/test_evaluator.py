@@ -8,9 +8,13 @@ from sosdyn.errors import InputError, NotFittedError
 from sosdyn.lfd.cdsp import CDSP
 
 
-@pytest.fixture(scope="module", params=[1, 3], ids=["linear", "cubic"])
+@pytest.fixture(scope="module", params=[1, 3, "warped"], ids=["linear", "cubic", "warped"])
 def model(request, linear_demos):
-    return CDSP(n_components=3, field_degree=request.param).fit(linear_demos)
+    if request.param == "warped":       # a fixed warp: 20 bumps (the linear demos' spirals are not radial)
+        m = CDSP(n_components=3, warp={"n_maps": 20}).fit(linear_demos)
+        assert len(m.warp_["sigmas"]) >= 10      # measured 19 (the fit stops when no bump helps)
+        return m
+    return CDSP(n_components=3, field_degree=request.param, warp="none").fit(linear_demos)
 
 
 def test_same_numbers_as_predict_in_twice_the_data_box(model):
@@ -25,7 +29,7 @@ def test_same_numbers_as_predict_in_twice_the_data_box(model):
 
 
 def test_far_states_use_the_nearest_component_like_predict(linear_demos):
-    model = CDSP(n_components=3).fit(linear_demos)
+    model = CDSP(n_components=3, warp="none").fit(linear_demos)
     fast = model.predictor()
     for x in ([1e160, -3e159], [-2e158, 5e157], [4e3, 1e160]):   # every l_k underflows: one-hot h
         x = np.array(x)

@@ -14,9 +14,13 @@ from sosdyn.lfd.export import export, to_cpp, to_python
 TOL = 1e-9
 
 
-@pytest.fixture(scope="module", params=[1, 3], ids=["linear", "cubic"])
+@pytest.fixture(scope="module", params=[1, 3, "warped"], ids=["linear", "cubic", "warped"])
 def model(request, linear_demos):
-    return CDSP(n_components=3, field_degree=request.param).fit(linear_demos)
+    if request.param == "warped":       # a fixed warp: 20 bumps (the linear demos' spirals are not radial)
+        m = CDSP(n_components=3, warp={"n_maps": 20}).fit(linear_demos)
+        assert len(m.warp_["sigmas"]) >= 10      # measured 19 (the fit stops when no bump helps)
+        return m
+    return CDSP(n_components=3, field_degree=request.param, warp="none").fit(linear_demos)
 
 
 def box_states(model, count, seed=0):
@@ -51,7 +55,7 @@ def test_python_export_matches_predict(model, tmp_path):
 
 
 def test_python_export_far_from_data_uses_the_nearest_component(tmp_path, linear_demos):
-    model = CDSP(n_components=3).fit(linear_demos)
+    model = CDSP(n_components=3, warp="none").fit(linear_demos)
     gen = import_source(to_python(model), tmp_path / "far.py")
     far = model.goal_ + model.scale_ * np.array([[1e156, 3e155], [-2e157, 1e150], [5e155, -5e155]])
     Z = (far - model.goal_) / model.scale_

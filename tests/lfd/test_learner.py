@@ -8,7 +8,7 @@ from sosdyn.lfd.learner import (LEARNER_HINT, History, Settings, embed, learn, s
 
 
 def test_learn_gives_the_estimators_numbers_and_history(linear_demos):
-    model = sd.CDSP(n_components=1, gamma=0.5, metric_degree=2, max_iter=3).fit(linear_demos)
+    model = sd.CDSP(n_components=1, gamma=0.5, metric_degree=2, max_iter=3, warp="none").fit(linear_demos)
     X, Xdot = linear_demos.stacked()
     Z, Zdot = (X - model.goal_) / model.scale_, Xdot / model.scale_
     rows = []

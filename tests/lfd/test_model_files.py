@@ -18,7 +18,7 @@ from sosdyn.lfd.certificate import DEFAULT_SAMPLES
 
 @pytest.fixture(scope="module")
 def model(leaf):
-    return sd.CDSP(n_components=2, gamma=0.5, max_iter=3).fit(leaf.subsample(20))
+    return sd.CDSP(warp="none", n_components=2, gamma=0.5, max_iter=3).fit(leaf.subsample(20))
 
 
 @pytest.fixture(scope="module")

@@ -64,13 +64,14 @@ def test_numpy_scalars_and_a_generator_are_accepted_and_saved_as_plain_json(tmp_
     expected_seed = int(np.random.default_rng(7).integers(0, MAX_SEED))
     model = sd.CDSP(n_components=np.int64(1), gamma=np.float32(0.5), eps=np.float64(1e-3),
                     max_iter=np.int32(2), max_samples=np.int64(100), verify_samples=np.int64(500),
-                    random_state=rng, solver="clarabel").fit(line_demos())
+                    random_state=rng, solver="clarabel", corrective_rounds=np.int64(1),
+                    corrective_tau=np.float32(0.5)).fit(line_demos())
     assert model.certified_ and model.verification_.n_samples == 500
     assert model.seed_ == expected_seed
     path = model.save(tmp_path / "m.json")
     params = json.loads(path.read_text())["params"]
     assert params["random_state"] == expected_seed and params["gamma"] == float(np.float32(0.5))
-    assert type(params["n_components"]) is int
+    assert type(params["n_components"]) is int and type(params["corrective_rounds"]) is int
     loaded = sd.load_model(path)
     assert loaded.seed_ == expected_seed and loaded.certified_
 
@@ -91,7 +92,7 @@ def test_subsampling_below_the_mixture_size_is_an_input_error():
 
 
 def test_verify_arguments_are_checked(tmp_path):
-    model = sd.CDSP(n_components=1, gamma=0.5, max_iter=1, verify_samples=200).fit(line_demos())
+    model = sd.CDSP(warp="none", n_components=1, gamma=0.5, max_iter=1, verify_samples=200).fit(line_demos())
     assert model.verify().n_samples == 200
     with pytest.raises(sd.InputError, match="n_samples must be an integer in"):
         model.verify(n_samples=0)
@@ -107,18 +108,24 @@ def test_presets_set_their_parameters_and_paper_is_the_former_default():
     paper = sd.CDSP.preset("paper").get_params()
     assert (paper["solver_method"], paper["metric_prox"], paper["n_components"]) == ("alternating", 0.0, 6)
     assert (paper["field_degree"], paper["metric_degree"], paper["gamma"]) == (1, 0, 0.1)
-    default = sd.CDSP().get_params()
-    assert {k: default[k] for k in PRESETS["ica"]} == dict(PRESETS["ica"], n_components=8)   # "ica", K = 8
+    assert (paper["corrective_rounds"], paper["warp"]) == (0, "none")     # the paper's fit: no refits, no warp
+    default = sd.CDSP().get_params()                            # "ica", K = 8, warp "auto"
+    assert {k: default[k] for k in PRESETS["ica"]} == dict(PRESETS["ica"], n_components=8, warp="auto")
+    assert (default["corrective_tau"], default["corrective_min_dist"]) == (0.5, 0.02)
     cubic = sd.CDSP.preset("cubic", n_components=4).get_params()
     assert (cubic["field_degree"], cubic["metric_degree"], cubic["n_components"]) == (3, 2, 4)
+    assert cubic["corrective_rounds"] == 0 and sd.CDSP.preset("ica").corrective_rounds == 0
+    assert cubic["warp"] == sd.CDSP.preset("ica").warp == "none"
     with pytest.raises(sd.InputError, match="unknown preset 'fast'. Try: one of"):
         sd.CDSP.preset("fast")
 
 
 def test_a_file_written_before_metric_prox_loads_with_the_plain_metric_step(tmp_path):
-    model = sd.CDSP(n_components=1).fit(line_demos())
+    model = sd.CDSP(n_components=1, warp="none").fit(line_demos())
     content = read_model_file(model.save(tmp_path / "new.json"), None)
-    del content["params"]["metric_prox"]
+    for name in ("metric_prox", "corrective_rounds", "corrective_tau", "corrective_min_dist", "warp"):
+        del content["params"][name]
+    del content["state"]["warp_"]
     old = sd.load_model(write_model_file(content, tmp_path / "old.json", None))
-    assert old.metric_prox == 0.0 and old.certified_
+    assert old.metric_prox == 0.0 and old.corrective_rounds == 0 and old.warp == "none" and old.certified_
     np.testing.assert_allclose(old.predict([[1.0, 2.0]]), model.predict([[1.0, 2.0]]))

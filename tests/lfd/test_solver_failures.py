@@ -33,7 +33,7 @@ def inject(monkeypatch, mode, every=1):
 
 @pytest.fixture
 def fit(linear_demos):
-    return lambda: sd.CDSP(n_components=2, gamma=0.5, solver_method="ica", max_iter=5).fit(linear_demos)
+    return lambda: sd.CDSP(n_components=2, gamma=0.5, solver_method="ica", max_iter=5, warp="none").fit(linear_demos)
 
 
 @pytest.mark.parametrize("mode", ["solver_error", "raise", "garbage_inaccurate"])

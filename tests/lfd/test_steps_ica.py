@@ -1,11 +1,13 @@
 """ICAStep: every iterate is certified and the cost does not increase."""
 import numpy as np
+import pytest
 
 from sosdyn.lfd.contraction import (contraction_degree, field_exponents, margin_matrix, metric_exponents,
                                     state_variables)
 from sosdyn.lfd.steps import DynamicsStep, ICAStep, LeastSquaresData
 from sosdyn.poly import PolyMatrix, Polynomial, jacobian, monomial_values
 from sosdyn.sos import matrix_form
+from sosdyn.sos.conic import affine_cones
 
 A = np.array([[-1.0, 4.0], [0.0, -1.0]])
 
@@ -71,3 +73,19 @@ def test_ica_term_count_is_quadratic_in_n():
     pairs, units = n * (n + 1) // 2, n * n
     # own, margin, J P0, J0 P, J0 P0, J0, P0, 1/a, a
     assert len(ica.tables[0].names) == 2 + pairs + units + pairs + units + pairs + 2 == 66
+
+
+def test_ica_step_with_affine_cones_is_the_same_program():
+    """The ICA step hands its constant Gram blocks to Clarabel as cones on their expressions
+    (affine_psd): the same optimum as the plain lowering, and every block still checked."""
+    Z = np.random.default_rng(0).uniform(-1, 1, size=(200, 2))
+    data = LeastSquaresData(np.ones((200, 1)), Z, Z @ A.T)
+    fexps, vars = field_exponents(2, 1), state_variables(2)
+    C, _ = DynamicsStep(data, fexps, metric_exponents(2, 0), vars, 0.1, 1e-4).solve(np.eye(2)[:, :, None])
+    ica = ICAStep(data, fexps, vars, gamma=0.1, margin=1e-4, eps=1e-3)
+    _, _, sol = ica.solve(C, np.eye(2))
+    plain = ica.prog.solve()
+    assert sol.verified and plain.verified
+    assert sol.objective == pytest.approx(plain.objective, rel=1e-6, abs=1e-9)
+    assert len(sol.verify().checks) == len(plain.verify().checks) >= 4
+    assert sum(rows is not None for rows in affine_cones(sol.data).rows) == 2    # ica[0], P - eps I

@@ -1,21 +1,27 @@
-"""problems.lasa_corrective: the corrective variants of the ds-opt LASA run build the right estimator."""
+"""problems.lasa_corrective: the corrective variants of the ds-opt LASA run and their cache keys."""
+import sosdyn as sd
 from problems import lasa_corrective, lasa_dsopt
-from sosdyn.lfd.cdsp import CDSP
-from sosdyn.lfd.corrective import CorrectiveCDSP
 
 
-def test_problem_variants_build_the_right_estimator():
-    plain = lasa_corrective.make_estimator({"n_components": 3})
-    assert isinstance(plain, CDSP) and plain.n_components == 3
-    corr = lasa_corrective.make_estimator({"n_components": 3, lasa_corrective.CORRECTIVE: 2})
-    assert isinstance(corr, CorrectiveCDSP) and corr.rounds == 2 and corr.cdsp_params == {"n_components": 3}
-    assert corr.start_index == 19 and corr.score is lasa_corrective.training_dtwd
-    key = lasa_corrective.estimator_params({"gamma": 0.02, lasa_corrective.CORRECTIVE: 2})
-    assert key["gamma"] == 0.02 and key[lasa_corrective.CORRECTIVE] == 2 and key["tau"] == lasa_corrective.TAU
-    assert lasa_corrective.CORRECTIVE not in lasa_corrective.estimator_params({"gamma": 0.02})
-
-
-def test_corrective_variants_are_registered():
+def test_corrective_variants_are_registered_cdsp_settings():
     assert set(lasa_corrective.VARIANTS) <= set(lasa_dsopt.VARIANTS)
     assert lasa_dsopt.SELECTIONS["CDSP corrective selected"] == tuple(lasa_corrective.VARIANTS)
-    assert lasa_dsopt.VARIANTS["CDSP default"] == {}                # the existing variants are kept
+    assert lasa_dsopt.VARIANTS["CDSP default"] == {}                   # CDSP() itself: warp="auto" since issue 12
+    plain = sd.CDSP(**lasa_dsopt.VARIANTS["CDSP plain"])
+    assert (plain.corrective_rounds, plain.warp) == (0, "none")     # the default's core alone
+    for name, kwargs in lasa_corrective.VARIANTS.items():           # "refitted twice", no warp, as registered
+        assert (sd.CDSP(**kwargs).corrective_rounds, sd.CDSP(**kwargs).warp) == (2, "none"), name
+    # the plain selections choose among plain fits, as before corrective refits were the default
+    for selection in ("CDSP selected", "CDSP selected+cubic"):
+        for v in lasa_dsopt.SELECTIONS[selection]:
+            m = sd.CDSP(**lasa_dsopt.VARIANTS[v])
+            assert (m.corrective_rounds, m.warp) == (0, "none"), (selection, v)
+
+
+def test_a_plain_fit_keeps_its_cache_key():
+    """At 0 rounds the corrective parameters are unused and left out of the key; so is warp="none"."""
+    plain = lasa_corrective.key_params({"corrective_rounds": 0, "gamma": 0.02, "warp": "none"})
+    assert plain["gamma"] == 0.02 and not any(k.startswith("corrective_") or k == "warp" for k in plain)
+    corrective = lasa_corrective.key_params({"gamma": 0.02, "corrective_rounds": 3, "warp": "none"})
+    assert (corrective["corrective_rounds"], corrective["corrective_tau"]) == (3, 0.5) and "warp" not in corrective
+    assert lasa_corrective.key_params({})["warp"] == "auto"          # the default's key names its warp

@@ -87,8 +87,11 @@ def proximal(ids, center, weight) -> QuadraticForm:
     return QuadraticForm(weight * np.eye(k), -2 * weight * center, weight * center @ center, ids)
 
 
-def solve_with_fallback(prog, solver):
+def solve_with_fallback(prog, solver, affine_psd=False):
     """Solve with ``solver``; if its answer is not usable, retry, else raise.
+
+    ``affine_psd``: Clarabel (direct back end) gets the PSD blocks fixed by their equality rows
+    as cones on affine expressions (:func:`~sosdyn.sos.conic.affine_cones`); the SCS retry never.
 
     Usable means the whole certificate passed the independent check (``sol.usable``). A proof
     of infeasibility (or unboundedness) is an answer, not a numerical failure, and is raised as
@@ -102,12 +105,13 @@ def solve_with_fallback(prog, solver):
 
     A retry that is used is stated in ``sol.info["fallback"]`` (and so in the learner's history_).
     """
-    sol = prog.solve(solver=solver)
+    direct = {"affine_psd": True} if affine_psd and solver.upper() == "CLARABEL" else {}
+    sol = prog.solve(solver=solver, **direct)
     if sol.usable or sol.status in ("infeasible", "unbounded") or solver == FALLBACK_SOLVER:
         return sol.raise_for_status()
     first = f"{solver}: {sol.status} ({sol.raw_status})"
     if solver.upper() == "CLARABEL" and sol.status in ANSWERED:
-        tight = prog.solve(solver=solver, **TIGHT_CLARABEL)
+        tight = prog.solve(solver=solver, **TIGHT_CLARABEL, **direct)
         if tight.usable:
             tight.info["fallback"] = f"{solver} with tighter tolerances after {first}"
             return tight

@@ -10,8 +10,6 @@ with delta_d = delta for the margin's growth degree d and 0 for the other possib
 """
 from __future__ import annotations
 
-import numpy as np
-
 from ...sos import SOSProgram
 from ..contraction import (contraction_degree, contraction_polymatrix, decision_fields, degree,
                            margin_degree, margin_matrix, unit_metrics)
@@ -23,11 +21,14 @@ class DynamicsStep:
 
     Terms (:class:`~sosdyn.lfd.steps.common.TermTable`): ("metric", a, b, j) is -G_k(E_abj),
     weight W[a, b, j]; ("margin", d) is -g_d(z) I, weight delta if d is the growth degree, else 0.
+    ``affine_psd``: constant conditions (linear fields, constant metric) reach Clarabel as cones
+    on their affine expressions (:func:`~sosdyn.lfd.steps.common.solve_with_fallback`).
     """
 
-    def __init__(self, data: LeastSquaresData, fexps, mexps, vars, gamma, margin, solver="CLARABEL"):
+    def __init__(self, data: LeastSquaresData, fexps, mexps, vars, gamma, margin, solver="CLARABEL",
+                 affine_psd=False):
         K, n, m = data.shape
-        self.solver, self.margin, self.data = solver, margin, data
+        self.solver, self.margin, self.data, self.affine_psd = solver, margin, data, affine_psd
         self.fexps, self.mexps = fexps, mexps
         self.grow_degrees = sorted({contraction_degree(0, degree(fexps)),
                                     contraction_degree(degree(mexps), degree(fexps))})
@@ -38,7 +39,7 @@ class DynamicsStep:
         grows = {("margin", d): margin_matrix(vars, n, d) for d in self.grow_degrees}
         self.tables, self.cons = [], []
         for k, f in enumerate(decision_fields(self.ids.reshape(K, n, m), fexps, vars)):
-            terms = {("metric",) + key: -contraction_polymatrix(f, E, vars, gamma) for key, E in units}
+            terms = {("metric",) + key: contraction_polymatrix(f, E, vars, gamma, scale=-1.0) for key, E in units}
             table = TermTable({**terms, **{name: -g for name, g in grows.items()}})
             self.tables.append(table)
             self.cons.append(table.add(self.prog, f"contraction[{k}]"))
@@ -63,7 +64,7 @@ class DynamicsStep:
         for table, con in zip(self.tables, self.cons):
             con.set_weights(table.weights(named))
         self.last = (W, margin, grow_degree)
-        sol = solve_with_fallback(self.prog, self.solver)
+        sol = solve_with_fallback(self.prog, self.solver, self.affine_psd)
         return sol.values_of(self.ids).reshape(self.data.shape), sol
 
     def refit(self, data: LeastSquaresData):

@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...poly import PolyMatrix, Polynomial, jacobian
-from ...poly.termarrays import Terms, concat_terms, terms_scale, terms_transpose
-from ...sos import SOSProgram
+from ...poly.termarrays import Terms, concat_terms, terms_matmul, terms_scale, terms_transpose
+from ...sos import SOSProgram, svec_to_matrix
 from ..contraction import (contraction_degree, degree, margin_matrix, metric_exponents, symmetric_pairs,
                            unit_fields, unit_metrics)
 from .common import LeastSquaresData, TermTable, proximal, solve_with_fallback
@@ -29,6 +29,12 @@ def unit_sandwich(J: Terms, a, b) -> Terms:
         s = J.select(J.row == u)
         pieces.append(s._replace(row=s.col, col=np.full(s.row.size, v)))
     X = concat_terms(*pieces)
+    return concat_terms(X, terms_transpose(X))
+
+
+def sandwich(J: Terms, P: Terms) -> Terms:
+    """The terms of J^T P + P J for the terms of n x n matrices J and P (P symmetric)."""
+    X = terms_matmul(terms_transpose(J), P)
     return concat_terms(X, terms_transpose(X))
 
 
@@ -97,7 +103,9 @@ class ICAStep:
         I = PolyMatrix.identity(n)
         grow = margin_matrix(vars, n, contraction_degree(0, degree(fexps)))
         margin_term = _blocks(n, {(0, 0): -grow}, vars)
-        shared = {("J0 P", c): _blocks(n, {(0, 0): -(Jc.T @ P + P @ Jc)}, vars) for c, Jc in enumerate(Ju)}
+        Pt = P.terms(vars)
+        shared = {("J0 P", c): _blocks(n, {(0, 0): terms_scale(sandwich(Jc.terms(vars), Pt), -1.0)}, vars)
+                  for c, Jc in enumerate(Ju)}
         shared.update({("J0 P0", ab): _blocks(n, {(0, 0): E[ab]}, vars) for ab in self.pairs})
         shared.update({("J0", c): _blocks(n, {(1, 0): -Ju[c]}, vars) for c in self.lin_units})
         shared.update({("P0", ab): _blocks(n, {(2, 0): -E[ab]}, vars) for ab in self.pairs})
@@ -138,7 +146,7 @@ class ICAStep:
         obj = self.data.partial_form(self.ids, self.free, C0) + proximal(self.ids, C0[self.free], prox) \
             + proximal(np.sort(self.P_ids), sv[np.argsort(self.P_ids)], prox)
         self.prog.minimize(obj)
-        sol = solve_with_fallback(self.prog, self.solver)
+        sol = solve_with_fallback(self.prog, self.solver, affine_psd=True)   # its cones are constant
         C = C0.copy()
         C[self.free] = sol.values_of(self.ids)
-        return C, sol.value(self.P), sol
+        return C, svec_to_matrix(sol.values_of(self.P_ids), self.n), sol

@@ -43,7 +43,7 @@ class MetricStep:
         self.prog.add_eq(trace0, float(n), name="trace M(0) = n")
         self.prog.add_ge(t_max - self.t, 0.0, name="margin bound")
         self.prog.maximize(self.t)
-        terms = {("field",) + key: -contraction_polymatrix(u, M, vars, 0.0)
+        terms = {("field",) + key: contraction_polymatrix(u, M, vars, 0.0, scale=-1.0)
                  for key, u in unit_fields(fexps, n, vars)}
         terms[FIXED] = -gamma * M - margin_matrix(vars, n, grow_degree) * self.t
         self.table = TermTable(terms)
