@@ -140,7 +140,7 @@ def plot(res, out_dir: Path, name: str = "scaling_n") -> str:
               for key, lab in (("total", "total"), ("em", "EM"), ("build", "build"), ("solve", "solver"),
                                ("verify", "verify"))}
     fig = scaling_plot(series, xlabel="state dimension n", ylabel="time (s)",
-                       title=f"{res.get('preset') or 'default'} CDSP fit (K = {K}) vs dimension")
+                       title=f"{res.get('preset') or 'default'} CDSP, one plain fit (K = {K}), vs dimension")
     return save_figure(fig, out_dir / name)["png"].name
 
 
