@@ -6,7 +6,7 @@ On the ds-opt split (train demos 1-4, test 5-7, every 2nd sample), ``CDSP(warp="
 demonstrations (red) and the protocol's Euler reproductions from their 20th points (dashed blue)
 with the protocol's test DTWD in the title; the third panel draws the training demonstrations
 mapped by the kept warp, x* + s phi((x - x*) / s), along which a constant-metric contracting
-field can move (the distance to the goal decreases). Run: ``python -m problems.warp_figure``
+field can move (the distance to the goal decreases). Run: ``make warp-figure``
 (writes ``docs/images/warp_<shape>.{png,svg}``).
 """
 from __future__ import annotations
@@ -62,7 +62,7 @@ def figure(shape: str, out_dir: Path) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m problems.warp_figure", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m problems warp-figure", description=__doc__.split("\n")[0])
     ap.add_argument("--shape", default="DoubleBendedLine", help="LASA shape (default: %(default)s)")
     ap.add_argument("--out", default=str(OUT), help="output folder (default: docs/images)")
     args = ap.parse_args(argv)
