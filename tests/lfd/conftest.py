@@ -5,6 +5,7 @@ from scipy.integrate import solve_ivp
 
 from sosdyn.errors import SosdynError
 from sosdyn.lfd import lasa
+from sosdyn.lfd.cdsp import CDSP
 from sosdyn.lfd.data import Demonstration, Demonstrations
 
 # A linear system that contracts in a non-identity metric only: eigenvalues -1, -1 but
@@ -63,3 +64,14 @@ def make_line_demo():
 def demos():
     """Three straight 2-D motions to the origin, units mm."""
     return Demonstrations([_line_demo((10, 5)), _line_demo((8, -4)), _line_demo((-6, 9))], "lines", "mm")
+
+
+@pytest.fixture(scope="session", params=[1, 3, "warped"], ids=["linear", "cubic", "warped"])
+def field_model(request, linear_demos):
+    """CDSP models of the linear demos whose fields the evaluator and export tests compare with
+    predict: linear and cubic sub-systems without a warp, and the linear one with a fixed warp."""
+    if request.param == "warped":       # a fixed warp: 20 bumps (the linear demos' spirals are not radial)
+        m = CDSP(n_components=3, warp={"n_maps": 20}).fit(linear_demos)
+        assert len(m.warp_["sigmas"]) >= 10      # measured 19 (the fit stops when no bump helps)
+        return m
+    return CDSP(n_components=3, field_degree=request.param, warp="none").fit(linear_demos)

@@ -14,13 +14,10 @@ from sosdyn.lfd.export import export, to_cpp, to_python
 TOL = 1e-9
 
 
-@pytest.fixture(scope="module", params=[1, 3, "warped"], ids=["linear", "cubic", "warped"])
-def model(request, linear_demos):
-    if request.param == "warped":       # a fixed warp: 20 bumps (the linear demos' spirals are not radial)
-        m = CDSP(n_components=3, warp={"n_maps": 20}).fit(linear_demos)
-        assert len(m.warp_["sigmas"]) >= 10      # measured 19 (the fit stops when no bump helps)
-        return m
-    return CDSP(n_components=3, field_degree=request.param, warp="none").fit(linear_demos)
+@pytest.fixture
+def model(field_model):
+    """The conftest's linear / cubic / warped models (fitted once per session)."""
+    return field_model
 
 
 def box_states(model, count, seed=0):
