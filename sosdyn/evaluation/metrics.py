@@ -12,7 +12,7 @@ import numpy as np
 
 from sosdyn.errors import InputError, SosdynError
 from sosdyn.limits import check_bytes
-from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.data import Demonstration, Demonstrations, resample_in_time
 
 
 def curve(x, what: str) -> np.ndarray:
@@ -156,8 +156,7 @@ def resample(reproduction, n_samples: int) -> np.ndarray:
     t = np.asarray(getattr(reproduction, "t", np.arange(len(X))), dtype=float)
     if len(X) < 2 or t.shape != (len(X),) or np.any(np.diff(t) <= 0):
         raise InputError(f"The reproduction needs >= 2 samples with increasing times, got {len(X)} samples.")
-    query = np.linspace(t[0], t[-1], n_samples)
-    return np.column_stack([np.interp(query, t, X[:, k]) for k in range(X.shape[1])])
+    return resample_in_time(t, X, n_samples)
 
 
 def sea(reproduction, demo) -> float:

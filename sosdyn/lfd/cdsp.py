@@ -41,8 +41,8 @@ from .certificate import (
     extract_certificate,
 )
 from .contraction import eval_fields, field_exponents, metric_exponents
-from .corrective import MIN_DIST, ROUNDS, TAU, sample_step
-from .data import check_demonstrations
+from .corrective import MIN_DIST, ROUNDS, TAU
+from .data import check_demonstrations, sample_step
 from .evaluator import StatePredictor
 from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost
 from .learner import History, Settings, learn, subsample

@@ -33,7 +33,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import SolverError
 from ..limits import get_limits
-from .data import Demonstration, Demonstrations
+from .data import Demonstration, Demonstrations, sample_step
 from .rollout import euler_until_rest
 
 ROUNDS, TAU, MIN_DIST = 0, 0.5, 0.02   # CDSP's defaults: refits (off: warp="auto" does better), tau (s), min_dist
@@ -73,11 +73,6 @@ def rollout_deviation(rollout: np.ndarray, demo_pos: np.ndarray) -> float:
     """Symmetric mean nearest-point distance between a rollout (i, n) and a demonstration (T, n):
     (mean_x min_p |x - p| + mean_p min_x |x - p|) / 2."""
     return 0.5 * float(nearest(demo_pos, rollout)[1].mean() + nearest(rollout, demo_pos)[1].mean())
-
-
-def sample_step(demos: Demonstrations) -> float:
-    """The data's time step: the median of every demonstration's sample intervals."""
-    return float(np.median(np.concatenate([np.diff(d.t) for d in demos])))
 
 
 def rest_rule(demos: Demonstrations) -> tuple[float, float, int]:
@@ -156,4 +151,4 @@ def augmented(demos: Demonstrations, extra: list[Demonstration]) -> Demonstratio
 __all__ = ["DIVERGED", "MAX_PAIRS", "MIN_DIST", "MIN_PAIRS", "REST_FRACTION", "REST_WINDOW",
            "ROLLOUT_SPAN", "ROUNDS", "TAU", "augmented", "corrective_demonstration",
            "corrective_pairs", "demo_score", "nearest", "rest_rule", "rollout_deviation", "rollout_starts",
-           "sample_step", "thin", "training_rollouts", "training_score"]
+           "thin", "training_rollouts", "training_score"]

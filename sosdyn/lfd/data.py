@@ -242,3 +242,15 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
             f"{1.1 * spread[worst]:.3g}; sosdyn fit --goal-tol)."
         )
     return demos
+
+
+def sample_step(demos: Demonstrations) -> float:
+    """The data's time step: the median of every demonstration's sample intervals."""
+    return float(np.median(np.concatenate([np.diff(d.t) for d in demos])))
+
+
+def resample_in_time(t: np.ndarray, pos: np.ndarray, n_points: int) -> np.ndarray:
+    """The curve pos (T, n), sampled at the increasing times t, at n_points instants equidistant in
+    time from t[0] to t[-1] (linear interpolation)."""
+    s = np.linspace(t[0], t[-1], n_points)
+    return np.column_stack([np.interp(s, t, pos[:, i]) for i in range(pos.shape[1])])

@@ -19,12 +19,11 @@ from .corrective import (
     corrective_demonstration,
     corrective_pairs,
     demo_score,
-    sample_step,
     thin,
     training_rollouts,
     training_score,
 )
-from .data import Demonstrations
+from .data import Demonstrations, sample_step
 
 
 def corrective_fits(fit_round: Callable, demos: Demonstrations, n_rounds: int, tau: float, min_dist: float):

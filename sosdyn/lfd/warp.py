@@ -37,6 +37,7 @@ import math
 import numpy as np
 
 from ..errors import InputError
+from .data import resample_in_time
 
 #: A warp's settings (CDSP's ``warp`` dict; every key optional): at most n_maps bumps, each l_j <= l_max,
 #: each removing the fraction beta of the mismatch; n_points samples per time-normalised curve; match
@@ -183,12 +184,6 @@ def fit_maps(X: np.ndarray, Y: np.ndarray, goal: np.ndarray, n_maps: int, l_max:
     return (np.array(centers).reshape(-1, n), np.array(vectors).reshape(-1, n), np.array(sigmas, dtype=float))
 
 
-def resample(t: np.ndarray, pos: np.ndarray, n_points: int) -> np.ndarray:
-    """The curve pos (T, n) sampled at times t at n_points uniformly spaced instants (linear interpolation)."""
-    s = np.linspace(t[0], t[-1], n_points)
-    return np.column_stack([np.interp(s, t, pos[:, i]) for i in range(pos.shape[1])])
-
-
 def fit_warp(curves: list[tuple[np.ndarray, np.ndarray]], goal: np.ndarray, settings: dict
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A warp fixing ``goal`` fitted to the demonstrations ``curves`` [(t, pos)]: each resampled to
@@ -197,7 +192,7 @@ def fit_warp(curves: list[tuple[np.ndarray, np.ndarray]], goal: np.ndarray, sett
     sigmas) in the curves' units; ``settings`` complete (WARP_DEFAULTS' keys, checked)."""
     goal = np.asarray(goal, dtype=float)
     scale = max(float(np.abs(pos - goal).max()) for _, pos in curves) or 1.0
-    res = [resample(t, pos, settings["n_points"]) for t, pos in curves]
+    res = [resample_in_time(t, pos, settings["n_points"]) for t, pos in curves]
     res = [np.mean(res, axis=0)] if settings["match"] == "mean" else res
     X = np.vstack(res)
     Y = np.vstack([radial_targets(c, goal, float(settings["decay"])) if settings["target"] == "radial"
@@ -234,4 +229,4 @@ def check_warp(maps, n_samples: int, seed: int) -> dict:
 
 __all__ = ["AUTO_WARPS", "BOUND_TOL", "CHECK_BOX", "LIP_FACTOR", "MATCHES", "SIGMA_GRID", "TARGETS", "WARP_DEFAULTS",
            "apply", "arc_fraction", "bumps_at", "check_maps", "check_warp", "fit_maps", "fit_warp", "invert",
-           "jacobian", "line_targets", "lipschitz_numbers", "pulled_back", "radial_targets", "resample"]
+           "jacobian", "line_targets", "lipschitz_numbers", "pulled_back", "radial_targets"]

@@ -14,7 +14,7 @@ import numbers
 import numpy as np
 
 from sosdyn.errors import InputError, NotFittedError
-from sosdyn.lfd.data import check_demonstrations
+from sosdyn.lfd.data import check_demonstrations, sample_step
 from sosdyn.lfd.rollout import as_positive, as_vector, rollout
 
 
@@ -65,7 +65,7 @@ class MotionModel(abc.ABC):
         demos = check_demonstrations(demos)
         self.dim_ = demos.dim
         self.goal_ = np.asarray(demos.goal, dtype=float)
-        self.dt_ = float(np.median(np.concatenate([np.diff(d.t) for d in demos])))
+        self.dt_ = sample_step(demos)
         return demos
 
     def _check_fitted(self):
