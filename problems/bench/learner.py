@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from sosdyn.lfd import CDSP, load_lasa
-from sosdyn.lfd.params import PLAIN
+from sosdyn.lfd.params import PLAIN, PRESETS
 from sosdyn.poly import monomials_up_to
 from sosdyn.report.figures import save_figure, scaling_plot
 
@@ -52,9 +52,10 @@ CORE = PLAIN                              # the learner's core fit; the default 
 VARIANTS = {
     "linear+ICA": dict(CORE, solver_method="ica"),
     "paper (metric deg 2, alternating)": dict(CORE, metric_degree=2, solver_method="alternating"),
-    "cubic + metric deg 2": dict(CORE, field_degree=3, metric_degree=2, solver_method="alternating"),
+    "cubic + metric deg 2": {k: v for k, v in PRESETS["cubic"].items() if k != "n_components"},
     "default (linear+ICA, choice of warp: 3 fits)": dict(solver_method="ica"),
 }
+SWEEP_BASE = dict(CORE, solver_method="ica")   # the sweeps vary one setting of the default's core fit
 TARGETS = {"linear_fit_s": 0.5, "paper_fit_s": 10.0, "cubic_fit_s": 3.0, "resolve_overhead_s": 2e-3}   # issue 14
 PARTS = ("em", "data", "build", "solve", "steps", "certify", "verify")
 
@@ -127,21 +128,23 @@ def run_sweeps(quick):
         sweeps[name] = {"xlabel": xlabel, "note": note, "rows": rows}
 
     Ks = (2, 3) if quick else (2, 3, 4, 6, 8, 11, 15)
-    sweep("K", "number of Gaussians K", [(K, f"K={K}", leaf, dict(n_components=K)) for K in Ks],
-          "Leaf_1, linear fields, constant metric, alternating (the default CDSP)")
+    sweep("K", "number of Gaussians K", [(K, f"K={K}", leaf, dict(SWEEP_BASE, n_components=K)) for K in Ks],
+          "Leaf_1, linear fields, constant metric, ICA: the default's core fit (one plain fit; K = 8 is the default)")
     mds = (0,) if quick else (0, 2, 4)
     sweep("metric", "metric monomials per entry (metric degree 0 / 2 / 4)",
           [(monomials_up_to(2, d).shape[0], f"metric degree {d}", leaf,
-            dict(n_components=2 if quick else 6, metric_degree=d)) for d in mds],
-          "Leaf_1, K = 6, linear fields, alternating; x = monomials of M(z) per entry (1, 6, 15)")
+            dict(SWEEP_BASE, n_components=2 if quick else 6, metric_degree=d)) for d in mds],
+          "Leaf_1, K = 6, linear fields, the default's core fit (ICA start; a polynomial metric adds the "
+          "proximal alternation); x = monomials of M(z) per entry (1, 6, 15)")
     fds = (1,) if quick else (1, 3)
-    sweep("field", "field degree", [(d, f"field degree {d}", leaf, dict(n_components=2 if quick else 6,
+    sweep("field", "field degree", [(d, f"field degree {d}", leaf, dict(SWEEP_BASE, n_components=2 if quick else 6,
                                                                          field_degree=d)) for d in fds],
-          "Leaf_1, K = 6, constant metric, alternating")
+          "Leaf_1, K = 6, constant metric, the default's core fit (ICA, then the proximal alternation for the "
+          "cubic terms)")
     Ns = (100, 300) if quick else (100, 1000, 10_000, 100_000)
     sweep("samples", "demonstration samples (total)",
           [(N, f"N={N}", synth(2, samples_per_demo=max(N // 7, 10)),
-            dict(n_components=2 if quick else 6, max_samples=None)) for N in Ns],
+            dict(SWEEP_BASE, n_components=2 if quick else 6, max_samples=None)) for N in Ns],
           "synthetic 2-D system, 7 demos, all samples used (max_samples=None), K = 6; the SDPs see "
           "the compressed least-squares data only, so only EM (and the compression) may grow")
     return sweeps
@@ -247,8 +250,30 @@ def evaluate_targets(fits, backends):
     return t
 
 
-def run_profiles(fits, targets, backends, quick):
-    """Profile the slowest fit of each variant that misses its target (and the re-solve path)."""
+def scaling_jobs(scaling) -> list:
+    """Profile jobs (title, demos, params) for the n-scaling goals the default's core fit misses
+    (:mod:`.scaling_n`): the fit at the largest n (ratio goal), the fit at the n of the worst
+    build/solve (build <= solve goal), the cubic preset at n = 3."""
+    if not scaling or scaling.get("preset"):
+        return []
+    g, totals = scaling["goals"], {r["n"]: r["total"] for r in scaling["rows"]}
+    core = dict(CORE, n_components=scaling_n.K, random_state=0)
+    wanted = {}
+    if g["ratio"]["met"] is False:
+        wanted[g["ratio"]["n_max"]] = "ratio goal"
+    if g["build_over_solve"]["met"] is False:
+        wanted.setdefault(g["build_over_solve"]["at_n"], "build <= solve goal")
+    jobs = [(f"default core fit, synthetic n = {n} ({why}; {fmt_s(totals[n])} in the scaling run)", synth(n), core)
+            for n, why in wanted.items()]
+    if g["cubic_n3"]["met"] is False:
+        jobs.append((f"cubic preset, synthetic n = 3 (cubic goal; {fmt_s(g['cubic_n3']['value'])})", synth(3),
+                     dict(PRESETS["cubic"], n_components=scaling_n.K, random_state=0)))
+    return jobs
+
+
+def run_profiles(fits, targets, backends, quick, scaling=None):
+    """Profile the slowest fit of each variant that misses its target, the n-scaling fits that miss
+    theirs (:func:`scaling_jobs`) and the re-solve path."""
     jobs = []
     for key, vname in (("linear_fit", "linear+ICA"), ("paper_fit", "paper (metric deg 2, alternating)"),
                        ("cubic_fit", "cubic + metric deg 2")):
@@ -256,10 +281,10 @@ def run_profiles(fits, targets, backends, quick):
             sel = [f for f in fits if f["variant"] == vname]
             worst = max(sel, key=lambda f: f["total"])
             jobs.append((f"{vname} fit on {worst['shape']} (K={worst['K']}, {fmt_s(worst['total'])})",
-                         worst["shape"], dict(worst["params"])))
+                         load_lasa(worst["shape"]), dict(worst["params"])))
+    jobs += [] if quick else scaling_jobs(scaling)
     profiles = []
-    for title, shape, params in jobs:
-        demos = load_lasa(shape)
+    for title, demos, params in jobs:
 
         def fit(params=params, demos=demos):
             with warnings.catch_warnings():
@@ -332,7 +357,7 @@ def main(argv=None):
     keep("backends", "backends.json", {"environment": res["environment"], "dynamics_step": res["backends"]})
     res["targets"] = evaluate_targets(res["fits"], res["backends"])
     res["profiles"] = [] if "profiles" in skip else run_profiles(res["fits"], res["targets"], res["backends"],
-                                                                  args.quick)
+                                                                  args.quick, res["scaling_n"])
     keep("profiles", "profiles.json", {"profiles": res["profiles"]})
     if "predict" not in skip:          # the one-state evaluator against model.predict (predict.json)
         predict.main(["--out", str(out_dir)] + (["--quick"] if args.quick else ["--cubic"]))

@@ -3,8 +3,10 @@
 For every problem: build / canonicalise / solve seconds for the ``direct`` and ``cvxpy`` back ends,
 the SDP sizes, the same problem in SumOfSquares.py (sympy + picos, solved by CVXOPT: the only SDP
 solver picos finds here) and in Drake (pydrake, solved by Clarabel as ours; :mod:`.drake_problems`)
-with ratios, the re-solve overhead of the compiled problem (``con.update(p)`` + solve minus the
-solver's own time), and the sparsity rows (chained Rosenbrock / Wood, :mod:`.sparse_problems`).
+with ratios (against Drake with our stages split as Drake's are, :func:`.sos_split.like_drake`, and
+on the problems Drake solves in under 2 ms the floor of a sosdyn solve, :func:`.sos_split.floor`),
+the re-solve overhead of the compiled problem (``con.update(p)`` + solve minus the solver's own
+time), and the sparsity rows (chained Rosenbrock / Wood, :mod:`.sparse_problems`).
 Writes ``reports/bench/sos.json`` and ``sos.md`` (:mod:`.sos_report`).
 
 Options: ``--quick`` (small problems, few repetitions: the smoke test), ``--no-theirs``,
@@ -23,14 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-import sosdyn as sd
-
 from ..settings import BENCH
 from . import drake_problems, sos_problems, sparse_problems
 from .catalog import problems
 from .cdsp_problems import cdsp_fields
 from .profiling import profile_call
 from .sos_report import markdown
+from .sos_split import FLOOR_BELOW_S, build_split, floor, like_drake
 from .timing import environment, fmt_s, median, now, write_json
 
 BACKENDS = ("direct", "cvxpy")
@@ -61,14 +62,21 @@ def run_ours(p, backend, quick):
         build = now() - t0
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            t0 = now()
             sol = prog.solve(backend=backend)
+            wall = now() - t0
+        own = sol.info.get("solver_own_seconds", sol.timings["solve"])
+        verify = sol.timings.get("verify", 0.0)
         runs.append({"build": build, "build_program": sol.timings["build"],
                      "canonicalize": sol.timings["canonicalize"], "solve": sol.timings["solve"],
+                     "solve_wall": wall, "verify": verify, "solver_own": own,
+                     "canonicalize_like_drake": wall - verify - own,
                      "status": sol.status, "iterations": sol.info.get("iterations")})
         elapsed += build + sol.timings["canonicalize"] + sol.timings["solve"]
         if len(runs) >= reps(elapsed / len(runs), elapsed):
             break
-    out = {k: median([r[k] for r in runs]) for k in ("build", "build_program", "canonicalize", "solve")}
+    out = {k: median([r[k] for r in runs]) for k in ("build", "build_program", "canonicalize", "solve", "solve_wall",
+                                                     "verify", "solver_own", "canonicalize_like_drake")}
     out["build_min"] = min(r["build"] for r in runs)
     out.update(status=runs[-1]["status"], iterations=runs[-1]["iterations"], repetitions=len(runs),
                sizes=prog.compile().sizes())
@@ -166,9 +174,12 @@ def measure(p, args, drake_ok) -> dict:
         ratios["build_theirs_over_ours_median"] = th["build"] / d["build"]
         ratios["build_canon_theirs_over_ours"] = (th["build"] + th["canonicalize"]) / (d["build"] + d["canonicalize"])
         ratios["solve_theirs_over_ours"] = th["solve"] / d["solve"] if d["solve"] > 0 else None
-    if dk and "build" in dk:          # Drake / ours: above 1 ours is faster
-        dk["ratios"] = {k: dk[k] / d[k] if d[k] > 0 else None for k in ("build", "canonicalize", "solve")}
-        dk["ratios"]["total"] = total(dk) / total(d)
+    if dk and "build" in dk:          # Drake / ours: above 1 ours is faster; stages as Drake's are split
+        ours = like_drake(d)
+        dk["ratios"] = {k: dk[k] / ours[k] if ours[k] > 0 else None for k in ("build", "canonicalize", "solve")}
+        dk["ratios"]["total"] = total(dk) / total(ours)
+        if total(dk) < FLOOR_BELOW_S:
+            entry["floor"] = floor(p, 5 if args.quick else 200)
     ratios["build_canon_over_solve"] = (d["build"] + d["canonicalize"]) / d["solve"] if d["solve"] > 0 else None
     entry["ratios"] = ratios
     entry["status_ok"] = (p.expect == "any" or d["status"] == p.expect
@@ -248,74 +259,6 @@ def _version(dist) -> str | None:
         return metadata.version(dist)
     except metadata.PackageNotFoundError:
         return None
-
-
-def build_split(p, reps, drake_ok) -> dict | None:
-    """Min and median seconds of the two stages of one build — the polynomial expression, then
-    the SOS constraint on it — in sosdyn, SumOfSquares.py and Drake, for a one-polynomial
-    problem (``ctx["fn"]``); None for other problems."""
-    _, ctx = p.ours()
-    fn = ctx.get("fn")
-    if fn is None:
-        return None
-    names = " ".join(v.vars[0] for v in ctx["vars"])
-    n = len(ctx["vars"])
-
-    def ours_expr():
-        return fn(*sd.variables(names))
-
-    def ours_sos(e):
-        sd.SOSProgram().add_sos(e)
-
-    stages = {"sosdyn": _stages(ours_expr, ours_sos, reps)}
-    try:
-        import sympy
-        from SumOfSquares import SOSProblem  # optional (the bench extra)
-        from sympy.core.cache import clear_cache
-        sparse = True                            # its Newton reduction, as in the main run
-        try:
-            syms = sympy.symbols(names)
-            SOSProblem().add_sos_constraint(sympy.expand(fn(*syms)), list(syms), sparse=True)
-        except ValueError:                       # its hull needs full-dimensional support
-            sparse = False
-        held = {}
-
-        def theirs_expr():
-            held["syms"] = sympy.symbols(names)
-            return sympy.expand(fn(*held["syms"]))
-        def theirs_sos(e):
-            SOSProblem().add_sos_constraint(e, list(held["syms"]), sparse=sparse)
-        stages["SumOfSquares.py"] = _stages(theirs_expr, theirs_sos, reps)
-        stages["SumOfSquares.py, sympy cache cleared before each build"] = _stages(
-            theirs_expr, theirs_sos, reps, before=clear_cache)
-    except ImportError:
-        pass
-    if drake_ok:
-        holder = {}
-
-        def drake_expr():
-            holder["prog"], xs = drake_problems.program(n)
-            return fn(*xs)
-        stages["Drake"] = _stages(drake_expr, lambda e: holder["prog"].AddSosConstraint(e), reps)
-    return {"problem": p.name, "repetitions": reps, "stages": stages}
-
-
-def _stages(make_expr, add_constraint, reps, before=None) -> dict:
-    """Seconds (min, median) of ``make_expr()`` and ``add_constraint(expr)``; ``before()`` runs
-    untimed ahead of each repetition."""
-    t = {"polynomial": [], "SOS constraint": [], "total": []}
-    for _ in range(reps):
-        if before is not None:
-            before()
-        t0 = now()
-        e = make_expr()
-        t1 = now()
-        add_constraint(e)
-        t2 = now()
-        t["polynomial"].append(t1 - t0)
-        t["SOS constraint"].append(t2 - t1)
-        t["total"].append(t2 - t0)
-    return {k: {"min": float(np.min(v)), "median": median(v)} for k, v in t.items()}
 
 
 def profiles(probs, summary, quick):

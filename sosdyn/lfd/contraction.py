@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..poly import PolyMatrix, Polynomial, monomial_gradients, monomial_values, monomials_up_to, variable_names
-from ..poly.termarrays import (concat_terms, matrix_terms, terms_directional_derivative, terms_jacobian, terms_matmul,
-                               terms_scale, terms_transpose)
+from ..poly.termarrays import (Terms, concat_terms, matrix_terms, terms_directional_derivative, terms_jacobian,
+                               terms_matmul, terms_scale, terms_transpose)
 
 SAMPLE_BOX = 2.0            # sampled states lie in |z|_inf <= 2: twice the data box
 
@@ -121,7 +121,13 @@ def sampled_eigenvalues(C, fexps, W, mexps, Z, gamma) -> tuple[float, float]:
     """(max over z in Z and k of the generalised eigenvalue of (G_k(z), M(z)), min eig of M(z)).
 
     Contraction at the samples means the first is <= 0 and the second > 0; the first is inf
-    when M(z) is not positive definite somewhere (no generalised eigenvalue)."""
+    when M(z) is not positive definite somewhere (no generalised eigenvalue).
+
+    For linear fields under a constant metric, J_k, M and so G_k do not depend on z: every
+    state gives the same matrices, which are therefore computed at the first state only (the
+    same numbers as at all of them, without 10^4 identical eigenvalue problems)."""
+    if degree(fexps) == 1 and degree(mexps) == 0:
+        Z = Z[:1]
     G = contraction_matrices(C, fexps, W, mexps, Z, gamma)
     M = eval_metric(W, mexps, Z)
     min_m = float(np.linalg.eigvalsh(M)[:, 0].min())
@@ -193,17 +199,25 @@ def margin_matrix(vars, n, degree):
 
 
 def unit_metrics(mexps, n, vars):
-    """[((a, b, j), E)]: E has z^g_j at (a, b) and (b, a), so M = sum W[a, b, j] E."""
+    """[((a, b, j), E)]: E has z^g_j at (a, b) and (b, a), so M = sum W[a, b, j] E.
+
+    Each E is made from its one or two terms (:class:`~sosdyn.poly.termarrays.Terms`), not
+    entry by entry."""
+    vars = variable_names(vars)
     out = []
     for a, b in symmetric_pairs(n):
+        rows, cols = np.array(sorted({a, b})), np.array(sorted({a, b}, reverse=True))
         for j in range(mexps.shape[0]):
-            entries = np.zeros((n, n), dtype=object)
-            mono = Polynomial(vars, mexps[j:j + 1], [1.0])
-            for idx in np.ndindex(n, n):
-                entries[idx] = Polynomial.constant(0.0, vars)
-            entries[a, b] = entries[b, a] = mono
-            out.append(((a, b, j), PolyMatrix(entries)))
+            t = Terms(rows, cols, np.repeat(mexps[j:j + 1], rows.size, axis=0), np.full(rows.size, -1),
+                      np.ones(rows.size))
+            out.append(((a, b, j), PolyMatrix.from_terms(t, (n, n), vars)))
     return out
+
+
+def field_jacobian(f, vars) -> PolyMatrix:
+    """J_ij = d f_i / d z_j of the field f (a list of n Polynomials), on term arrays."""
+    vars = variable_names(vars)
+    return PolyMatrix.from_terms(terms_jacobian(matrix_terms(list(f), vars), len(vars)), (len(f), len(vars)), vars)
 
 
 def unit_fields(fexps, n, vars):

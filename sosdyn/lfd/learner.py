@@ -10,11 +10,19 @@ B. (field_degree > 1 or a learned metric_degree > 0) stage A's certified (C, P) 
 C. (refine_gmm) the mixture refined with the metric fixed (:mod:`~sosdyn.lfd.refine`).
 
 Every row of the fit's history (step, cost, solver status and times) goes through a
-:class:`History`. The compiled steps live only inside :func:`learn`.
+:class:`History`. The compiled steps live inside :func:`learn`, or, within a
+:func:`reuse_steps` block (``CDSP.fit``: its warp candidates and corrective rounds), in a
+:class:`StepCache` shared by the fits of that block: a step's SOS terms and Gram matching
+depend only on its structure (sizes, monomials, gamma, margins, solver), so a later fit of the
+same structure only gives it its own data term (``use_data``). Every solve sets all the step's
+weights (and, for the steps that change it per solve, the objective), so a reused step returns
+the numbers a fresh one would.
 """
 from __future__ import annotations
 
 from collections.abc import Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -49,7 +57,7 @@ class Settings:
     refine_gmm: bool
 
     @classmethod
-    def from_params(cls, params: Mapping) -> "Settings":
+    def from_params(cls, params: Mapping) -> Settings:
         return cls(**{f.name: params[f.name] for f in fields(cls)})
 
     @property
@@ -70,12 +78,65 @@ class History:
         if sol is not None:
             row.update(status=sol.status, solve_s=sol.timings["solve"],
                        build_s=sol.timings["build"] + sol.timings["canonicalize"])
+            if sol.info.get("iterations") is not None:          # the solver's (interior-point) iterations
+                row["iterations"] = int(sol.info["iterations"])
             if "fallback" in sol.info:
                 row["fallback"] = sol.info["fallback"]
         row.update(extra)
         self.rows.append(row)
         if self.progress is not None:
             self.progress(row)
+
+
+class StepCache:
+    """Compiled steps by structure key (module docstring): ``step(cls, *args, data=, **kwargs)``."""
+
+    def __init__(self):
+        self.steps: dict = {}
+
+    def step(self, cls, *args, data=None, **kwargs):
+        """``cls(data, *args, **kwargs)`` (``cls(*args, **kwargs)`` without data), or the step
+        compiled earlier from equal arguments and a data term of the same shape, given ``data``."""
+        key = (cls, None if data is None else data.shape) + tuple(map(structure, args)) \
+            + tuple((k, structure(v)) for k, v in sorted(kwargs.items()))
+        if key not in self.steps:
+            self.steps[key] = cls(*args, **kwargs) if data is None else cls(data, *args, **kwargs)
+        elif data is not None:
+            self.steps[key].use_data(data)
+        return self.steps[key]
+
+
+_CACHE: ContextVar = ContextVar("sosdyn_step_cache", default=None)
+
+
+@contextmanager
+def reuse_steps():
+    """Within the block, the fits of :func:`learn` (in this thread) share one :class:`StepCache`."""
+    token = _CACHE.set(StepCache())
+    try:
+        yield
+    finally:
+        _CACHE.reset(token)
+
+
+def active_step_cache() -> StepCache | None:
+    """The :class:`StepCache` of the innermost :func:`reuse_steps` block of this thread, or None."""
+    return _CACHE.get()
+
+
+def compiled(cls, *args, data=None, **kwargs):
+    """A step from the active :class:`StepCache` (:func:`reuse_steps`), else a new one."""
+    cache = active_step_cache()
+    if cache is None:
+        return cls(*args, **kwargs) if data is None else cls(data, *args, **kwargs)
+    return cache.step(cls, *args, data=data, **kwargs)
+
+
+def structure(value):
+    """A hashable key of a step argument: arrays by dtype, shape and bytes."""
+    if isinstance(value, np.ndarray):
+        return ("array", value.dtype.str, value.shape, value.tobytes())
+    return value
 
 
 def subsample(X, Xdot, max_samples):
@@ -137,7 +198,7 @@ def learn_fields(Z, Zdot, mixture, s: Settings, history: History):
     data = least_squares_data(Z, Zdot, mixture, fexps)
     C = embed(C, lin_exps, fexps)
     W = embed(P[:, :, None], const_exps, mexps)
-    dyn = DynamicsStep(data, fexps, mexps, state_variables(n), s.gamma, s.margin, s.solver)
+    dyn = compiled(DynamicsStep, fexps, mexps, state_variables(n), s.gamma, s.margin, s.solver, data=data)
     C, sol = dyn.solve(W)
     history.record("dynamics (degree %d)" % s.field_degree, data.cost(C), sol)
     if s.learned_metric_degree > 0:
@@ -149,7 +210,8 @@ def stage_a(data: LeastSquaresData, fexps, mexps, s: Settings, history: History)
     """Linear fields and a constant metric: (C, P, the dynamics step)."""
     n = data.shape[1]
     vars = state_variables(n)
-    dyn = DynamicsStep(data, fexps, mexps, vars, s.gamma, s.margin, s.solver, affine_psd=s.solver_method == "ica")
+    dyn = compiled(DynamicsStep, fexps, mexps, vars, s.gamma, s.margin, s.solver,
+                   affine_psd=s.solver_method == "ica", data=data)
     W = np.eye(n)[:, :, None]
     C, sol = dyn.solve(W)
     history.record("dynamics (M = I)", data.cost(C), sol)
@@ -158,7 +220,7 @@ def stage_a(data: LeastSquaresData, fexps, mexps, s: Settings, history: History)
     if s.solver_method == "alternating":
         C, W = alternate(data, dyn, C, W, fexps, mexps, s, history)
         return C, W[:, :, 0], dyn
-    ica = ICAStep(data, fexps, vars, s.gamma, s.margin, s.eps, s.solver)
+    ica = compiled(ICAStep, fexps, vars, s.gamma, s.margin, s.eps, s.solver, data=data)
     P = np.eye(n)
     for _ in range(s.max_iter):
         old = data.cost(C)
@@ -177,8 +239,8 @@ def alternate(data: LeastSquaresData, dyn: DynamicsStep, C, W, fexps, mexps, s: 
     then dynamics step, until no progress: (C, W)."""
     K, n, _ = data.shape
     grow = margin_degree(W, mexps, fexps)
-    met = MetricStep(n, K, mexps, fexps, state_variables(n), s.gamma, s.eps, grow_degree=grow,
-                     solver=s.solver)
+    met = compiled(MetricStep, n, K, mexps, fexps, state_variables(n), s.gamma, s.eps, grow_degree=grow,
+                   solver=s.solver)
     for _ in range(s.max_iter):
         W_new, t, sol = met.solve(C, W, s.metric_prox)
         history.record("metric", data.cost(C), sol, margin=t)

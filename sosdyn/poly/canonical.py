@@ -10,6 +10,7 @@
 """
 from __future__ import annotations
 
+import functools
 import re
 
 import numpy as np
@@ -24,8 +25,11 @@ def natural_key(name: str) -> tuple:
 
 def merged_vars(a: tuple, b: tuple) -> tuple:
     """Variables of a result over operands with variables ``a`` and ``b`` (module doc)."""
-    if a == b:
-        return a
+    return a if a == b else _merged(a, b)
+
+
+@functools.lru_cache(maxsize=1024)         # a program combines the same few tuples many times
+def _merged(a: tuple, b: tuple) -> tuple:
     sa, sb = set(a), set(b)
     if sa >= sb and sa != sb:
         return a

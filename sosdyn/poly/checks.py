@@ -82,6 +82,30 @@ def check_exponents(exps: np.ndarray) -> np.ndarray:
     return exps.astype(np.int64)
 
 
+def admissible_arrays(nvars: int, exps, coef, ids, canonical: bool):
+    """(exps, coef, ids) of a polynomial in ``nvars`` variables given by a caller, as int64 /
+    float / int64 arrays of matching shapes, checked (module doc); PolynomialError otherwise.
+    With ``canonical`` the rows are taken as given (distinct, sorted): sizes and exponents unchecked."""
+    coef = real_array(coef)
+    if coef.ndim == 1:
+        coef = coef[:, None]
+    exps = check_exponents(np.asarray(exps))
+    exps = exps.reshape(coef.shape[0], nvars) if exps.size or not nvars else exps.reshape(-1, nvars)
+    ids = np.zeros(0, dtype=np.int64) if ids is None else np.asarray(ids, dtype=np.int64)
+    if coef.shape != (exps.shape[0], 1 + ids.size):
+        raise PolynomialError(f"coefficient array of shape {coef.shape} does not fit {exps.shape[0]} "
+                              f"monomials and {ids.size} decision variables")
+    if not canonical and exps.shape[0] > 1:
+        check_terms_size(exps.shape[0], exps.shape[1], coef.shape[1], "combining like terms")
+    if not canonical and exps.size:
+        if exps.min() < 0:
+            raise PolynomialError("negative exponents: only polynomials are supported")
+        if int(exps.max()) * exps.shape[1] > MAX_DEGREE:     # else no row can exceed it
+            check_degree(int(exps.sum(axis=1).max()), "a polynomial")
+    check_coefficients(coef)
+    return exps, coef, ids
+
+
 def check_terms_size(nterms: int, nvars: int, ncoef: int, what: str) -> None:
     """Check against ``sosdyn.limits`` the memory of a polynomial of ``nterms`` terms.
 

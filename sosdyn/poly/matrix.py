@@ -22,6 +22,8 @@ from .polynomial import Polynomial, variable_names
 from .termarrays import (Terms, combine, concat_terms, matrix_terms, terms_entries, terms_matmul, terms_scale,
                          terms_transpose)
 
+SMALL_SIDE = 4      # asymmetry of square matrices up to this size: entry by entry (no term sort)
+
 
 def _entry(value, vars=()) -> Polynomial:
     if isinstance(value, Polynomial):
@@ -217,7 +219,15 @@ class PolyMatrix:
 
     def asymmetry(self) -> np.ndarray:
         """(r, r) array: the largest |coefficient| of P_ij - P_ji relative to max(1, the largest
-        |coefficient| of P), so that round-off of large products is not asymmetry (one sort)."""
+        |coefficient| of P), so that round-off of large products is not asymmetry (one sort; for
+        a small square matrix, entry by entry: P_ij - P_ji on the fast path of small polynomials)."""
+        r, c = self.shape
+        if r == c and r <= SMALL_SIDE:
+            out = np.zeros(self.shape)
+            for i in range(r):
+                for j in range(i + 1, r):
+                    out[i, j] = out[j, i] = np.abs((self.entries[i, j] - self.entries[j, i]).coef).max(initial=0.0)
+            return out / max([1.0] + [float(np.abs(p.coef).max(initial=0.0)) for p in self.entries.flat])
         t = self.terms(self.vars)
         d, _ = combine(concat_terms(t, terms_scale(terms_transpose(t), -1.0)))
         out = np.zeros(self.shape)

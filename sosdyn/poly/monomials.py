@@ -8,6 +8,7 @@ degree overflows float64 already at |v| = 2 and its values are meaningless in fl
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -17,6 +18,9 @@ from ..limits import check_bytes
 
 _MAX_KEY = 2**62
 MAX_DEGREE = 1000
+CACHE_MAX_MONOMIALS = 4096   # monomials_up_to keeps answers up to C(n + degree, n) rows of this many
+SMALL_ROWS = 64     # unique_rows / match_rows work on Python tuples up to this many rows (numpy's
+                    # fixed cost per call is larger there than the work)
 
 
 def monomial_keys(exps: np.ndarray, base: int | None = None) -> np.ndarray | None:
@@ -36,6 +40,12 @@ def unique_rows(exps: np.ndarray):
     """Unique exponent rows (sorted lexicographically) and the inverse index of every row."""
     if exps.shape[0] == 0:
         return exps.reshape(0, exps.shape[1]), np.zeros(0, dtype=np.int64)
+    if exps.shape[0] <= SMALL_ROWS:            # plain Python: tuples sort lexicographically
+        rows = [tuple(r) for r in exps.tolist()]
+        uniq = sorted(set(rows))
+        at = {r: i for i, r in enumerate(uniq)}
+        return (np.array(uniq, dtype=exps.dtype).reshape(len(uniq), exps.shape[1]),
+                np.array([at[r] for r in rows], dtype=np.int64))
     keys = monomial_keys(exps)
     if keys is None:
         uniq, inv = np.unique(exps, axis=0, return_inverse=True)
@@ -96,9 +106,22 @@ def monomials_up_to(n: int, degree: int, min_degree: int = 0,
                               "Try: a lower degree")
     if n == 0:
         return np.zeros((1 if min_degree <= 0 else 0, 0), dtype=np.int64)
-    check_bytes(3 * 8.0 * n * math.comb(n + degree, n),           # the rows, sort keys, sorted copy
+    count = math.comb(n + degree, n)
+    check_bytes(3 * 8.0 * n * count,           # the rows, sort keys, sorted copy
                 f"the monomials of degree <= {degree} in {n} variables",
                 "lower the degree or the number of variables")
+    if max_per_var is None and count <= CACHE_MAX_MONOMIALS:     # a program asks for the same few many times
+        return _monomials_cached(int(n), int(degree), int(min_degree)).copy()
+    return _monomials(n, degree, min_degree, max_per_var)
+
+
+@functools.lru_cache(maxsize=256)
+def _monomials_cached(n: int, degree: int, min_degree: int) -> np.ndarray:
+    return _monomials(n, degree, min_degree, None)
+
+
+def _monomials(n: int, degree: int, min_degree: int, max_per_var) -> np.ndarray:
+    """The rows of :func:`monomials_up_to` (arguments checked there)."""
     caps = np.full(n, degree) if max_per_var is None else np.minimum(max_per_var, degree)
     arr, used = np.zeros((1, 0), dtype=np.int64), np.zeros(1, dtype=np.int64)
     for cap in caps:             # row r of the prefix gets exponents 0..min(cap, degree - used_r)
@@ -120,6 +143,9 @@ def match_rows(table: np.ndarray, queries: np.ndarray) -> np.ndarray:
         return np.zeros(0, dtype=np.int64)
     if table.shape[0] == 0:
         return np.full(queries.shape[0], -1, dtype=np.int64)
+    if table.shape[0] + queries.shape[0] <= SMALL_ROWS:      # plain Python: a dict of rows
+        lookup = {tuple(r): i for i, r in enumerate(table.tolist())}
+        return np.array([lookup.get(tuple(r), -1) for r in queries.tolist()], dtype=np.int64)
     base = int(max(table.max(initial=0), queries.max(initial=0))) + 1
     tk = monomial_keys(table, base)
     qk = monomial_keys(queries, base)

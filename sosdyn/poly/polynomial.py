@@ -12,16 +12,13 @@ A numeric polynomial has k = 0. Products are allowed when at most one factor dep
 decision variables, so every result stays affine in d (the form an SOS program needs).
 
 Admissible data (:mod:`.checks`, applied whenever a polynomial is made, so also after every
-operation): real, finite coefficients with |c| <= ``MAX_COEFFICIENT`` = 1e150 (an operation
-whose result breaks the rule -- an overflow -- raises too); non-negative integer exponents of
-total degree <= ``MAX_DEGREE``, checked before a power is expanded. Results of operations are
-made by ``Polynomial._made`` from admissible operands: their exponents are sums of admissible
-ones, so only what an operation can break is checked again (coefficients always, the degree
-of a product); ``canonical=True`` marks given rows already in canonical form;
-arrays of products and of combining like terms within ``sosdyn.limits``; finite evaluation
-points. Evaluation is :func:`.evaluation.monomial_values` times the coefficients, at points
-given by name (a dict) or as columns in ``vars`` order; ``==`` compares by value; the variable
-order of a result and the printing rules are in :mod:`.terms`.
+operation): real, finite coefficients with |c| <= ``MAX_COEFFICIENT`` = 1e150 (an overflow in an
+operation raises too); non-negative integer exponents of total degree <= ``MAX_DEGREE``, checked
+before a power or a product is expanded; the arrays of products and of combining like terms within
+``sosdyn.limits``; finite evaluation points. An operation on admissible operands checks again only
+what it can break (``Polynomial._made``; ``canonical=True`` marks given rows already canonical);
+small operations run on plain Python (:mod:`.smallterms`). ``==`` compares by value; evaluation,
+variable order and printing: :mod:`.evaluation`, :mod:`.canonical`.
 """
 from __future__ import annotations
 
@@ -30,15 +27,16 @@ from numbers import Number
 import numpy as np
 
 from ..errors import PolynomialError
-from .checks import (check_coefficients, check_degree, check_exponents, check_terms_size, ordered_points,
+from .checks import (admissible_arrays, check_coefficients, check_degree, check_terms_size, ordered_points,
                      real_array)
+from . import smallterms as small
 from .evaluation import monomial_values
 from .monomials import MAX_DEGREE, combine_terms, match_rows, sum_rows
 from .canonical import canonical_key, format_terms, merged_vars
 
 
 def _scalar(value) -> float:
-    return float(real_array(value, "a scalar operand"))
+    return float(value) if type(value) in (float, int) else float(real_array(value, "a scalar operand"))
 
 
 class Polynomial:
@@ -49,27 +47,10 @@ class Polynomial:
 
     def __init__(self, vars, exps, coef, ids=None, *, canonical: bool = False):
         self.vars = tuple(vars)
-        coef = real_array(coef)
-        if coef.ndim == 1:
-            coef = coef[:, None]
-        exps = check_exponents(np.asarray(exps))
-        exps = exps.reshape(coef.shape[0], len(self.vars)) if exps.size or not self.vars \
-            else exps.reshape(-1, len(self.vars))
-        ids = np.zeros(0, dtype=np.int64) if ids is None else np.asarray(ids, dtype=np.int64)
-        if coef.shape != (exps.shape[0], 1 + ids.size):
-            raise PolynomialError(
-                f"coefficient array of shape {coef.shape} does not fit {exps.shape[0]} "
-                f"monomials and {ids.size} decision variables")
-        if not canonical and exps.shape[0] > 1:
-            check_terms_size(exps.shape[0], exps.shape[1], coef.shape[1], "combining like terms")
-        if not canonical and exps.size:
-            if exps.min() < 0:
-                raise PolynomialError("negative exponents: only polynomials are supported")
-            if int(exps.max()) * exps.shape[1] > MAX_DEGREE:     # else no row can exceed it
-                check_degree(int(exps.sum(axis=1).max()), "a polynomial")
-        check_coefficients(coef)
+        exps, coef, ids = admissible_arrays(len(self.vars), exps, coef, ids, canonical)
         if not canonical:
-            exps, coef, ids = combine_terms(exps, coef, ids)
+            combine = small.combine if small.fits(exps.shape[0], coef.shape[1]) else combine_terms
+            exps, coef, ids = combine(exps, coef, ids)
         self.exps, self.coef, self.ids = exps, coef, ids
 
     @classmethod
@@ -77,6 +58,8 @@ class Polynomial:
         """The polynomial of arrays an operation computed from admissible polynomials (int64
         exponents >= 0 of checked degree, sorted ids): terms combined (see combine_terms; rows
         sorted when ``sort``), then the coefficients checked, which an operation can overflow."""
+        if small.fits(exps.shape[0], coef.shape[1]):
+            return cls._bare(vars, *small.combine(exps, coef, ids))
         exps, coef, ids = combine_terms(exps, coef, ids, sort)
         check_coefficients(coef)
         return cls._bare(vars, exps, coef, ids)
@@ -93,15 +76,14 @@ class Polynomial:
     def constant(cls, value: float, vars=()) -> "Polynomial":
         """The constant polynomial ``value``."""
         vars = tuple(vars)
-        return cls._made(vars, np.zeros((1, len(vars)), dtype=np.int64), np.array([[_scalar(value)]]),
-                         np.zeros(0, dtype=np.int64), sort=False)
+        return cls._bare(vars, *small.canonical({(0,) * len(vars): [_scalar(value)]}, len(vars), [], small.NO_IDS))
 
     @classmethod
     def affine(cls, ids, coefs, const: float = 0.0, vars=()) -> "Polynomial":
         """The degree-0 polynomial ``const + sum_j coefs[j] * d[ids[j]]``."""
         ids = np.asarray(ids, dtype=np.int64)
         order = np.argsort(ids)
-        row = np.r_[_scalar(const), real_array(coefs)[order]][None, :]
+        row = np.concatenate(([_scalar(const)], real_array(coefs).reshape(-1)[order]))[None, :]
         return cls._made(tuple(vars), np.zeros((1, len(vars)), dtype=np.int64), row, ids[order], sort=False)
 
     # ------------------------------------------------------------------ properties
@@ -180,33 +162,38 @@ class Polynomial:
         return NotImplemented
 
     # ------------------------------------------------------------------ arithmetic
-    def __add__(self, other):
-        other = self._coerce(other)
-        if other is NotImplemented:
-            return NotImplemented
-        a, b = self._align(other)
+    def _sum(self, other, sign: float):
+        """self + sign * other (sign 1 or -1); small operands on the Python path (:mod:`.smallterms`)."""
+        n, k = self.nterms + other.nterms, 1 + self.ids.size + other.ids.size
+        if small.fits(n, k):
+            vars = merged_vars(self.vars, other.vars)
+            check_terms_size(n, len(vars), k, "combining like terms")
+            return Polynomial._bare(vars, *small.add(self, other, sign, vars))
+        a, b = self._align(other if sign > 0 else -other)
         check_terms_size(a.nterms + b.nterms, a.nvars, a.coef.shape[1], "combining like terms")
         return Polynomial._made(a.vars, np.vstack([a.exps, b.exps]), np.vstack([a.coef, b.coef]), a.ids)
+
+    def __add__(self, other):
+        other = self._coerce(other)
+        return NotImplemented if other is NotImplemented else self._sum(other, 1.0)
 
     __radd__ = __add__
 
     def __neg__(self):
-        return Polynomial._made(self.vars, self.exps, -self.coef, self.ids, sort=False)
+        return Polynomial._bare(self.vars, self.exps, -self.coef, self.ids)     # admissible and canonical still
 
     def __sub__(self, other):
         other = self._coerce(other)
-        if other is NotImplemented:
-            return NotImplemented
-        return self + (-other)
+        return NotImplemented if other is NotImplemented else self._sum(other, -1.0)
 
     def __rsub__(self, other):
         other = self._coerce(other)
-        if other is NotImplemented:
-            return NotImplemented
-        return other + (-self)
+        return NotImplemented if other is NotImplemented else other._sum(self, -1.0)
 
     def __mul__(self, other):
         if isinstance(other, Number) or (isinstance(other, np.ndarray) and other.ndim == 0):
+            if small.fits(self.nterms, self.coef.shape[1]):
+                return Polynomial._bare(self.vars, *small.scale(self.exps, self.coef, self.ids, _scalar(other)))
             return Polynomial._made(self.vars, self.exps, self.coef * _scalar(other), self.ids, sort=False)
         if not isinstance(other, Polynomial):
             return NotImplemented
@@ -215,10 +202,11 @@ class Polynomial:
                 "product of two polynomials that both depend on decision variables is not "
                 "affine in them (a bilinear term); fix one factor to numbers first")
         a, b = (other, self) if self.is_numeric and not other.is_numeric else (self, other)  # b numeric
-        if a.vars != b.vars:
-            vars = merged_vars(a.vars, b.vars)
-            a, b = a.with_vars(vars), b.with_vars(vars)
-        check_terms_size(a.nterms * b.nterms, a.nvars, a.coef.shape[1], "a product")
+        vars = merged_vars(a.vars, b.vars)
+        check_terms_size(a.nterms * b.nterms, len(vars), a.coef.shape[1], "a product")
+        if small.fits(a.nterms * b.nterms, a.coef.shape[1], small.SMALL_PRODUCT_CELLS):
+            return Polynomial._bare(vars, *small.multiply(a, b, vars))
+        a, b = a.with_vars(vars), b.with_vars(vars)
         exps = (a.exps[:, None, :] + b.exps[None, :, :]).reshape(a.nterms * b.nterms, a.nvars)
         if int(exps.max(initial=0)) * a.nvars > MAX_DEGREE:      # else no row can exceed it
             check_degree(int(exps.sum(axis=1).max()), "a product")
@@ -238,10 +226,9 @@ class Polynomial:
     def __pow__(self, k: int):
         if not isinstance(k, (int, np.integer)) or k < 0:
             raise PolynomialError(f"power must be a non-negative integer, got {k!r}")
-        check_degree(max(self.degree, 0) * int(k), f"a power p**{k}")
         if self.nterms == 1 and self.is_numeric:          # (c x^a)^k = c^k x^(k a)
-            with np.errstate(over="ignore", under="ignore"):  # an overflow to inf is refused by _made
-                return Polynomial._made(self.vars, self.exps * int(k), self.coef ** int(k), self.ids, sort=False)
+            return Polynomial._bare(self.vars, *small.power(self.exps, self.coef, self.ids, int(k)))
+        check_degree(max(self.degree, 0) * int(k), f"a power p**{k}")
         result, base = None, self
         while k:
             if k & 1:
@@ -383,7 +370,7 @@ def variables(names) -> tuple:
     names = list(names)
     if len(set(names)) != len(names):
         raise PolynomialError(f"duplicate variable names in {names}")
-    return tuple(Polynomial((n,), [[1]], [1.0]) for n in names)
+    return tuple(Polynomial._bare((n,), np.ones((1, 1), dtype=np.int64), np.ones((1, 1)), small.NO_IDS) for n in names)
 
 
 def variable_names(polys) -> tuple:

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import PolynomialError
-from .checks import check_terms_size, real_array
+from .checks import check_coefficients, check_terms_size, real_array
 from .monomials import monomial_keys, unique_rows
 from .polynomial import Polynomial
 
@@ -158,7 +158,8 @@ def terms_entries(t: Terms, shape, vars) -> np.ndarray:
 
     Entries list their monomials in :func:`~.monomials.sum_rows` order (lexicographic) and drop
     zero coefficients and unused decision ids, as a Polynomial built term by term would."""
-    t, keys = combine(t)
+    t, keys, vars = *combine(t), tuple(vars)
+    check_coefficients(t.val)                               # once for every entry (sums can overflow)
     flat = t.row * shape[1] + t.col
     size = shape[0] * shape[1]
     bounds = np.searchsorted(flat, np.arange(size + 1))
@@ -181,5 +182,5 @@ def terms_entries(t: Terms, shape, vars) -> np.ndarray:
         r = row[lo:hi] - row[lo]
         coef = np.zeros((int(r[-1]) + 1, 1 + ids.size))
         coef[r, cols[lo:hi]] = t.val[lo:hi]
-        out[divmod(int(e), shape[1])] = Polynomial(vars, t.exps[lo:hi][mono[lo:hi]], coef, ids, canonical=True)
+        out[divmod(int(e), shape[1])] = Polynomial._bare(vars, t.exps[lo:hi][mono[lo:hi]], coef, ids)
     return out

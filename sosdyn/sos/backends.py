@@ -28,9 +28,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError
-from ..limits import check_bytes
+from ..limits import check_bytes, get_limits
 from ..poly import MAX_COEFFICIENT
 from .conic import affine_cones, check_data, coupled_psd_sizes, cvxpy_block_vars
+from .csc import csc, vstack
 from .gram import svec_pairs, svec_to_matrix
 from .objective import is_cvxpy
 from .solution import Solution
@@ -70,21 +71,7 @@ def _clarabel(data, verbose, settings):
     opt-in."""
     settings = dict(settings)
     red = affine_cones(data, enabled=settings.pop("affine_psd", False))
-    A_eq, b_eq, A_ge, G, h, soc, P, q = red.lower(data)
-    blocks, rhs, cones = [sp.csc_matrix(A_eq), -sp.csc_matrix(A_ge)], [b_eq, -data.b_ge], []
-    if A_eq.shape[0]:
-        cones.append(clarabel.ZeroConeT(A_eq.shape[0]))
-    if A_ge.shape[0]:
-        cones.append(clarabel.NonnegativeConeT(A_ge.shape[0]))
-    blocks.append(G)                        # s = h - G y in each PSD block
-    rhs.append(h)
-    cones += [clarabel.PSDTriangleConeT(size) for _, size in data.psd]
-    if data.n_soc:                          # s = G x in each 3-dim second-order cone
-        blocks.append(-soc)
-        rhs.append(np.zeros(soc.shape[0]))
-        cones += [clarabel.SecondOrderConeT(3)] * data.n_soc
-    A = sp.vstack(blocks).tocsc()
-    P = sp.triu(2.0 * P).tocsc() if P is not None else sp.csc_matrix((q.size, q.size))
+    P, q, A, b, cones = clarabel_problem(data, red)
     opts = clarabel.DefaultSettings()
     opts.verbose = verbose
     for k, v in settings.items():
@@ -92,18 +79,41 @@ def _clarabel(data, verbose, settings):
             raise InputError(f"unknown Clarabel setting {k!r}")
         setattr(opts, k, v)
     t0 = time.perf_counter()
-    result = clarabel.DefaultSolver(P, q, A, np.concatenate(rhs), cones, opts).solve()
+    result = clarabel.DefaultSolver(P, q, A, b, cones, opts).solve()
     seconds = time.perf_counter() - t0
     status = _CLARABEL_STATUS.get(str(result.status), "solver_error")
     z, s = np.asarray(result.z, dtype=float), np.asarray(result.s, dtype=float)
-    start = A_eq.shape[0] + A_ge.shape[0]
+    start = int(red.keep_rows.sum()) + data.b_ge.size           # rows before the PSD parts
     duals, s_blocks = [], []
     for pos, size in data.psd:          # z's PSD parts: svec of each block's dual matrix
         duals.append(svec_to_matrix(z[start:start + pos.size], size))
         s_blocks.append(s[start:start + pos.size])
         start += pos.size
     x = red.values(data, np.asarray(result.x, dtype=float), s_blocks)
-    return status, x, str(result.status), seconds, {"iterations": int(result.iterations), "psd_duals": duals}
+    return status, x, str(result.status), seconds, {"iterations": int(result.iterations), "psd_duals": duals,
+                                                    "solver_own_seconds": float(result.solve_time)}
+
+
+def clarabel_problem(data, red):
+    """Clarabel's (P, q, A, b, cones) of ``data`` lowered by ``red`` (:class:`~.conic.AffineCones`):
+    rows A_eq (zero cone), A_ge (nonnegative), the PSD blocks, the second-order cones."""
+    A_eq, b_eq, A_ge, G, h, soc, P, q = red.lower(data)
+    blocks, rhs, cones = [(A_eq.tocsc(), 1), (A_ge.tocsc(), -1)], [b_eq, -data.b_ge], []
+    if A_eq.shape[0]:
+        cones.append(clarabel.ZeroConeT(A_eq.shape[0]))
+    if A_ge.shape[0]:
+        cones.append(clarabel.NonnegativeConeT(A_ge.shape[0]))
+    blocks.append((G, 1))                   # s = h - G y in each PSD block
+    rhs.append(h)
+    cones += [clarabel.PSDTriangleConeT(size) for _, size in data.psd]
+    if data.n_soc:                          # s = G x in each 3-dim second-order cone
+        blocks.append((soc.tocsc(), -1))
+        rhs.append(np.zeros(soc.shape[0]))
+        cones += [clarabel.SecondOrderConeT(3)] * data.n_soc
+    A = vstack(blocks, q.size)
+    P = sp.triu(2.0 * P).tocsc() if P is not None else csc(np.zeros(0), np.zeros(0, dtype=np.int64),
+                                                           np.zeros(q.size + 1, dtype=np.int64), (q.size, q.size))
+    return P, q, A, np.concatenate(rhs), cones
 
 
 def _svec_to_vec_map(size):
@@ -193,6 +203,17 @@ def solver_bytes(data, solver: str, backend: str) -> float:
     return float(total)
 
 
+def coarse_bytes(data) -> float:
+    """An upper bound of :func:`solver_bytes` for Clarabel through the direct back end, from
+    sizes alone: one dense group of every variable and equality row (D = n + rows), each svec
+    entry counted as a variable (so the bound needs no pass over the PSD blocks)."""
+    rows = data.A_eq.shape[0] + data.A_ge.shape[0] + 3 * data.n_soc
+    nnz = data.A_eq.nnz + data.A_ge.nnz + (data.soc.nnz if data.soc is not None else 0) \
+        + (data.P.nnz if data.P is not None else 0) + data.n
+    dense = float(data.n + data.A_eq.shape[0]) ** 2
+    return BASE_BYTES + SPARSE_BYTES * (nnz + 2 * data.n + rows) + DENSE_BYTES * dense
+
+
 def _size_hint(solver: str) -> str:
     hint = ("lower the degree (a smaller Gram basis), exploit sparsity (add_sos(..., sparsity='correlative' or 'term'): "
             "one small Gram block per clique or term component), or use "
@@ -242,12 +263,13 @@ def solve_program(program, solver, backend, scale, verbose, build=0.0, **setting
                         {"build": build, "canonicalize": canon, "solve": 0.0},
                         raw_status="detected before solving", reason=data.infeasible_reason)
     check_data(data)
-    sizes = data.sizes()
-    check_bytes(solver_bytes(data, solver, backend),
-                f"The {solver} solve ({backend} backend; {len(sizes['psd_blocks'])} PSD block(s), the "
-                f"largest {max(sizes['psd_blocks'], default=0)} x {max(sizes['psd_blocks'], default=0)}, "
-                f"{sizes['equalities']} equality rows)",
-                _size_hint(solver))
+    if not (backend == "direct" and coarse_bytes(data) <= get_limits().max_bytes):   # else the estimate fits
+        sizes = data.sizes()
+        check_bytes(solver_bytes(data, solver, backend),
+                    f"The {solver} solve ({backend} backend; {len(sizes['psd_blocks'])} PSD block(s), the "
+                    f"largest {max(sizes['psd_blocks'], default=0)} x {max(sizes['psd_blocks'], default=0)}, "
+                    f"{sizes['equalities']} equality rows)",
+                    _size_hint(solver))
     try:
         if backend == "direct":
             status, x, raw, seconds, info = _clarabel(data, verbose, settings)

@@ -29,6 +29,7 @@ import scipy.sparse as sp
 
 from ..errors import InputError, PolynomialError
 from ..poly import PolyMatrix, Polynomial
+from .csc import column_of_entries, csc, from_triplets
 from .objective import QuadraticForm, affine_rows, is_cvxpy
 
 MAX_RHS = 1e8
@@ -97,6 +98,9 @@ def _stack(ids, parts, kind, scale):
     invariant under scaling its coordinates separately).
     """
     parts = [p for p in parts if p.kind == kind]
+    if not parts:
+        return csc(np.zeros(0), np.zeros(0, np.int64), np.zeros(ids.size + 1, np.int64), (0, ids.size)), \
+            np.zeros(0), 0.0, ""
     n_rows, r, c, v, rhs, starts = 0, [], [], [], [], []
     for p in parts:
         starts.append(n_rows)
@@ -105,8 +109,8 @@ def _stack(ids, parts, kind, scale):
         v.append(p.vals)
         rhs.append(p.rhs)
         n_rows += p.rhs.size
-    cat = lambda xs, dt: np.concatenate(xs) if xs else np.zeros(0, dtype=dt)  # noqa: E731
-    r, c, v, b = cat(r, np.int64), cat(c, np.int64), cat(v, float), cat(rhs, float)
+    cat = lambda xs: xs[0] if len(xs) == 1 else np.concatenate(xs)  # noqa: E731 -- only read below
+    r, c, v, b = cat(r), cat(c), cat(v), np.concatenate(rhs)            # b: a new array, returned
     owner = np.arange(n_rows)
     if kind == "eq":      # 0 = 0 rows carry nothing; 0 = b != 0 rows are caught as infeasible
         keep = (np.bincount(r, minlength=n_rows) > 0) | (b != 0)
@@ -114,7 +118,7 @@ def _stack(ids, parts, kind, scale):
     if r.size:            # the CSC layout: entries by column, then row; duplicates summed
         order = np.lexsort((r, c))
         r, c, v = r[order], c[order], v[order]
-        first = np.flatnonzero(np.r_[True, (r[1:] != r[:-1]) | (c[1:] != c[:-1])])
+        first = np.flatnonzero(np.concatenate(([True], (r[1:] != r[:-1]) | (c[1:] != c[:-1]))))
         r, c, v = r[first], c[first], np.add.reduceat(v, first)
     norms = np.zeros(b.size)                # largest |A_ij| of each row
     np.maximum.at(norms, r, np.abs(v))
@@ -129,8 +133,8 @@ def _stack(ids, parts, kind, scale):
         norms = np.where(has, norms, 1.0)
         v = v * (1.0 / norms)[r]
         b = b / norms
-    indptr = np.concatenate(([0], np.cumsum(np.bincount(c, minlength=ids.size))))
-    return sp.csc_matrix((v, r, indptr), shape=(b.size, ids.size)), b, ratio, source
+    indptr = np.searchsorted(c, np.arange(ids.size + 1))          # c is sorted (CSC order)
+    return csc(v, r, indptr, (b.size, ids.size)), b, ratio, source
 
 
 def _objective(program, ids):
@@ -210,20 +214,21 @@ class AffineCones:
         with h - G y = y[pos] for a kept block and D^-1 (b_R - A_R y) for an eliminated one.
         Returns (A_eq, b_eq, A_ge, G, h, soc, P, q); nothing is copied if nothing is eliminated.
         """
+        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, dtype=np.int64)  # noqa: E731
+        gone = [k for k, rows in enumerate(self.rows) if rows is not None]
+        if not gone:                                     # every block on its own variables: G = -E
+            c = cat([pos for pos, _ in data.psd])
+            G = from_triplets(np.arange(c.size), c, -np.ones(c.size), (c.size, data.n))
+            return data.A_eq, data.b_eq, data.A_ge, G, np.zeros(c.size), data.soc, data.P, data.q
         keep, n_keep = self.keep_cols, int(self.keep_cols.sum())
         col = np.cumsum(keep) - 1                        # a kept variable's position among the kept
         sizes = np.array([pos.size for pos, _ in data.psd], dtype=np.int64)
         start = np.concatenate(([0], np.cumsum(sizes)))
         h = np.zeros(start[-1])
-        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, dtype=np.int64)  # noqa: E731
         kept = [k for k, r in enumerate(self.rows) if r is None]
         r = cat([start[k] + np.arange(sizes[k]) for k in kept])
         c = col[cat([data.psd[k][0] for k in kept])]
         v = -np.ones(r.size)
-        gone = [k for k, rows in enumerate(self.rows) if rows is not None]
-        if not gone:
-            G = sp.csc_matrix((v, (r, c)), shape=(h.size, n_keep))
-            return data.A_eq, data.b_eq, data.A_ge, G, h, data.soc, data.P, data.q
         A = data.A_eq.tocsc()
         R = cat([self.rows[k] for k in gone])
         target, d = np.full(A.shape[0], -1), np.ones(A.shape[0])
@@ -235,7 +240,7 @@ class AffineCones:
         r = np.concatenate([r, target[A.indices[e]]])
         c = np.concatenate([c, col[A_col[e]]])
         v = np.concatenate([v, A.data[e] / d[A.indices[e]]])
-        G = sp.csc_matrix((v, (r, c)), shape=(h.size, n_keep))
+        G = from_triplets(r, c, v, (h.size, n_keep))
         A_eq = _submatrix(A, self.keep_rows, keep)
         P = None if data.P is None else _submatrix(data.P.tocsc(), keep, keep)
         soc = None if data.soc is None else _submatrix(data.soc.tocsc(), None, keep)
@@ -254,13 +259,13 @@ class AffineCones:
 
 def _submatrix(M: sp.csc_matrix, rows, cols) -> sp.csc_matrix:
     """M[rows][:, cols] of a CSC matrix for boolean masks (rows None: all), order kept."""
-    M_col = np.repeat(np.arange(M.shape[1]), np.diff(M.indptr))
+    M_col = column_of_entries(M)
     on = cols[M_col] if rows is None else cols[M_col] & rows[M.indices]
     new_row = M.indices[on] if rows is None else (np.cumsum(rows) - 1)[M.indices[on]]
     n_cols = int(cols.sum())
     indptr = np.concatenate(([0], np.cumsum(np.bincount((np.cumsum(cols) - 1)[M_col[on]], minlength=n_cols))))
     n_rows = M.shape[0] if rows is None else int(rows.sum())
-    return sp.csc_matrix((M.data[on], new_row, indptr), shape=(n_rows, n_cols))
+    return csc(M.data[on], new_row, indptr, (n_rows, n_cols))
 
 
 def affine_cones(data: ConicData, enabled: bool = True) -> AffineCones:

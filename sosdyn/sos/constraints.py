@@ -168,8 +168,12 @@ class SOSConstraint:
         memo = self._layout_memo
         if memo is not None and np.array_equal(memo[0], exps):
             return memo[1]
-        U, _ = unique_rows(np.vstack([exps, self._gram_exps]))
-        layout = (U, match_rows(U, exps), match_rows(U, self._gram_exps))
+        idx_p = match_rows(self._gram_exps, exps)
+        if (idx_p >= 0).all():        # p's monomials among the Gram products': U is theirs
+            layout = (self._gram_exps, idx_p, np.arange(self._gram_exps.shape[0]))
+        else:
+            U, _ = unique_rows(np.vstack([exps, self._gram_exps]))
+            layout = (U, match_rows(U, exps), match_rows(U, self._gram_exps))
         self._layout_memo = (exps, layout)
         return layout
 
@@ -187,8 +191,7 @@ class SOSConstraint:
             np.concatenate([-prows.vals, self._gram_weights]),
             rhs)
         covered = np.zeros(U.shape[0], dtype=bool)
-        covered[idx_g] = True
-        covered[prows.rows] = True
+        covered[idx_g] = covered[prows.rows] = True
         bad = np.flatnonzero(~covered & (rhs != 0))
         self.infeasible_reason = None if not bad.size else (
             f"constraint {self.name!r}: monomial "

@@ -32,10 +32,19 @@ SQRT2 = np.sqrt(2.0)
 
 
 def svec_pairs(b: int):
-    """Row and column index (i <= j) of every svec entry, in Clarabel's order."""
+    """Row and column index (i <= j) of every svec entry, in Clarabel's order (read-only arrays:
+    answers are cached, every Gram block of a size asks for the same)."""
+    return _svec_pairs(int(b))
+
+
+@functools.lru_cache(maxsize=256)
+def _svec_pairs(b: int):
     cols = np.repeat(np.arange(b), np.arange(1, b + 1))
     rows = np.concatenate([np.arange(j + 1) for j in range(b)]) if b else np.zeros(0, dtype=int)
-    return rows.astype(np.int64), cols.astype(np.int64)
+    out = rows.astype(np.int64), cols.astype(np.int64)
+    for a in out:
+        a.flags.writeable = False
+    return out
 
 
 def svec_size(b: int) -> int:

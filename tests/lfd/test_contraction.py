@@ -1,13 +1,12 @@
 """G_k and M as numbers and as polynomial matrices: both agree, and known answers."""
 import numpy as np
-
 import pytest
 
-from sosdyn.lfd.contraction import (certificate_matrices, constant_index, contraction_degree,
-                                    contraction_matrices, contraction_polymatrix, decision_fields,
-                                    decision_metric, degree, field_exponents, margin_degree, metric_exponents,
-                                    numeric_fields, numeric_metric, sample_states, sampled_eigenvalues,
-                                    state_variables, symmetric_pairs)
+from sosdyn.lfd.contraction import (certificate_matrices, constant_index, contraction_degree, contraction_matrices,
+                                    contraction_polymatrix, decision_fields, decision_metric, degree, eval_metric,
+                                    field_exponents, field_jacobian, generalized_max_eig, margin_degree,
+                                    metric_exponents, numeric_fields, numeric_metric, sample_states,
+                                    sampled_eigenvalues, state_variables, symmetric_pairs, unit_fields, unit_metrics)
 from sosdyn.poly import allocate, jacobian
 
 RNG = np.random.default_rng(0)
@@ -46,6 +45,34 @@ def test_sampled_eigenvalues_of_a_known_contraction():
     max_g, min_m = sampled_eigenvalues(C1, field_exponents(2, 1), -W0, metric_exponents(2, 0),
                                        sample_states(0, 100, 2), 0.5)
     assert max_g == np.inf and min_m == -1.0
+
+
+def test_sampled_eigenvalues_of_linear_fields_under_a_constant_metric_are_those_of_every_state():
+    """G_k and M do not depend on z then: computed once, the numbers over all states, exactly."""
+    rng = np.random.default_rng(5)
+    n, K = 3, 4
+    Cl = np.stack([-2 * np.eye(n) + 0.5 * rng.normal(size=(n, n)) for _ in range(K)])
+    B = rng.normal(size=(n, n))
+    P = (B @ B.T + n * np.eye(n))[:, :, None]
+    fexps, mexps, Z = field_exponents(n, 1), metric_exponents(n, 0), sample_states(1, 400, n)
+    max_g, min_m = sampled_eigenvalues(Cl, fexps, P, mexps, Z, 0.2)
+    M = eval_metric(P, mexps, Z)
+    assert max_g == generalized_max_eig(contraction_matrices(Cl, fexps, P, mexps, Z, 0.2), M).max()
+    assert min_m == np.linalg.eigvalsh(M)[:, 0].min() > 0 and -10 < max_g < 10
+
+
+def test_unit_metrics_and_field_jacobians_on_term_arrays_are_the_entrywise_matrices():
+    vars = state_variables(2)
+    units = unit_metrics(MEXPS, 2, vars)
+    assert len(units) == 3 * MEXPS.shape[0]
+    Z = RNG.uniform(-1, 1, size=(7, 2))
+    for (a, b, j), E in units:
+        want = np.zeros((7, 2, 2))
+        want[:, a, b] = want[:, b, a] = np.prod(Z ** MEXPS[j], axis=1)
+        np.testing.assert_array_equal(E(Z, vars), want)
+    for _, u in unit_fields(FEXPS, 2, vars):
+        J, ref = field_jacobian(u, vars), jacobian(u, vars)
+        assert all(J.entries[i, j] == ref.entries[i, j] for i in range(2) for j in range(2))
 
 
 def test_sample_states_fill_twice_the_data_box_reproducibly():

@@ -3,8 +3,9 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
-from sosdyn.lfd.learner import (LEARNER_HINT, History, Settings, embed, learn, stalled, subsample,
-                                with_learner_hint)
+from sosdyn.lfd.learner import (LEARNER_HINT, History, Settings, StepCache, active_step_cache, embed, learn,
+                                reuse_steps, stalled, subsample, with_learner_hint)
+from sosdyn.lfd.steps import DynamicsStep, ICAStep, MetricStep
 
 
 def test_learn_gives_the_estimators_numbers_and_history(linear_demos):
@@ -20,6 +21,31 @@ def test_learn_gives_the_estimators_numbers_and_history(linear_demos):
     assert [r["step"] for r in history.rows] == [r["step"] for r in model.history_]
     assert history.rows[0]["step"] == "dynamics (M = I)" and history.rows[-1]["iteration"] == len(rows) - 1
     assert rows == history.rows
+
+
+def test_fits_in_one_reuse_block_share_their_steps_and_give_the_fresh_numbers(linear_demos):
+    """Two fits of one structure on different data: inside reuse_steps() the second compiles no
+    step (ICA, both dynamics steps and the metric step are reused) and both give exactly the
+    numbers of fresh steps."""
+    model = sd.CDSP(n_components=2, metric_degree=2, max_iter=2, warp="none").fit(linear_demos)
+    X, Xdot = linear_demos.stacked()
+    Z, Zdot = (X - model.goal_) / model.scale_, Xdot / model.scale_
+    s = Settings.from_params(model.get_params())
+    data = [(Z, Zdot), (Z, 0.7 * Zdot + 0.05 * Z[:, ::-1])]
+    fresh = [learn(z, zd, model.mixture_, s, History()) for z, zd in data]
+    assert active_step_cache() is None
+    with reuse_steps():
+        cache = active_step_cache()
+        first = learn(*data[0], model.mixture_, s, History())
+        steps = dict(cache.steps)
+        second = learn(*data[1], model.mixture_, s, History())
+        assert cache.steps == steps and len(steps) == 4
+        assert {key[0] for key in steps} == {DynamicsStep, ICAStep, MetricStep}
+    assert active_step_cache() is None and isinstance(cache, StepCache)
+    for got, want in zip((first, second), fresh):
+        np.testing.assert_array_equal(got[0], want[0])
+        np.testing.assert_array_equal(got[1], want[1])
+    assert not np.allclose(first[0], second[0])
 
 
 def test_settings_and_the_learned_metric_degree():

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ...errors import InputError
+from ...poly import PolyMatrix
 from ...sos import QuadraticForm
 from ...sos.rigorous import ANSWERED
 
@@ -79,6 +80,16 @@ class TermTable:
             raise InputError(f"family weights must name every term exactly once: missing {missing}, "
                              f"unknown {unknown}. Try: one weight per name in the step's term table.")
         return np.array([values[k] for k in self.names], dtype=float)
+
+
+def renamed_ids(P: PolyMatrix, old, new, vars) -> PolyMatrix:
+    """P with every decision id old[i] renamed new[i] (``old`` sorted, ``new`` in the same order;
+    other ids kept): component k's copy of a term that is linear in component 0's coefficients,
+    made from P's term arrays instead of by repeating the polynomial algebra."""
+    t = P.terms(vars)
+    pos = np.minimum(np.searchsorted(old, t.did), old.size - 1)
+    hit = old[pos] == t.did
+    return PolyMatrix.from_terms(t._replace(did=np.where(hit, new[pos], t.did)), P.shape, vars)
 
 
 def proximal(ids, center, weight) -> QuadraticForm:

@@ -11,9 +11,9 @@ with delta_d = delta for the margin's growth degree d and 0 for the other possib
 from __future__ import annotations
 
 from ...sos import SOSProgram
-from ..contraction import (contraction_degree, contraction_polymatrix, decision_fields, degree,
-                           margin_degree, margin_matrix, unit_metrics)
-from .common import LeastSquaresData, TermTable, solve_with_fallback
+from ..contraction import (contraction_degree, contraction_polymatrix, decision_fields, degree, margin_degree,
+                           margin_matrix, unit_metrics)
+from .common import LeastSquaresData, TermTable, renamed_ids, solve_with_fallback
 
 
 class DynamicsStep:
@@ -38,8 +38,11 @@ class DynamicsStep:
         self.unit_keys = [key for key, _ in units]
         grows = {("margin", d): margin_matrix(vars, n, d) for d in self.grow_degrees}
         self.tables, self.cons = [], []
-        for k, f in enumerate(decision_fields(self.ids.reshape(K, n, m), fexps, vars)):
-            terms = {("metric",) + key: contraction_polymatrix(f, E, vars, gamma, scale=-1.0) for key, E in units}
+        own = self.ids.reshape(K, n * m)        # ascending ids, as allocated
+        f0 = decision_fields(own[:1].reshape(1, n, m), fexps, vars)[0]
+        first = {("metric",) + key: contraction_polymatrix(f0, E, vars, gamma, scale=-1.0) for key, E in units}
+        for k in range(K):                      # component k: component 0's terms, ids renamed
+            terms = first if k == 0 else {name: renamed_ids(T, own[0], own[k], vars) for name, T in first.items()}
             table = TermTable({**terms, **{name: -g for name, g in grows.items()}})
             self.tables.append(table)
             self.cons.append(table.add(self.prog, f"contraction[{k}]"))
@@ -67,9 +70,13 @@ class DynamicsStep:
         sol = solve_with_fallback(self.prog, self.solver, self.affine_psd)
         return sol.values_of(self.ids).reshape(self.data.shape), sol
 
-    def refit(self, data: LeastSquaresData):
-        """Same metric and margins as the last solve, new data term (e.g. new GMM weights)."""
+    def use_data(self, data: LeastSquaresData) -> DynamicsStep:
+        """A new data term of the same shape (the constraints stay compiled)."""
         self.data = data
         self.prog.minimize(data.form(self.ids))
-        W, margin, grow = self.last
+        return self
+
+    def refit(self, data: LeastSquaresData):
+        """Same metric and margins as the last solve, new data term (e.g. new GMM weights)."""
+        W, margin, grow = self.use_data(data).last
         return self.solve(W, margin=margin, grow_degree=grow)

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...poly import PolyMatrix, Polynomial, jacobian
+from ...poly import PolyMatrix, Polynomial
 from ...poly.termarrays import Terms, concat_terms, terms_matmul, terms_scale, terms_transpose
 from ...sos import SOSProgram, svec_to_matrix
-from ..contraction import (contraction_degree, degree, margin_matrix, metric_exponents, symmetric_pairs,
+from ..contraction import (contraction_degree, degree, field_jacobian, margin_matrix, metric_exponents, symmetric_pairs,
                            unit_fields, unit_metrics)
-from .common import LeastSquaresData, TermTable, proximal, solve_with_fallback
+from .common import LeastSquaresData, TermTable, proximal, renamed_ids, solve_with_fallback
 
 
 def unit_sandwich(J: Terms, a, b) -> Terms:
@@ -65,21 +65,22 @@ class ICAStep:
     Terms of component k (J = J_k of the decision fields, J_c the unit Jacobians, E_ab the
     unit constant metrics), and their weights at the iterate (C0, P0):
 
-    ==========================  ==========================================  ==============
-    name                        term                                        weight
-    ==========================  ==========================================  ==============
-    "own"                       blocks (0,0) -gamma P, (1,0) J, (2,0) P     1
-    "margin"                    block (0,0) -g(z) I                         delta
-    ("J P0", ab)                block (0,0) -(J^T E_ab + E_ab J)            P0_ab
-    ("J0 P", c)                 block (0,0) -(J_c^T P + P J_c)              C0_c
-    ("J0 P0", ab)               block (0,0) E_ab                            S_ab (below)
-    ("J0", c)                   block (1,0) -J_c (linear c only)            C0_c
-    ("P0", ab)                  block (2,0) -E_ab                           P0_ab
-    "1/a", "a"                  blocks (1,1) I, (2,2) I                     1/a, a
-    ==========================  ==========================================  ==============
+    ==========================  ==================================================  ==============
+    name                        term                                                weight
+    ==========================  ==================================================  ==============
+    "own"                       blocks (0,0) -gamma P, (1,0) J, (2,0) P             1
+    "margin"                    block (0,0) -g(z) I                                 delta
+    ("P0", ab)                  blocks (0,0) -(J^T E_ab + E_ab J), (2,0) -E_ab      P0_ab
+    ("J0", c)                   blocks (0,0) -(J_c^T P + P J_c), (1,0) -J_c         C0_c
+                                (the (1,0) block for linear c only)
+    ("J0 P0", ab)               block (0,0) E_ab                                    S_ab (below)
+    "1/a", "a"                  blocks (1,1) I, (2,2) I                             1/a, a
+    ==========================  ==================================================  ==============
 
-    J0l = sum_c C0_c J_c over the linear c is a number matrix, so the terms J_c^T E_ab + E_ab J_c
-    (weights C0_c P0_ab) are summed into n(n+1)/2 terms E_ab: one per entry of the symmetric
+    Parts with the same weight are one term (the blocks are disjoint, so the family's sum is
+    unchanged): n(n+1)/2 + n m + n(n+1)/2 + 4 terms per component. J0l = sum_c C0_c J_c over the
+    linear c is a number matrix, so the parts J_c^T E_ab + E_ab J_c (weights C0_c P0_ab) are
+    summed into n(n+1)/2 terms E_ab: one per entry of the symmetric
     S = J0l^T P0 + P0 J0l = sum_{a <= b} S_ab E_ab.
     """
 
@@ -98,44 +99,48 @@ class ICAStep:
         E = {(a, b): E for (a, b, _), E in unit_metrics(metric_exponents(n, 0), n, vars)}
         self.pairs = symmetric_pairs(n)
         units = unit_fields(fexps, n, vars)
-        Ju = [jacobian(u, vars) for _, u in units]                      # unit Jacobians (numeric)
+        Ju = [field_jacobian(u, vars) for _, u in units]                # unit Jacobians (numeric)
         self.lin_units = [c for c, ((_, j), _) in enumerate(units) if self.linear[j]]
         I = PolyMatrix.identity(n)
         grow = margin_matrix(vars, n, contraction_degree(0, degree(fexps)))
         margin_term = _blocks(n, {(0, 0): -grow}, vars)
         Pt = P.terms(vars)
-        shared = {("J0 P", c): _blocks(n, {(0, 0): terms_scale(sandwich(Jc.terms(vars), Pt), -1.0)}, vars)
+        lin_units = set(self.lin_units)
+        shared = {("J0", c): _blocks(n, {(0, 0): terms_scale(sandwich(Jc.terms(vars), Pt), -1.0),
+                                         **({(1, 0): -Jc} if c in lin_units else {})}, vars)
                   for c, Jc in enumerate(Ju)}
         shared.update({("J0 P0", ab): _blocks(n, {(0, 0): E[ab]}, vars) for ab in self.pairs})
-        shared.update({("J0", c): _blocks(n, {(1, 0): -Ju[c]}, vars) for c in self.lin_units})
-        shared.update({("P0", ab): _blocks(n, {(2, 0): -E[ab]}, vars) for ab in self.pairs})
         shared.update({"1/a": _blocks(n, {(1, 1): I}, vars), "a": _blocks(n, {(2, 2): I}, vars)})
         self.tables, self.cons = [], []
-        lin_ids = self.ids.reshape(K, n, -1)
-        for k in range(K):
-            f_lin = [Polynomial(vars, fexps[self.linear], np.hstack([np.zeros((n, 1)), np.eye(n)]), lin_ids[k, i])
-                     for i in range(n)]
-            J = jacobian(f_lin, vars)
-            own = _blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P}, vars)
-            Jt = J.terms(vars)
-            own_p0 = {("J P0", ab): _blocks(n, {(0, 0): terms_scale(unit_sandwich(Jt, *ab), -1.0)}, vars)
-                      for ab in self.pairs}
-            table = TermTable({"own": own, "margin": margin_term, **own_p0, **shared})
+        lin_ids = self.ids.reshape(K, -1)                               # ascending ids, as allocated
+        f_lin = [Polynomial(vars, fexps[self.linear], np.hstack([np.zeros((n, 1)), np.eye(n)]), ids)
+                 for ids in lin_ids[0].reshape(n, -1)]
+        J = field_jacobian(f_lin, vars)
+        first = {"own": _blocks(n, {(0, 0): -gamma * P, (1, 0): J, (2, 0): P}, vars)}
+        first.update({("P0", ab): _blocks(n, {(0, 0): terms_scale(unit_sandwich(J.terms(vars), *ab), -1.0),
+                                              (2, 0): -E[ab]}, vars) for ab in self.pairs})
+        for k in range(K):                      # component k: component 0's terms, ids renamed
+            own = first if k == 0 else {name: renamed_ids(T, lin_ids[0], lin_ids[k], vars) for name, T in first.items()}
+            table = TermTable({"own": own["own"], "margin": margin_term,
+                               **{name: T for name, T in own.items() if name != "own"}, **shared})
             self.tables.append(table)
             self.cons.append(table.add(self.prog, f"ica[{k}]"))
         self.margin = margin
+
+    def use_data(self, data: LeastSquaresData) -> ICAStep:
+        """A new data term of the same shape (the constraints stay compiled)."""
+        self.data = data
+        return self
 
     def weights(self, c0, P0, alpha) -> dict:
         """The family weights by name at the iterate (fields c0 = C0[k].ravel(), metric P0)."""
         p0 = {ab: P0[ab] for ab in self.pairs}
         out = {"own": 1.0, "margin": self.margin, "1/a": 1.0 / alpha, "a": alpha}
-        out.update({("J P0", ab): p0[ab] for ab in self.pairs})
-        out.update({("J0 P", c): c0[c] for c in range(c0.size)})
+        out.update({("P0", ab): p0[ab] for ab in self.pairs})
+        out.update({("J0", c): c0[c] for c in range(c0.size)})
         J0l = c0.reshape(self.n, -1)[:, self.linear] @ self.lin_exps
         S = J0l.T @ P0 + P0 @ J0l
         out.update({("J0 P0", ab): S[ab] for ab in self.pairs})
-        out.update({("J0", c): c0[c] for c in self.lin_units})
-        out.update({("P0", ab): p0[ab] for ab in self.pairs})
         return out
 
     def solve(self, C0, P0, alpha=1.0, prox=1e-4):

@@ -21,4 +21,4 @@ def test_summary_rebuilt_from_json_equals_the_written_one(tmp_path):
     for r in scal["rows"]:                       # full default (corrective refits) >= its core fit
         assert r["full"] > r["total"] > 0
     assert scal["goals"]["full_ratio"] == pytest.approx(scal["rows"][1]["full"] / scal["rows"][0]["full"])
-    assert "core fit (`corrective_rounds=0`" in written and "| full default |" in written
+    assert "core fit (one plain fit: no warp, no corrective refits" in written and "| full default |" in written
