@@ -85,7 +85,9 @@ def test_newcomer_csv_folder_fit_plot_export(capsys, tmp_path):
     content = json.loads(model.read_text())
     history = content["state"]["history_"]
     per_warp = {w: [int(s[1]) for s in steps if s[0] == w] for w in ("none", *AUTO_WARPS)}
-    assert {s[0] for s in steps} == set(per_warp) and len(steps) == sum(map(len, per_warp.values()))
+    # (a candidate whose bumps equal an earlier one's reuses that fit and prints no steps of its own)
+    assert {"none", *list(AUTO_WARPS)[:1]} <= {s[0] for s in steps} <= set(per_warp)
+    assert len(steps) == sum(map(len, per_warp.values()))
     # one plain line per convex step of every candidate of warp="auto"; the kept one's are the file's history
     assert [r["iteration"] + 1 for r in history] in per_warp.values() and len(history) >= 2
     assert "3 demonstrations of demos" in out and "certificate: passed" in out

@@ -40,6 +40,9 @@ from sosdyn.lfd.rollout import euler_until_rest
 
 TRAIN_DEMOS = (0, 1, 2, 3)          # 0-based indices of the training demonstrations (1-4)
 TEST_DEMOS = (4, 5, 6)              # and of the test demonstrations (5-7)
+#: Named splits, name -> (train, test) 0-based indices: the protocol's, and the one that swaps the
+#: roles of the two ends (train on demos 4-7, test on 1-3) to check that a choice holds on other data.
+SPLITS = {"standard": (TRAIN_DEMOS, TEST_DEMOS), "swapped": ((3, 4, 5, 6), (0, 1, 2))}
 SAMPLE_STEP = 2                     # keep every 2nd sample
 START_INDEX = 19                    # reproductions start at the 20th kept point
 DT, MAX_STEPS, VEL_TOL, WINDOW = 0.01, 3000, 0.1, 4
@@ -56,8 +59,9 @@ SINGLE_PATTERN_SHAPES = (
 # ---------------------------------------------------------------- train / test split
 
 
-def split(demos) -> tuple[Demonstrations, Demonstrations]:
-    """Protocol step 1: (train, test) = demonstrations 1-4 and 5-7, every 2nd sample kept.
+def split(demos, train=TRAIN_DEMOS, test=TEST_DEMOS) -> tuple[Demonstrations, Demonstrations]:
+    """Protocol step 1: (train, test) = the demonstrations at the 0-based indices ``train`` and
+    ``test`` (default 1-4 and 5-7; :data:`SPLITS` names others), every 2nd sample kept.
 
     Sample k of a kept demonstration is sample 2k of the original (k = 0, 1, ...; the last
     original sample is dropped when T is even, as MATLAB's ``1:2:end`` drops it), with its
@@ -65,11 +69,16 @@ def split(demos) -> tuple[Demonstrations, Demonstrations]:
     subsampling changes which instants are kept, not what was measured at them.
     """
     items = list(demos)
-    needed = max(TEST_DEMOS) + 1
+    train, test = tuple(train), tuple(test)
+    if not train or not test or set(train) & set(test) or not all(
+            isinstance(i, (int, np.integer)) and i >= 0 for i in train + test):
+        raise InputError(f"train {train} and test {test} must be non-empty, disjoint tuples of 0-based "
+                         "demonstration indices. Try: one of sosdyn.evaluation.dsopt.SPLITS.")
+    needed = max(train + test) + 1
     if len(items) < needed:
         raise InputError(
-            f"The protocol needs {needed} demonstrations (train 1-4, test 5-7), got {len(items)}. "
-            "Try: a LASA shape (sosdyn.load_lasa), which has 7.")
+            f"The split needs {needed} demonstrations (train {[i + 1 for i in train]}, test "
+            f"{[i + 1 for i in test]}), got {len(items)}. Try: a LASA shape (sosdyn.load_lasa), which has 7.")
     for i, d in enumerate(items):
         if not isinstance(d, Demonstration):
             raise InputError(f"Item {i} is a {type(d).__name__}, not a Demonstration.")
@@ -80,7 +89,7 @@ def split(demos) -> tuple[Demonstrations, Demonstrations]:
             [Demonstration(d.t[::SAMPLE_STEP], d.pos[::SAMPLE_STEP], d.vel[::SAMPLE_STEP], d.source)
              for d in (items[i] for i in indices)], name, units)
 
-    return keep(TRAIN_DEMOS), keep(TEST_DEMOS)
+    return keep(train), keep(test)
 
 
 def start_points(demos) -> np.ndarray:
@@ -153,8 +162,9 @@ def select_fit(fit_fns: Mapping[str, Callable], train) -> tuple[str, object, dic
     return best, models[best], scores
 
 
-def evaluate_shape(fit_fn: Callable, demos) -> dict:
-    """The whole protocol on one shape's demonstrations (7, e.g. ``sosdyn.load_lasa(name)``).
+def evaluate_shape(fit_fn: Callable, demos, train=TRAIN_DEMOS, test=TEST_DEMOS) -> dict:
+    """The whole protocol on one shape's demonstrations (7, e.g. ``sosdyn.load_lasa(name)``),
+    split by :func:`split` with ``train`` / ``test`` (default demos 1-4 / 5-7).
 
     ``fit_fn(train)`` gets the training :class:`Demonstrations` and returns a field
     ``X (m, n) -> Xdot (m, n)`` or a model with ``.predict`` (its goal is its own). Returns
@@ -165,7 +175,7 @@ def evaluate_shape(fit_fn: Callable, demos) -> dict:
     and ``reproduce_s`` (wall time, s). A reproduction that diverges (SolverError) scores inf
     and its message is kept in ``failure``.
     """
-    train, test = split(demos)
+    train, test = split(demos, train, test)
     t0 = time.perf_counter()
     model = fit_fn(train)
     fit_s = time.perf_counter() - t0
@@ -208,6 +218,14 @@ def load_seds_published(path) -> dict[str, dict[str, float]]:
 
 
 __all__ = [
-    "SINGLE_PATTERN_SHAPES", "split", "start_points", "euler_reproduce",
-    "nearest_demo_score", "reproduction_scores", "select_fit", "evaluate_shape", "load_seds_published",
+    "SINGLE_PATTERN_SHAPES",
+    "SPLITS",
+    "euler_reproduce",
+    "evaluate_shape",
+    "load_seds_published",
+    "nearest_demo_score",
+    "reproduction_scores",
+    "select_fit",
+    "split",
+    "start_points",
 ]

@@ -45,7 +45,7 @@ from .corrective import MIN_DIST, ROUNDS, TAU
 from .data import check_demonstrations, sample_step
 from .evaluator import StatePredictor
 from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost
-from .learner import History, Settings, learn, subsample
+from .learner import History, Settings, learn, reuse_steps, subsample
 from .model_io import FORMAT, VERSION, write_model_file
 from .model_state import STATE_FIELDS, state_record
 from .params import (
@@ -180,7 +180,7 @@ class CDSP:
         BLAS runs single-threaded inside: every matrix here is small, and a multi-threaded
         OpenBLAS spin-waits on small problems (measured 10-100x slower on 2 loaded cores).
         """
-        with threadpool_limits(limits=1, user_api="blas"):
+        with threadpool_limits(limits=1, user_api="blas"), reuse_steps():    # one compile per step structure
             return self._fit(demos)
 
     def _fit(self, demos):
@@ -195,14 +195,19 @@ class CDSP:
                               fit_warp([(d.t, d.pos) for d in demos], demos.goal, settings), t_start)
 
     def _fit_auto(self, demos, t_start):
-        """warp="auto": :func:`~.rounds.warp_choice` among no warp and AUTO_WARPS (same seed)."""
+        """warp="auto": :func:`~.rounds.warp_choice` among no warp and AUTO_WARPS (same seed); a
+        candidate whose fitted bumps equal an earlier one's (the greedy fit stopped early) reuses its fit."""
         seed = resolve_seed(self.random_state)
+        fitted = {}
 
         def fit_candidate(name, settings):
             tagged = None if self.progress is None else (lambda row: self.progress(dict(row, warp=name)))
             maps = None if settings is None else fit_warp([(d.t, d.pos) for d in demos], demos.goal, settings)
-            return CDSP(**dict(self.get_params(), random_state=seed, progress=tagged))._fit_core(
-                demos, maps, time.perf_counter())
+            key = None if maps is None else b"".join(np.ascontiguousarray(a).tobytes() for a in maps)
+            if key not in fitted:
+                fitted[key] = CDSP(**dict(self.get_params(), random_state=seed, progress=tagged))._fit_core(
+                    demos, maps, time.perf_counter())
+            return fitted[key]
 
         kept, self.warp_scores_ = warp_choice(fit_candidate, {"none": None, **AUTO_WARPS}, demos)
         self.__dict__.update({k: v for k, v in vars(kept).items() if k.endswith("_") and k != "warp_scores_"})

@@ -61,7 +61,8 @@ def corrective_fits(fit_round: Callable, demos: Demonstrations, n_rounds: int, t
 def warp_choice(fit_candidate: Callable, candidates: dict, demos: Demonstrations):
     """``fit_candidate(name, settings)`` for every ``candidates`` item (settings None: no warp, must
     certify; a warped candidate that does not certify scores inf), each scored by
-    :func:`~.corrective.demo_score`. Returns (the kept model, {name: score})."""
+    :func:`~.corrective.demo_score` (once per distinct model: a candidate may return an earlier
+    one's fit). Returns (the kept model, {name: score}); ties: the first candidate."""
     fits, scores = {}, {}
     for name, settings in candidates.items():
         try:
@@ -71,7 +72,9 @@ def warp_choice(fit_candidate: Callable, candidates: dict, demos: Demonstrations
                 raise
             scores[name] = float("inf")
             continue
-        scores[name] = demo_score(lambda X, m=fits[name]: m.field(X, m.goal_), demos)
+        same = next((n for n in fits if n != name and fits[n] is fits[name]), None)
+        scores[name] = scores[same] if same is not None else demo_score(
+            lambda X, m=fits[name]: m.field(X, m.goal_), demos)
     return fits[min(fits, key=lambda w: (not fits[w].certified_, scores[w]))], scores
 
 

@@ -7,6 +7,7 @@ import pytest
 
 from sosdyn.errors import InputError, ModelFileError
 from sosdyn.evaluation.metrics import dtwd
+from sosdyn.lfd import cdsp as cdsp_module
 from sosdyn.lfd.cdsp import CDSP
 from sosdyn.lfd.corrective import rollout_deviation
 from sosdyn.lfd.data import Demonstration, Demonstrations
@@ -17,6 +18,7 @@ from sosdyn.lfd.rollout import euler_until_rest
 from sosdyn.lfd.warp import (
     AUTO_WARPS,
     LIP_FACTOR,
+    WARP_DEFAULTS,
     apply,
     check_maps,
     fit_maps,
@@ -192,6 +194,19 @@ def test_auto_keeps_the_candidate_of_lowest_training_score(hook_models):
     X = np.random.default_rng(4).uniform(-2, 2, (50, 2))
     assert np.array_equal(auto.predict(X), fixed.predict(X))
     assert auto.warp == "auto" and auto.verification_.passed
+
+
+def test_auto_fits_each_distinct_warp_once(hook_models, monkeypatch):
+    """Two candidates whose greedy fits give the same bumps (here: the same settings) share one core
+    fit and one score; a third, different one gets its own."""
+    monkeypatch.setattr(cdsp_module, "AUTO_WARPS", {"a": dict(WARP_DEFAULTS, n_maps=10), "b": dict(
+        WARP_DEFAULTS, n_maps=10), "c": dict(WARP_DEFAULTS, n_maps=5)})
+    calls = []
+    core = CDSP._fit_core
+    monkeypatch.setattr(CDSP, "_fit_core", lambda self, *a: calls.append(a[1]) or core(self, *a))
+    scores = CDSP(**CDSP_SMALL).fit(hook_models[0]).warp_scores_
+    assert [None if m is None else len(m[2]) for m in calls] == [None, 10, 5]
+    assert scores["a"] == scores["b"] != scores["c"] and np.isfinite(list(scores.values())).all()
 
 
 def test_auto_keeps_no_warp_where_it_reproduces_best(linear_demos):

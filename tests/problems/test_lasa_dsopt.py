@@ -7,6 +7,7 @@ import math
 import pytest
 
 from problems import lasa_dsopt
+from problems.lasa_dsopt_report import demo_names, figure_caption
 
 DEFAULT = "CDSP default"
 ENTRY_KEYS = {"dtwd_test_mean", "dtwd_test_std", "dtwd_test", "dtwd_train_mean", "ratio_to_nearest",
@@ -102,3 +103,12 @@ def test_three_shapes_default_and_selection_under_measured_bounds(tmp_path):
         train = {c: lasa_dsopt.run_job(shape, c, 0, False, tmp_path / "cache", False)["dtwd_train_mean"]
                  for c in lasa_dsopt.SELECTIONS[selected]}
         assert entry["selected"] == min(train, key=train.get)
+
+
+def test_published_references_only_on_the_standard_split():
+    """LPV-DS / SEDS means are published for train 1-4 / test 5-7: another split's figure and page
+    name its own test demos and draw no published lines."""
+    assert demo_names((4, 5, 6)) == "5-7" and demo_names([0, 1, 2]) == "1-3"
+    assert "LPV-DS (PC-GMM) 26-shape mean 1749" in figure_caption(1, True)
+    swapped = figure_caption(1, False, references=False)
+    assert "1749" not in swapped and "3954" not in swapped and "no published references" in swapped
