@@ -32,7 +32,7 @@ from . import lasa_warp as warp
 from .cache import key_hash
 from .jobs import add_scheduler_argument, parallel_map
 from .jsonio import jsonable, write_json
-from .lasa_dsopt_report import REFERENCE, figure, figure_caption, fmt, write_html
+from .lasa_dsopt_report import REFERENCE, figure, figure_caption, figure_variants, fmt, write_html
 from .settings import REPO, REPORTS
 
 OUT = REPORTS / "lasa_dsopt"
@@ -266,7 +266,8 @@ def run(shapes, variants=ALL_VARIANTS, *, seeds: int = 1, quick: bool = False, o
     paths = figure(per_shape, variants, seds, out_dir, dsopt.SPLITS[split][1], references=split == STANDARD)
     results["figures"] = {"lasa_dsopt": {
         "png": "figures/lasa_dsopt.png", "svg": "figures/lasa_dsopt.svg",
-        "caption": figure_caption(seeds, bool(seds), references=split == STANDARD)}}
+        "caption": figure_caption(seeds, bool(seds), references=split == STANDARD,
+                                  drawn=figure_variants(variants))}}
     results["meta"]["wall_s"] = time.perf_counter() - t0
     write_json(out_dir / "results.json", results)
     return {"results": out_dir / "results.json", "html": write_html(results, out_dir), **paths}

@@ -32,9 +32,24 @@ def demo_names(indices) -> str:
     return f"{indices[0] + 1}-{indices[-1] + 1}"
 
 
-def figure_caption(seeds: int, with_seds: bool, references: bool = True) -> str:
-    return ("Per-shape test DTWD (log scale) of the paper's CDSP, the default's plain fit, the default (its choice"
-            " of diffeomorphic pre-warp) and the selection among corrective refits (every variant is in the table)"
+#: The variants the figure draws when present (the per-shape table lists every variant).
+FIGURE_VARIANTS = ("CDSP paper", "CDSP plain", "CDSP default", "CDSP corrective selected")
+MARKERS = "os^v<>ph"
+
+
+def figure_variants(variants) -> list:
+    """The variants the figure draws: all of a small run (<= 4), else the FIGURE_VARIANTS present (else
+    the first len(MARKERS) run)."""
+    variants = list(variants)
+    if len(variants) <= 4:
+        return variants
+    return [v for v in FIGURE_VARIANTS if v in variants] or variants[:len(MARKERS)]
+
+
+def figure_caption(seeds: int, with_seds: bool, references: bool = True, drawn=FIGURE_VARIANTS) -> str:
+    what = ("the paper's CDSP, the default's plain fit, the default (its choice of diffeomorphic pre-warp) and "
+            "the selection among corrective refits" if tuple(drawn) == FIGURE_VARIANTS else ", ".join(drawn))
+    return (f"Per-shape test DTWD (log scale) of {what} (every variant is in the table)"
             + (" (mean ± std over seeds)" if seeds > 1 else "") + ", the nearest training demo (open diamonds)"
             + (" and SEDS as published (crosses)" if with_seds else "")
             + (f"; dashed: LPV-DS (PC-GMM) 26-shape mean {REFERENCE['LPV-DS PC-GMM']:.0f}, "
@@ -42,9 +57,6 @@ def figure_caption(seeds: int, with_seds: bool, references: bool = True) -> str:
                "; no published references: they are for the standard split."))
 
 
-#: The variants the figure draws when present (the per-shape table lists every variant).
-FIGURE_VARIANTS = ("CDSP paper", "CDSP plain", "CDSP default", "CDSP corrective selected")
-MARKERS = "os^v<>ph"
 
 
 @styled
@@ -55,7 +67,7 @@ def figure(per_shape: dict, variants, seds: dict | None, out_dir: Path, test_dem
     as markers, the LPV-DS and SEDS 26-shape means as lines (``references``: published for the
     standard split only)."""
     shapes = list(per_shape)
-    variants = [v for v in FIGURE_VARIANTS if v in variants] or list(variants)[:len(MARKERS)]
+    variants = figure_variants(variants)
     fig = new_figure(max(7.0, 0.42 * len(shapes) + 2), 4.2)
     ax = fig.add_subplot()
     x = np.arange(len(shapes))
