@@ -235,7 +235,7 @@ class AffineCones:
         target[R] = cat([start[k] + np.arange(sizes[k]) for k in gone])
         d[R] = A.data[A.indptr[cat([data.psd[k][0] for k in gone])]]
         h[target[R]] = data.b_eq[R] / d[R]
-        A_col = np.repeat(np.arange(data.n), np.diff(A.indptr))
+        A_col = column_of_entries(A)
         e = ~self.keep_rows[A.indices] & keep[A_col]     # entries of eliminated rows on kept variables
         r = np.concatenate([r, target[A.indices[e]]])
         c = np.concatenate([c, col[A_col[e]]])
