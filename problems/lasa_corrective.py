@@ -1,5 +1,5 @@
 """Corrective-data variants of the ds-opt LASA run (problems.lasa_dsopt): CDSP with
-``corrective_rounds`` refits on its own training rollouts' departures (sosdyn.lfd.corrective; the
+``corrective_rounds`` refits on its own training rollouts' departures (sosdyn.lfd.fit.corrective; the
 round kept by the rollouts' nearest-point deviation from demos 1-4, training data only).
 
 "CDSP corrective" is ICA, K = 8 (the default's core) with 2 rounds and no warp, the others
@@ -9,7 +9,7 @@ among the three by the protocol's training-reproduction DTWD.
 from __future__ import annotations
 
 import sosdyn as sd
-from sosdyn.lfd.params import PRESETS
+from sosdyn.lfd.fit.params import PRESETS
 
 ROUNDS = {"corrective_rounds": 2, "warp": "none"}       # no warp: the variants as measured before it existed
 

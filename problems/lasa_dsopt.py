@@ -25,7 +25,7 @@ import numpy as np
 import sosdyn as sd
 from sosdyn.errors import SosdynError
 from sosdyn.evaluation import dsopt
-from sosdyn.lfd.params import PLAIN, PRESETS
+from sosdyn.lfd.fit.params import PLAIN, PRESETS
 
 from . import lasa_corrective as corrective
 from . import lasa_warp as warp

@@ -1,13 +1,13 @@
 """Diffeomorphic pre-warp variants of the ds-opt LASA run (problems.lasa_dsopt): ``CDSP(warp=settings)``,
-a CDSP fitted in coordinates u = phi(z) (sosdyn.lfd.warp), phi a composition of Gaussian bumps that
+a CDSP fitted in coordinates u = phi(z) (sosdyn.lfd.fit.warp), phi a composition of Gaussian bumps that
 pulls the mean training demonstration onto a path along which |u| never increases.
 
 Hyper-parameters from the TRAINING demos only (random_state 0, no corrective rounds, 26 shapes; numbers
 in docs/accuracy-log.md): of n_maps 15 / 30 / 60 / 100, "mean" / "each" curves and decay 0 / 0.25 /
 0.5 / 0.75 / 1, 100 maps with decay 0.75 had the lowest training-reproduction DTWD (the warp's
-defaults, sosdyn.lfd.warp.WARP_DEFAULTS, "CDSP plain warped"); among the selections {plain fit, warp A,
+defaults, sosdyn.lfd.fit.warp.WARP_DEFAULTS, "CDSP plain warped"); among the selections {plain fit, warp A,
 warp B} the lowest training mean is plain + 60 maps decay 0.75 + 60 maps decay 1 ("CDSP warped
-selected"; these two warps are CDSP()'s warp="auto" candidates, sosdyn.lfd.warp.AUTO_WARPS, chosen there
+selected"; these two warps are CDSP()'s warp="auto" candidates, sosdyn.lfd.fit.warp.AUTO_WARPS, chosen there
 by the rollouts' deviation rather than the protocol's DTWD). "CDSP warped selected 6" adds 30 maps
 d = 0.75 and d = 1 and 60 maps d = 0.9: under the protocol's rule, the candidate set of lowest 3-seed
 TRAINING mean measured (docs/accuracy-log.md, session 6).
@@ -17,8 +17,8 @@ computed by the former separate estimator (the warp in data coordinates) are not
 """
 from __future__ import annotations
 
-from sosdyn.lfd.params import PLAIN
-from sosdyn.lfd.warp import AUTO_WARPS, WARP_DEFAULTS
+from sosdyn.lfd.fit.params import PLAIN
+from sosdyn.lfd.fit.warp import AUTO_WARPS, WARP_DEFAULTS
 
 WARP_KEY_VERSION = 2            # 2: the warp inside CDSP, in its normalised coordinates z
 D075, D1 = AUTO_WARPS.values()

@@ -16,7 +16,7 @@ import numpy as np
 import sosdyn as sd
 from sosdyn.evaluation.baselines import GMR
 from sosdyn.evaluation.metrics import dtwd, velocity_rmse
-from sosdyn.lfd.params import PLAIN
+from sosdyn.lfd.fit.params import PLAIN
 
 from .settings import PAPER_SHAPES, REPORTS
 

@@ -19,8 +19,8 @@ import numpy as np
 import sosdyn as sd
 from sosdyn.evaluation import dsopt
 from sosdyn.evaluation.metrics import dtwd
-from sosdyn.lfd.params import PLAIN
-from sosdyn.lfd.warp import apply
+from sosdyn.lfd.fit.params import PLAIN
+from sosdyn.lfd.fit.warp import apply
 from sosdyn.report.figures import save_figure, streamlines
 from sosdyn.report.figures.style import new_figure
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
-from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.poly import PolyMatrix
 
 
@@ -117,7 +117,7 @@ def test_model_boundary(fitted, what, call, match):
     ("edited array", lambda d: d["state"]["C_"][0][0].__setitem__(0, 3.0), "checksum"),
     ("wrong format", lambda d: d.__setitem__("format", "other"), "not a sosdyn-cdsp"),
     ("future version", lambda d: d.__setitem__("version", 99), "version"),
-    ("missing state", lambda d: (d.__setitem__("state", {}), d.__setitem__("sha256", __import__("sosdyn.lfd.model_io", fromlist=["_digest"])._digest({k: v for k, v in d.items() if k != "sha256"}))), "malformed"),
+    ("missing state", lambda d: (d.__setitem__("state", {}), d.__setitem__("sha256", __import__("sosdyn.lfd.model.fileformat", fromlist=["_digest"])._digest({k: v for k, v in d.items() if k != "sha256"}))), "malformed"),
 ])
 def test_tampered_model_files(fitted, tmp_path, what, edit, match):
     with pytest.raises(sd.ModelFileError, match=match):

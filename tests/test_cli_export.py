@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
-from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 
 from cli_support import run
 

@@ -13,7 +13,7 @@ from cli_support import assert_one_error_line, run
 
 import sosdyn as sd
 from sosdyn.cli.fit import progress_line
-from sosdyn.lfd.warp import AUTO_WARPS
+from sosdyn.lfd.fit.warp import AUTO_WARPS
 
 DT = 0.02
 

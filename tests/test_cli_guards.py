@@ -17,7 +17,7 @@ import sosdyn as sd
 from sosdyn.cli import paths as cli_paths
 from sosdyn.cli import error_line, main
 from sosdyn.errors import DemonstrationError, InputError, ModelFileError
-from sosdyn.lfd.model_io import FORMAT, VERSION
+from sosdyn.lfd.model.fileformat import FORMAT, VERSION
 from sosdyn.limits import json_text_depth
 
 TRY_RESULTS = "Try: pass the results.json"

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from sosdyn.errors import SosdynError
-from sosdyn.lfd import lasa
+from sosdyn.lfd.data import lasa
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")

@@ -3,9 +3,9 @@ model's fields) and theirs (the same program written for SumOfSquares.py)."""
 from __future__ import annotations
 
 from sosdyn.lfd import CDSP, load_lasa
-from sosdyn.lfd.contraction import contraction_degree, degree, metric_exponents, state_variables
-from sosdyn.lfd.params import PLAIN
-from sosdyn.lfd.steps import MetricStep
+from sosdyn.lfd.fit.contraction import contraction_degree, degree, metric_exponents, state_variables
+from sosdyn.lfd.fit.params import PLAIN
+from sosdyn.lfd.fit.steps import MetricStep
 
 from .sos_problems import SPARSE
 

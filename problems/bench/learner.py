@@ -3,7 +3,7 @@
 * per-fit timings for the four paper shapes (BendedLine, DoubleBendedLine, Leaf_1, Leaf_2 with
   K = 6/7/6/6) and four variants: linear + ICA, the paper formulation (metric degree 2,
   alternating), cubic fields + degree-2 metric -- each the learner's core fit
-  (one plain fit: ``sosdyn.lfd.params.PLAIN``, no warp, no corrective refits) -- and the default's
+  (one plain fit: ``sosdyn.lfd.fit.params.PLAIN``, no warp, no corrective refits) -- and the default's
   full fit, linear + ICA with its choice of warp (three fits);
 * scaling sweeps (log-log plots): K, metric degree, field degree, number of demonstration
   samples; the default fit against the dimension n = 2..7 with the issue-14 goals (:mod:`.scaling_n`);
@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from sosdyn.lfd import CDSP, load_lasa
-from sosdyn.lfd.params import PLAIN, PRESETS
+from sosdyn.lfd.fit.params import PLAIN, PRESETS
 from sosdyn.poly import monomials_up_to
 from sosdyn.report.figures import save_figure, scaling_plot
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from sosdyn import CDSP, load_lasa
-from sosdyn.lfd.params import PLAIN
+from sosdyn.lfd.fit.params import PLAIN
 
 from ..settings import BENCH
 from .timing import environment, median, write_json

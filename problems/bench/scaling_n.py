@@ -30,10 +30,10 @@ import warnings
 from pathlib import Path
 
 from sosdyn.lfd import CDSP
-from sosdyn.lfd.contraction import state_variables
-from sosdyn.lfd.learner import least_squares_data, subsample
-from sosdyn.lfd.params import PLAIN, preset_params
-from sosdyn.lfd.steps import DynamicsStep
+from sosdyn.lfd.fit.contraction import state_variables
+from sosdyn.lfd.fit.learner import least_squares_data, subsample
+from sosdyn.lfd.fit.params import PLAIN, preset_params
+from sosdyn.lfd.fit.steps import DynamicsStep
 from sosdyn.report.figures import save_figure, scaling_plot
 from sosdyn.sos.verification import verify_certificate
 

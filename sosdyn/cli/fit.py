@@ -19,9 +19,9 @@ import typer
 from rich.markup import escape
 
 from ..errors import InputError
-from ..lfd.cdsp import DEFAULTS
-from ..lfd.data import GOAL_TOL_FRACTION, MAX_UNITS_CHARS
-from ..lfd.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
+from ..lfd.model.cdsp import DEFAULTS
+from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, MAX_UNITS_CHARS
+from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from .base import State, app, err, info, out, positive
 from .paths import check_folder, check_output, demo_inputs
 

@@ -65,8 +65,8 @@ def export_model(
     `bool predict(const double* x, double* xdot)`."""
     import sosdyn as sd
 
-    from ..lfd.export import export as generate
-    from ..lfd.model_io import replace_atomically
+    from ..lfd.runtime.export import export as generate
+    from ..lfd.model.fileformat import replace_atomically
 
     existing(model_path, "model file")
     check_output(out_path, [model_path], "model file")

@@ -35,7 +35,7 @@ import numpy as np
 
 from sosdyn.errors import InputError, SolverError
 from sosdyn.evaluation.metrics import curve, dtwd
-from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.rollout import euler_until_rest
 
 TRAIN_DEMOS = (0, 1, 2, 3)          # 0-based indices of the training demonstrations (1-4)

@@ -12,7 +12,7 @@ import numpy as np
 
 from sosdyn.errors import InputError, SosdynError
 from sosdyn.limits import check_bytes
-from sosdyn.lfd.data import Demonstration, Demonstrations, resample_in_time
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, resample_in_time
 
 
 def curve(x, what: str) -> np.ndarray:

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from sosdyn.evaluation.metrics import DTWDistance, warping_path_length
-from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.rollout import rollout
 
 GOAL = np.array([1.0, -2.0])

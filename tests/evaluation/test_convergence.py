@@ -6,7 +6,7 @@ import pytest
 from sosdyn.errors import InputError, SolverError
 from sosdyn.evaluation.convergence import (grid_convergence, grid_convergence_batched,
                                            grid_convergence_budget, grid_starts)
-from sosdyn.lfd.data import Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstrations
 from sosdyn.lfd.rollout import rollout
 
 

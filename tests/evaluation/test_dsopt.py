@@ -17,8 +17,8 @@ from sosdyn.evaluation.dsopt import (
     split,
     start_points,
 )
-from sosdyn.lfd.data import Demonstration, Demonstrations
-from sosdyn.lfd.lasa import lasa_names, load_lasa
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
+from sosdyn.lfd.data.lasa import lasa_names, load_lasa
 
 
 # ---------------------------------------------------------------- Euler reproduction

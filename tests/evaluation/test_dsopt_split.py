@@ -8,7 +8,7 @@ import pytest
 from problems import lasa_dsopt
 from sosdyn.errors import InputError
 from sosdyn.evaluation.dsopt import SPLITS, evaluate_shape, split
-from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 
 
 def tagged_demos(T: int = 60) -> Demonstrations:

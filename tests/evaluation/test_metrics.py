@@ -8,7 +8,7 @@ import pytest
 from sosdyn.errors import InputError, ResourceLimitError
 from sosdyn.evaluation.metrics import dtwd, edot, goal_error, quadrilateral_areas, sea, velocity_rmse
 from sosdyn.limits import limits
-from sosdyn.lfd.data import Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstrations
 from sosdyn.lfd.rollout import Trajectory
 
 

@@ -12,7 +12,7 @@ from sosdyn.evaluation.perturbations import (
     robustness,
     shifted_reference,
 )
-from sosdyn.lfd.data import Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstrations
 from sosdyn.lfd.rollout import Trajectory
 
 

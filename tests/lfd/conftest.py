@@ -4,9 +4,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from sosdyn.errors import SosdynError
-from sosdyn.lfd import lasa
-from sosdyn.lfd.cdsp import CDSP
-from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.data import lasa
+from sosdyn.lfd.model.cdsp import CDSP
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 
 # A linear system that contracts in a non-identity metric only: eigenvalues -1, -1 but
 # A + A^T has eigenvalue +2, so the quadratic Lyapunov V = |x|^2 (SEDS) cannot certify it.

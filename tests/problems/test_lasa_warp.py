@@ -4,7 +4,7 @@ import pytest
 import sosdyn as sd
 from problems import lasa_corrective, lasa_dsopt, lasa_warp
 from sosdyn.errors import SosdynError
-from sosdyn.lfd.warp import AUTO_WARPS, WARP_DEFAULTS
+from sosdyn.lfd.fit.warp import AUTO_WARPS, WARP_DEFAULTS
 
 
 def test_warp_variants_are_registered_cdsp_settings():

@@ -14,7 +14,7 @@ import numbers
 import numpy as np
 
 from sosdyn.errors import InputError, NotFittedError
-from sosdyn.lfd.data import check_demonstrations, sample_step
+from sosdyn.lfd.data.demonstrations import check_demonstrations, sample_step
 from sosdyn.lfd.rollout import as_positive, as_vector, rollout
 
 
@@ -51,7 +51,7 @@ class MotionModel(abc.ABC):
 
     @abc.abstractmethod
     def fit(self, demos):
-        """Learn from :class:`~sosdyn.lfd.data.Demonstrations`; return ``self``."""
+        """Learn from :class:`~sosdyn.lfd.data.demonstrations.Demonstrations`; return ``self``."""
 
     @abc.abstractmethod
     def predict(self, X):

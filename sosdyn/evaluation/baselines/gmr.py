@@ -6,14 +6,14 @@ The mixture p(x, ẋ) = Σ_k π_k N([x, ẋ]; μ_k, Σ_k) gives the field of the
     A_k = Σ_k,ẋx Σ_k,xx⁻¹,   b_k = μ_k,ẋ − A_k μ_k,x,
     h_k(x) = π_k N(x; μ_k,x, Σ_k,xx) / Σ_i π_i N(x; μ_i,x, Σ_i,xx).
 
-:func:`gmm_linear_maps` lives in :mod:`sosdyn.lfd.gmm` (the CDSP learner starts from it).
+:func:`gmm_linear_maps` lives in :mod:`sosdyn.lfd.fit.gmm` (the CDSP learner starts from it).
 """
 
 import numpy as np
 from sklearn.mixture import GaussianMixture
 
 from sosdyn.errors import InputError
-from sosdyn.lfd.gmm import PositionMixture, gmm_linear_maps
+from sosdyn.lfd.fit.gmm import PositionMixture, gmm_linear_maps
 from sosdyn.evaluation.baselines.base import AutonomousModel, check_int, check_points
 from sosdyn.lfd.rollout import as_positive
 

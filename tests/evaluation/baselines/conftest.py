@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from sosdyn.errors import SosdynError
-from sosdyn.lfd.data import Demonstration, Demonstrations
-from sosdyn.lfd.lasa import load_lasa
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
+from sosdyn.lfd.data.lasa import load_lasa
 
 GOAL = np.array([1.0, 2.0])   # where straight_demos end
 

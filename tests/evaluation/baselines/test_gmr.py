@@ -8,7 +8,7 @@ from sklearn.mixture import GaussianMixture
 
 from sosdyn.errors import InputError, NotFittedError
 from sosdyn.evaluation.baselines import GMR, gmm_linear_maps, position_responsibilities
-from sosdyn.lfd.data import Demonstration, Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 
 GOAL = np.array([1.0, 2.0])
 A_STABLE = np.array([[-1.0, 0.8], [-0.3, -1.5]])

@@ -1,0 +1,146 @@
+"""The GMM of the motion model (paper eq. 2): joint mixture on [x, xdot] and its position marginal.
+
+    xdot = sum_k h_k(x) (A_k x + b_k),   A_k = S_k,xdot x S_k,xx^-1,  b_k = mu_k,xdot - A_k mu_k,x
+    h_k(x) = pi_k N(x; mu_k,x, S_k,xx) / sum_i pi_i N(x; mu_i,x, S_i,xx)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import logsumexp
+
+from sosdyn.errors import InputError
+
+MAX_BIC_COMPONENTS = 10         # n_components="bic" tries K = 1..10
+MIN_SAMPLES_PER_COMPONENT = 5   # and needs at least 5 samples per Gaussian
+
+
+def check_joint_gmm(gmm, n: int) -> None:
+    """A fitted full-covariance sklearn GaussianMixture on [x, xdot] with x of dimension n."""
+    if getattr(gmm, "covariance_type", None) != "full" or not hasattr(gmm, "means_"):
+        raise InputError("expected a fitted sklearn GaussianMixture with covariance_type='full'.")
+    if gmm.means_.shape[1] != 2 * n:
+        raise InputError(f"the mixture is {gmm.means_.shape[1]}-D, expected 2*n = {2 * n} for "
+                         f"[x, xdot] with n = {n}; pass the position dimension n.")
+
+
+def gmm_linear_maps(gmm, n: int):
+    """Per-component linear maps of eq. (2): A (K, n, n) and b (K, n)."""
+    check_joint_gmm(gmm, n)
+    cov, mean = gmm.covariances_, gmm.means_
+    A = np.linalg.solve(cov[:, :n, :n], cov[:, :n, n:]).transpose(0, 2, 1)   # S_xx^-1 S_x,xdot = A^T
+    b = mean[:, n:] - np.einsum("kij,kj->ki", A, mean[:, :n])
+    return A, b
+
+
+def fit_joint_gmm(Z, Zdot, n_components, seed: int):
+    """EM on the joint samples [z, zdot]: (sklearn GaussianMixture, BIC list or None).
+
+    ``n_components`` is K, or "bic" for the K in 1..MAX_BIC_COMPONENTS (at most one per
+    MIN_SAMPLES_PER_COMPONENT samples) with the lowest Bayesian information criterion."""
+    from sklearn.mixture import GaussianMixture     # lazy: importing sklearn takes seconds; only fits need it
+    from threadpoolctl import threadpool_limits     # (sklearn's own dependency)
+
+    data = np.hstack([Z, Zdot])
+
+    def em(k):
+        # one OpenMP thread: k-means on a few thousand samples gains nothing from more, and on a
+        # busy machine its spinning threads cost ~1 s per fit (issue 14); the result is identical
+        with threadpool_limits(1, user_api="openmp"):
+            return GaussianMixture(k, covariance_type="full", random_state=seed, reg_covar=1e-6,
+                                   max_iter=500).fit(data)
+    if n_components != "bic":
+        return em(n_components), None
+    top = min(MAX_BIC_COMPONENTS, Z.shape[0] // MIN_SAMPLES_PER_COMPONENT)
+    fits = [em(k) for k in range(1, top + 1)]
+    bic = [float(g.bic(data)) for g in fits]
+    return fits[int(np.argmin(bic))], bic
+
+
+def gmr_cost(gmm, Z, Zdot) -> float:
+    """Cost (18) of the unconstrained GMR of ``gmm``: mean_t |sum_k h_k(z_t)(A_k z_t + b_k) - zdot_t|^2,
+    the accuracy ceiling of this GMM."""
+    n = Z.shape[1]
+    A, b = gmm_linear_maps(gmm, n)
+    H = PositionMixture.from_joint(gmm, n).responsibilities(Z)
+    pred = np.einsum("tk,kij,tj->ti", H, A, Z) + H @ b
+    return float(((pred - Zdot) ** 2).sum() / Z.shape[0])
+
+
+@dataclass
+class PositionMixture:
+    """pi_k, mu_k,x, S_k,xx of the position marginal: all h_k(x) needs.
+
+    Treat it as immutable: the Cholesky factors are computed once, on first use.
+    """
+
+    weights: np.ndarray       # (K,)
+    means: np.ndarray         # (K, n)
+    covariances: np.ndarray   # (K, n, n)
+
+    @classmethod
+    def from_joint(cls, gmm, n: int) -> "PositionMixture":
+        check_joint_gmm(gmm, n)
+        return cls(gmm.weights_.copy(), gmm.means_[:, :n].copy(), gmm.covariances_[:, :n, :n].copy())
+
+    @property
+    def n_components(self) -> int:
+        return self.weights.size
+
+    def factors(self):
+        """Inverse Cholesky factors and log normalisers, computed once per mixture."""
+        if getattr(self, "_cache", None) is None:
+            n = self.means.shape[1]
+            chol = np.linalg.cholesky(self.covariances)
+            inv = np.linalg.inv(chol)
+            lognorm = (np.log(self.weights) - np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
+                       - 0.5 * n * np.log(2 * np.pi))
+            self._cache = (inv, lognorm)
+        return self._cache
+
+    def log_joint(self, X: np.ndarray) -> np.ndarray:
+        """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K).
+
+        Far from the data the quadratic form overflows and an entry is -inf (NaN when
+        ``x - mu_k`` itself overflows); :meth:`responsibilities` handles both.
+        """
+        inv, lognorm = self.factors()
+        with np.errstate(over="ignore", invalid="ignore"):
+            z = np.einsum("kij,mkj->mki", inv, X[:, None, :] - self.means[None])
+            return lognorm[None, :] - 0.5 * np.einsum("mki,mki->mk", z, z)
+
+    def log_mahalanobis(self, X: np.ndarray) -> np.ndarray:
+        """log ||S_k^-1/2 (x - mu_k)|| at the rows of X, shape (m, K), finite for any finite x.
+
+        Each row is divided by c = max(1, max_i |x_i|) before the triangular solve, so
+        nothing overflows: log d_k(x) = log c + 1/2 log ||L_k^-1 (x/c - mu_k/c)||^2.
+        """
+        inv, _ = self.factors()
+        c = np.maximum(np.abs(X).max(axis=1), 1.0)[:, None, None]
+        z = np.einsum("kij,mkj->mki", inv, X[:, None, :] / c - self.means[None] / c)
+        with np.errstate(divide="ignore"):
+            return np.log(c[:, :, 0]) + 0.5 * np.log(np.einsum("mki,mki->mk", z, z))
+
+    def responsibilities(self, X: np.ndarray) -> np.ndarray:
+        """h_k(x) = pi_k N(x; mu_k, S_k) / sum_i pi_i N(x; mu_i, S_i), shape (m, K), rows sum to one.
+
+        Computed in log-space: h = exp(l - logsumexp(l)), l_k = log pi_k + log N(x; mu_k, S_k).
+        Where every l_k underflows (the quadratic forms overflow float, ||x|| ~ 1e154 and up)
+        h is one-hot on the component nearest in Mahalanobis distance (:meth:`log_mahalanobis`):
+        the limit of the softmax as the quadratic terms dominate log pi_k and the normalisers.
+        Raises :class:`InputError` for rows of X that are NaN or inf.
+        """
+        X = np.asarray(X, dtype=float)
+        bad = np.flatnonzero(~np.isfinite(X).all(axis=1)) if X.ndim == 2 else []
+        if X.ndim != 2 or X.shape[1] != self.means.shape[1] or len(bad):
+            what = f"row {bad[0]} = {X[bad[0]]} is not finite" if len(bad) else f"has shape {X.shape}"
+            raise InputError(f"responsibilities: X {what}; pass finite states of shape "
+                             f"(m, {self.means.shape[1]}).")
+        lj = self.log_joint(X)
+        far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
+        lj[far] = 0.0
+        h = np.exp(lj - logsumexp(lj, axis=1, keepdims=True))
+        if far.any():
+            h[far] = np.eye(self.n_components)[np.argmin(self.log_mahalanobis(X[far]), axis=1)]
+        return h

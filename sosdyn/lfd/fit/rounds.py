@@ -1,0 +1,81 @@
+"""Fits made of several CDSP fits: corrective rounds, and the choice of warp (``warp="auto"``).
+
+Both take a function that makes one certified fit (raising NotCertifiedError otherwise) and keep,
+among the certified fits, the one whose reproductions of the TRAINING demonstrations deviate least
+from them (:func:`~.corrective.training_score`; lower is better). A fitted model here is anything
+with ``field(X, goal)``, ``goal_``, ``scale_``, ``certified_`` and ``history_``.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from sosdyn.errors import NotCertifiedError
+from .corrective import (
+    MAX_PAIRS,
+    MIN_PAIRS,
+    augmented,
+    corrective_demonstration,
+    corrective_pairs,
+    demo_score,
+    thin,
+    training_rollouts,
+    training_score,
+)
+from ..data.demonstrations import Demonstrations, sample_step
+
+
+def corrective_fits(fit_round: Callable, demos: Demonstrations, n_rounds: int, tau: float, min_dist: float):
+    """Rounds 0..n_rounds (:mod:`.corrective`): ``fit_round(r, data)`` fits round r on the
+    demonstrations plus the corrective pseudo-demonstrations of rounds < r; round r's training
+    rollouts give the pairs of round r + 1 (states farther than ``min_dist`` x round 0's scale from
+    the demos). Stops after an uncertified refit (r > 0), a diverged rollout or fewer than MIN_PAIRS
+    pairs. Returns (kept round, its model, every round's score, pairs per round, every round's
+    history rows tagged with ``round``)."""
+    goal, dt = np.asarray(demos.goal, dtype=float), sample_step(demos)
+    P, V = demos.stacked()
+    models, extra, history, scores, pairs = [], [], [], [], []
+    for r in range(n_rounds + 1):
+        try:
+            model = fit_round(r, augmented(demos, extra))
+        except NotCertifiedError:
+            if r == 0:
+                raise
+            break                       # an uncertified refit: the certified rounds so far compete
+        models.append(model)
+        history += [dict(row, round=r) for row in model.history_]
+        reps = training_rollouts(lambda X, m=model: m.field(X, m.goal_), demos)
+        scores.append(training_score(reps, demos))
+        if r == n_rounds or reps is None:
+            break
+        X, Xdot = thin(*corrective_pairs(np.vstack(reps), P, V, tau, min_dist * models[0].scale_), MAX_PAIRS)
+        pairs.append(len(X))
+        if len(X) < MIN_PAIRS:
+            break
+        extra.append(corrective_demonstration(X, Xdot, goal, dt, f"corrective round {r + 1}"))
+    kept = min(range(len(models)), key=lambda i: (not models[i].certified_, scores[i]))
+    return kept, models[kept], scores, pairs, history
+
+
+def warp_choice(fit_candidate: Callable, candidates: dict, demos: Demonstrations):
+    """``fit_candidate(name, settings)`` for every ``candidates`` item (settings None: no warp, must
+    certify; a warped candidate that does not certify scores inf), each scored by
+    :func:`~.corrective.demo_score` (once per distinct model: a candidate may return an earlier
+    one's fit). Returns (the kept model, {name: score}); ties: the first candidate."""
+    fits, scores = {}, {}
+    for name, settings in candidates.items():
+        try:
+            fits[name] = fit_candidate(name, settings)
+        except NotCertifiedError:
+            if settings is None:
+                raise
+            scores[name] = float("inf")
+            continue
+        same = next((n for n in fits if n != name and fits[n] is fits[name]), None)
+        scores[name] = scores[same] if same is not None else demo_score(
+            lambda X, m=fits[name]: m.field(X, m.goal_), demos)
+    return fits[min(fits, key=lambda w: (not fits[w].certified_, scores[w]))], scores
+
+
+__all__ = ["corrective_fits", "warp_choice"]

@@ -1,0 +1,232 @@
+"""A diffeomorphic pre-warp: a composition of Gaussian bumps, invertible by construction.
+
+The map (Perrin & Schlehuber-Caissier 2016, with a correction that fixes the goal g) is
+
+    phi = psi_m o ... o psi_1,   psi_j(x) = x + (rho_j(x) - rho_j(g)) v_j,
+    rho_j(x) = exp(-|x - c_j|^2 / sigma_j^2).
+
+*Invertible.* |grad rho_j| <= sqrt(2) e^{-1/2} / sigma_j (attained at |x - c_j| = sigma_j/sqrt 2),
+so psi_j = id + q_j with Lip(q_j) <= l_j = |v_j| sqrt(2) e^{-1/2} / sigma_j. When l_j < 1,
+psi_j is a bijection of R^n (x = u - q_j(x) is a contraction in x for every u; Banach), smooth,
+with J_psi_j = I + v_j grad rho_j^T, whose singular values lie in [1 - l_j, 1 + l_j]. Hence phi is
+a global diffeomorphism with
+
+    prod_j (1 - l_j) <= sigma_min(J_phi(x)) <= sigma_max(J_phi(x)) <= prod_j (1 + l_j)   for all x.
+
+*Goal.* psi_j(g) = g for every j (the constant rho_j(g) v_j is subtracted; it changes no Jacobian
+and no Lipschitz number), so phi(g) = g.
+
+*Inverse.* psi_j(x) = u means x = u - t v_j with the scalar t solving t = rho_j(u - t v_j) - rho_j(g),
+one increasing equation in t (slope in [1 - l_j, 1 + l_j]); :func:`invert` solves it map by map, last
+map first (bracketed Newton).
+
+*Fit.* :func:`fit_maps` moves points X (N, n) onto targets Y (N, n) greedily: at step j, among the
+8 points of largest mismatch |Y_i - phi_{j-1}(X_i)|, the centre c_j = phi_{j-1}(X_i), the vector
+v_j = beta (Y_i - phi_{j-1}(X_i)) shrunk so that l_j <= l_max, and sigma_j from a geometric grid,
+the combination that most lowers the sum of squared mismatches (the fit stops when none lowers it).
+:func:`radial_targets` gives the targets CDSP's warp uses by default (:func:`fit_warp`): each
+point moved along its ray from g to (1 - decay s_i) times the running minimum of |x - g| (s_i the
+arc-length fraction), a path along which |u - g| never increases (strictly decreases for decay > 0),
+the property a contracting system with a constant metric imposes; :func:`line_targets` the segment
+from the curve's start to g (a larger deformation).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from sosdyn.errors import InputError
+from ..data.demonstrations import resample_in_time
+
+#: A warp's settings (CDSP's ``warp`` dict; every key optional): at most n_maps bumps, each l_j <= l_max,
+#: each removing the fraction beta of the mismatch; n_points samples per time-normalised curve; match
+#: "mean" (the mean training demonstration) or "each" (every one); target "radial" (decay in [0, 1]) or
+#: "line". The defaults: the single setting of lowest 26-shape TRAINING DTWD on LASA (docs/findings.md).
+WARP_DEFAULTS = {"n_maps": 100, "l_max": 0.5, "beta": 0.5, "n_points": 100, "match": "mean", "target": "radial",
+                 "decay": 0.75}
+#: The warped candidates of ``warp="auto"`` (the plain fit is the third): the pair of lowest 26-shape
+#: TRAINING mean when chosen per shape with the plain fit (problems/lasa_warp.py).
+AUTO_WARPS = {"60 maps, decay 0.75": dict(WARP_DEFAULTS, n_maps=60),
+              "60 maps, decay 1": dict(WARP_DEFAULTS, n_maps=60, decay=1.0)}
+MATCHES, TARGETS = ("mean", "each"), ("radial", "line")
+CHECK_BOX = 2.0                 # the singular-value check samples |z|_inf <= CHECK_BOX (the certificate's box)
+BOUND_TOL = 1e-9                # relative slack of the sampled singular-value bound
+LIP_FACTOR = math.sqrt(2.0) * math.exp(-0.5)     # sup |grad exp(-|x|^2/s^2)| * s
+SIGMA_GRID = np.geomspace(0.03, 1.0, 12)        # sigma / data scale tried at each fitting step
+
+
+def lipschitz_numbers(vectors: np.ndarray, sigmas: np.ndarray) -> np.ndarray:
+    """l_j = |v_j| sqrt(2) e^{-1/2} / sigma_j, the Lipschitz number of psi_j - id (m,)."""
+    return np.linalg.norm(np.asarray(vectors, float), axis=1) * LIP_FACTOR / np.asarray(sigmas, float)
+
+
+def check_maps(centers, vectors, sigmas, goal, *, what: str = "warp") -> tuple[np.ndarray, ...]:
+    """The map's arrays as floats, checked: shapes (m, n), (m, n), (m,), (n,), finite, sigma_j > 0 and
+    every l_j < 1 (psi_j a diffeomorphism). InputError naming the first violation."""
+    C, V, S, g = (np.asarray(a, dtype=float) for a in (centers, vectors, sigmas, goal))
+    m = S.shape[0] if S.ndim == 1 else -1
+    if g.ndim != 1 or C.shape != (m, g.size) or V.shape != (m, g.size):
+        raise InputError(f"{what}: centers {C.shape}, vectors {V.shape}, sigmas {S.shape} and goal {g.shape} "
+                         "must have shapes (m, n), (m, n), (m,) and (n,). Try: arrays from fit_maps.")
+    if not all(np.isfinite(a).all() for a in (C, V, S, g)) or not (S > 0).all():
+        raise InputError(f"{what}: every number must be finite and every sigma > 0. Try: arrays from fit_maps.")
+    lip = lipschitz_numbers(V, S)
+    if m and lip.max() >= 1:
+        j = int(lip.argmax())
+        raise InputError(f"{what}: map {j} has Lipschitz number {lip[j]:.6g} >= 1 (|v| = "
+                         f"{np.linalg.norm(V[j]):.6g}, sigma = {S[j]:.6g}): it may not be invertible. "
+                         "Try: a smaller |v| or a larger sigma (l_max < 1 in fit_maps).")
+    return C, V, S, g
+
+
+def _bump(X: np.ndarray, c: np.ndarray, sigma: float) -> np.ndarray:
+    """rho(x) = exp(-|x - c|^2 / sigma^2) at the rows of X."""
+    return np.exp(-np.sum((X - c) ** 2, axis=-1) / sigma ** 2)
+
+
+def bumps_at(x: np.ndarray, centers: np.ndarray, sigmas: np.ndarray) -> np.ndarray:
+    """rho_j(x) for every map j at one point x (n,): (m,)."""
+    return np.exp(-np.sum((x - np.asarray(centers)) ** 2, axis=1) / np.asarray(sigmas) ** 2)
+
+
+def apply(X, centers, vectors, sigmas, goal) -> np.ndarray:
+    """phi(X) at the rows of X (k, n)."""
+    U = np.array(X, dtype=float)
+    for c, v, s in zip(centers, vectors, sigmas):
+        U += (_bump(U, c, s) - _bump(goal, c, s))[:, None] * v
+    return U
+
+
+def jacobian(X, centers, vectors, sigmas, goal) -> tuple[np.ndarray, np.ndarray]:
+    """(phi(X), J_phi(X)): (k, n) and (k, n, n), by the chain rule J <- (I + v grad rho^T) J."""
+    U = np.array(X, dtype=float)
+    J = np.broadcast_to(np.eye(U.shape[1]), (U.shape[0],) + (U.shape[1],) * 2).copy()
+    for c, v, s in zip(centers, vectors, sigmas):
+        rho = _bump(U, c, s)
+        grad = (-2.0 / s ** 2) * rho[:, None] * (U - c)                   # (k, n)
+        J += v[None, :, None] * np.einsum("ki,kij->kj", grad, J)[:, None, :]
+        U += (rho - _bump(goal, c, s))[:, None] * v
+    return U, J
+
+
+def invert(U, centers, vectors, sigmas, goal, tol: float = 1e-14, max_iter: int = 200) -> np.ndarray:
+    """phi^{-1}(U) at the rows of U (k, n): per map, last first, the root t of the increasing function
+    h(t) = t - rho_j(u - t v_j) + rho_j(g) (h' in [1 - l_j, 1 + l_j]; h(-rho_j(g)) <= 0 <= h(1 - rho_j(g)))
+    by Newton steps kept inside the bracket (bisection otherwise), to |h| <= tol."""
+    X = np.array(U, dtype=float)
+    for c, v, s in zip(centers[::-1], vectors[::-1], sigmas[::-1]):
+        rg = _bump(goal, c, s)
+        lo, hi = np.full(len(X), -rg), np.full(len(X), 1.0 - rg)
+        t = np.zeros(len(X))
+        for _ in range(max_iter):
+            x = X - t[:, None] * v
+            rho = _bump(x, c, s)
+            h = t - rho + rg
+            if np.abs(h).max(initial=0.0) <= tol:
+                break
+            lo, hi = np.where(h < 0, t, lo), np.where(h > 0, t, hi)
+            step = t - h / (1.0 + (-2.0 / s ** 2) * rho * ((x - c) @ v))
+            t = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
+        X = X - t[:, None] * v
+    return X
+
+
+def line_targets(curve: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """The points of ``curve`` (N, n) moved onto the segment from curve[0] to ``goal``, point i at the
+    curve's arc-length fraction s_i: goal + (1 - s_i)(curve[0] - goal)."""
+    return goal + (1.0 - arc_fraction(curve))[:, None] * (curve[0] - goal)
+
+
+def arc_fraction(curve: np.ndarray) -> np.ndarray:
+    """s_i = arc length from curve[0] to curve[i] over the whole length (0 for a curve of length 0)."""
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
+    return arc / arc[-1] if arc[-1] > 0 else np.zeros_like(arc)
+
+
+def radial_targets(curve: np.ndarray, goal: np.ndarray, decay: float = 0.0) -> np.ndarray:
+    """The points of ``curve`` (N, n) moved along their rays from ``goal`` to the distance
+    (1 - decay s_i) min_{k <= i} r_k (r_k = |curve_k - goal|, s_i the arc-length fraction): with
+    decay = 0 the nearest curve along which |u - g| never increases; with decay in (0, 1] it
+    strictly decreases."""
+    d = curve - goal
+    r = np.linalg.norm(d, axis=1)
+    r_min = np.minimum.accumulate(r) * (1.0 - decay * arc_fraction(curve))
+    return goal + d * np.divide(r_min, r, out=np.ones_like(r), where=r > 0)[:, None]
+
+
+def fit_maps(X: np.ndarray, Y: np.ndarray, goal: np.ndarray, n_maps: int, l_max: float, beta: float,
+             scale: float, n_candidates: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Greedy matching of X onto Y (module docstring): (centers (m, n), vectors (m, n), sigmas (m,)),
+    m <= n_maps, every l_j <= l_max; sigmas from ``scale`` * SIGMA_GRID; centres among the
+    ``n_candidates`` points of largest mismatch (the one whose best bump lowers the mismatch most)."""
+    cur, goal = np.array(X, dtype=float), np.asarray(goal, dtype=float)
+    centers, vectors, sigmas = [], [], []
+    err = float(np.sum((Y - cur) ** 2))
+    for _ in range(n_maps):
+        miss = Y - cur
+        best = None
+        for i in np.argsort(-np.sum(miss ** 2, axis=1))[:n_candidates]:
+            for s in scale * SIGMA_GRID:
+                v = beta * miss[i]
+                v = v * min(1.0, l_max * s / (LIP_FACTOR * max(np.linalg.norm(v), 1e-300)))
+                new = cur + (_bump(cur, cur[i], s) - _bump(goal, cur[i], s))[:, None] * v
+                e = float(np.sum((Y - new) ** 2))
+                if best is None or e < best[0]:
+                    best = (e, cur[i].copy(), s, v, new)
+        if best[0] >= err * (1 - 1e-6):
+            break
+        err, c, s, v, cur = best
+        centers.append(c)
+        vectors.append(v)
+        sigmas.append(s)
+    n = X.shape[1]
+    return (np.array(centers).reshape(-1, n), np.array(vectors).reshape(-1, n), np.array(sigmas, dtype=float))
+
+
+def fit_warp(curves: list[tuple[np.ndarray, np.ndarray]], goal: np.ndarray, settings: dict
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A warp fixing ``goal`` fitted to the demonstrations ``curves`` [(t, pos)]: each resampled to
+    n_points instants (their mean if match is "mean"), matched (:func:`fit_maps`, sigmas relative to
+    the largest |pos - goal|) to its :func:`radial_targets` or :func:`line_targets`. (centers, vectors,
+    sigmas) in the curves' units; ``settings`` complete (WARP_DEFAULTS' keys, checked)."""
+    goal = np.asarray(goal, dtype=float)
+    scale = max(float(np.abs(pos - goal).max()) for _, pos in curves) or 1.0
+    res = [resample_in_time(t, pos, settings["n_points"]) for t, pos in curves]
+    res = [np.mean(res, axis=0)] if settings["match"] == "mean" else res
+    X = np.vstack(res)
+    Y = np.vstack([radial_targets(c, goal, float(settings["decay"])) if settings["target"] == "radial"
+                   else line_targets(c, goal) for c in res])
+    return fit_maps(X, Y, goal, int(settings["n_maps"]), float(settings["l_max"]), float(settings["beta"]), scale)
+
+
+def pulled_back(Z: np.ndarray, maps, field) -> np.ndarray:
+    """zdot = J_phi(z)^{-1} f(phi(z)) at the rows of Z (k, n), ``maps`` = (centers, vectors, sigmas)
+    fixing 0, ``field`` f on rows of U (stacked n x n solves)."""
+    U, J = jacobian(Z, *maps, np.zeros(Z.shape[1]))
+    return np.linalg.solve(J, field(U)[:, :, None])[:, :, 0]
+
+
+def check_warp(maps, n_samples: int, seed: int) -> dict:
+    """Every l_j < 1 recomputed (:func:`check_maps`, goal 0) and, at ``n_samples`` states uniform in
+    |z|_inf <= CHECK_BOX drawn with ``seed``, sigma_min(J_phi(z)) >= prod_j (1 - l_j) > 0. The numbers
+    and ``passed``; a map that fails :func:`check_maps` has max_lipschitz inf."""
+    C, V, S = maps
+    try:
+        check_maps(C, V, S, np.zeros(np.shape(C)[1]))
+        lip = lipschitz_numbers(V, S)
+    except InputError:
+        lip = np.array([np.inf])
+    bound = float(np.prod(1.0 - lip)) if lip.size else 1.0
+    n = np.shape(C)[1]
+    Z = np.random.default_rng(seed).uniform(-CHECK_BOX, CHECK_BOX, (n_samples, n))
+    sv = float(np.linalg.svd(jacobian(Z, C, V, S, np.zeros(n))[1], compute_uv=False)[:, -1].min()) \
+        if np.isfinite(lip).all() else 0.0
+    passed = bool(lip.max(initial=0.0) < 1 and bound > 0 and sv >= bound * (1 - BOUND_TOL))
+    return {"n_maps": len(S), "max_lipschitz": float(lip.max(initial=0.0)), "singular_bound": bound,
+            "min_singular": sv, "passed": passed}
+
+
+__all__ = ["AUTO_WARPS", "BOUND_TOL", "CHECK_BOX", "LIP_FACTOR", "MATCHES", "SIGMA_GRID", "TARGETS", "WARP_DEFAULTS",
+           "apply", "arc_fraction", "bumps_at", "check_maps", "check_warp", "fit_maps", "fit_warp", "invert",
+           "jacobian", "line_targets", "lipschitz_numbers", "pulled_back", "radial_targets"]

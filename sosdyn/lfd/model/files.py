@@ -1,0 +1,75 @@
+"""Reading CDSP model files: :func:`load_model` (every field validated, certificate re-checked).
+
+The file itself (JSON, checksum, signature, atomic writes) is :mod:`.model_io`; its state, field by
+field, :mod:`.model_state`; writing is :meth:`~sosdyn.lfd.model.cdsp.CDSP.save` (:func:`save_model`).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from sosdyn.errors import InputError, ModelFileError, SosdynError
+from .cdsp import CDSP, DEFAULTS
+from ..fit.certificate import DEFAULT_SAMPLES
+from ..fit.learner import Settings
+from .fileformat import REFIT_HINT, read_model_file
+from .state import check_param_names, need, validate_state
+from ..fit.params import LEGACY_PARAMS, PARAMS, check_params, resolve_seed
+
+LOAD_SEED = 0                   # the states of the sampled check when loading a file
+
+
+def save_model(model: CDSP, path, key=None) -> Path:
+    """``model.save(path, key)``: see :meth:`~sosdyn.lfd.model.cdsp.CDSP.save`."""
+    return model.save(path, key)
+
+
+def load_model(path, key=None) -> CDSP:
+    """Read a model written by :meth:`~sosdyn.lfd.model.cdsp.CDSP.save`: every field validated,
+    certificate re-checked.
+
+    With ``key`` (bytes or str; default $SOSDYN_MODEL_KEY) the file must carry a matching HMAC.
+    The certificate is re-checked from the model's own coefficients (Gram matrices, and
+    DEFAULT_SAMPLES sampled states with a fixed seed; with a warp also every l_j < 1 and the
+    sampled singular values of J_phi): the file's ``verify_samples`` and ``random_state`` do not
+    make this check weaker. Every failure is a ModelFileError.
+    """
+    path = Path(path)
+    content = read_model_file(path, key)
+    try:
+        model = model_from_content(content)
+    except ModelFileError as exc:
+        text = str(exc).rstrip(".")
+        raise ModelFileError(f"{path}: {text}." + ("" if "Try:" in text else f" {REFIT_HINT}")) from None
+    try:
+        report = model.verify(DEFAULT_SAMPLES, LOAD_SEED)
+    except (SosdynError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        raise ModelFileError(f"{path}: its certificate cannot be re-checked from its coefficients "
+                             f"({type(exc).__name__}: {exc}); refusing to load. {REFIT_HINT}") from None
+    if not report.passed:
+        raise ModelFileError(f"{path}: the stored certificate does not check out; refusing to load.\n"
+                             f"{report}\n{REFIT_HINT}")
+    model.verification_, model.certified_ = report, True
+    return model
+
+
+def model_from_content(content: dict) -> CDSP:
+    """A CDSP (not yet verified) from a file's content; ModelFileError naming the first bad field."""
+    params = dict(LEGACY_PARAMS, **need(content, "params", "", dict))   # files older than a parameter
+    check_param_names(params, PARAMS)
+    model = CDSP(**params)
+    try:
+        check_params(params, DEFAULTS)
+    except InputError as exc:
+        raise ModelFileError(f"invalid params: {exc}") from None
+    model.seed_ = resolve_seed(model.random_state)
+    metric_degree = Settings.from_params(params).learned_metric_degree
+    state = validate_state(need(content, "state", "", dict), model.n_components, model.field_degree,
+                           metric_degree, 0.5 * model.eps)
+    for name, value in state.items():
+        setattr(model, name, value)
+    return model
+
+
+__all__ = ["LOAD_SEED", "load_model", "model_from_content", "save_model"]

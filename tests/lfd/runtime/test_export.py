@@ -1,0 +1,119 @@
+"""Generated evaluators (sosdyn.lfd.runtime.export) compute what CDSP.predict computes."""
+import importlib.util
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from sosdyn.errors import InputError, NotFittedError
+from sosdyn.lfd.model.cdsp import CDSP
+from sosdyn.lfd.runtime.export import export, to_cpp, to_python
+
+TOL = 1e-9
+
+
+@pytest.fixture
+def model(field_model):
+    """The conftest's linear / cubic / warped models (fitted once per session)."""
+    return field_model
+
+
+def box_states(model, count, seed=0):
+    """``count`` states uniform in twice the data box (about the goal, half-width 2 scale)."""
+    rng = np.random.default_rng(seed)
+    return model.goal_ + model.scale_ * rng.uniform(-2, 2, size=(count, model.dim_))
+
+
+def max_rel_error(a, b):
+    """max over rows of |a - b|_inf / |b|_inf (|b| > 0 in the box: the goal has measure zero)."""
+    return float(np.max(np.abs(a - b).max(axis=1) / np.abs(b).max(axis=1)))
+
+
+def import_source(source, path):
+    path.write_text(source)
+    spec = importlib.util.spec_from_file_location(f"exported_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_python_export_matches_predict(model, tmp_path):
+    source = to_python(model)
+    assert not re.search(r"^\s*(import|from)\s+sosdyn", source, re.MULTILINE)
+    gen = import_source(source, tmp_path / "gen.py")
+    X = box_states(model, 10_000)
+    err = max_rel_error(gen.predict(X), model.predict(X))
+    assert err < TOL, err
+    x = X[7]
+    np.testing.assert_allclose(gen.predict(x), model.predict(x)[0], rtol=TOL)
+    assert gen.predict(x).shape == (model.dim_,)
+
+
+def test_python_export_far_from_data_uses_the_nearest_component(tmp_path, linear_demos):
+    model = CDSP(n_components=3, warp="none").fit(linear_demos)
+    gen = import_source(to_python(model), tmp_path / "far.py")
+    far = model.goal_ + model.scale_ * np.array([[1e156, 3e155], [-2e157, 1e150], [5e155, -5e155]])
+    Z = (far - model.goal_) / model.scale_
+    H = model.mixture_.responsibilities(Z)
+    assert set(np.unique(H)) == {0.0, 1.0}             # the fallback branch is the one tested
+    np.testing.assert_allclose(gen.predict(far), model.predict(far), rtol=TOL)
+    with pytest.raises(ValueError, match="NaN or inf"):
+        gen.predict([np.nan, 0.0])
+    with pytest.raises(ValueError, match="shape"):
+        gen.predict(np.zeros((2, 3)))
+
+
+def test_unfitted_model_and_unknown_target():
+    with pytest.raises(NotFittedError, match="fitted"):
+        to_python(CDSP())
+    with pytest.raises(ValueError, match="python, cpp"):
+        export(CDSP(), "rust")
+
+
+MAIN = """#include "model.hpp"
+#include <cstdio>
+int main() {
+  double x[cdsp_model::N], v[cdsp_model::N];
+  for (;;) {
+    for (int i = 0; i < cdsp_model::N; ++i) if (std::scanf("%lf", &x[i]) != 1) return 0;
+    const bool ok = cdsp_model::predict(x, v);
+    for (int i = 0; i < cdsp_model::N; ++i) std::printf("%.17g ", v[i]);
+    std::printf("%d\\n", ok ? 1 : 0);
+  }
+}
+"""
+
+
+@pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
+def test_cpp_export_matches_predict(model, tmp_path):
+    (tmp_path / "model.hpp").write_text(to_cpp(model))
+    (tmp_path / "main.cpp").write_text(MAIN)
+    exe = tmp_path / "main"
+    subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe),
+                    str(tmp_path / "main.cpp")], check=True, capture_output=True, text=True)
+    X = box_states(model, 1000, seed=1)
+    far = model.goal_ + model.scale_ * np.array([[1e156, 3e155]])   # finite for the linear field only
+    X = np.vstack([X, far]) if model.field_degree == 1 else X
+    stdin = "\n".join(" ".join(repr(float(v)) for v in row) for row in X)
+    res = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True, check=True)
+    out = np.array([[float(v) for v in line.split()] for line in res.stdout.splitlines()])
+    assert out.shape == (len(X), model.dim_ + 1)
+    assert (out[:, -1] == 1).all()
+    err = max_rel_error(out[:, :-1], model.predict(X))
+    assert err < TOL, err
+    bad = subprocess.run([str(exe)], input="nan 0\n", capture_output=True, text=True, check=True)
+    assert bad.stdout.split()[-1] == "0"
+
+
+def test_python_export_refuses_an_overflowing_state_like_predict(model, tmp_path):
+    """Where the field overflows float (z^3 at |z| ~ 1e120), both refuse the state."""
+    if model.field_degree == 1:
+        pytest.skip("a linear field does not overflow at |z| ~ 1e120")
+    gen = import_source(to_python(model), tmp_path / "overflow.py")
+    far = model.goal_ + model.scale_ * np.array([[1e120, 1e120]])
+    with pytest.raises(InputError, match="overflows float"):
+        model.predict(far)
+    with pytest.raises(ValueError, match="overflows float"):
+        gen.predict(far)
