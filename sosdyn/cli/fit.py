@@ -20,7 +20,7 @@ from rich.markup import escape
 
 from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
-from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, MAX_UNITS_CHARS
+from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from .base import State, app, err, info, out, positive
 from .paths import check_folder, check_output, demo_inputs
@@ -75,9 +75,10 @@ class FitProgress:
 
 
 def _units(value: str | None) -> str | None:
-    """Option callback: printable, at most MAX_UNITS_CHARS characters."""
-    if value is not None and (len(value) > MAX_UNITS_CHARS or not value.isprintable()):
-        raise typer.BadParameter(f"must be printable and at most {MAX_UNITS_CHARS} characters, e.g. m or mm.")
+    """Option callback: a units' name (:func:`~sosdyn.lfd.data.demonstrations.units_problem`)."""
+    problem = None if value is None else units_problem(value)
+    if problem:
+        raise typer.BadParameter(f"{problem}, e.g. m or mm.")
     return value
 
 

@@ -18,6 +18,9 @@ from sosdyn.errors import DemonstrationError, InputError
 MIN_SAMPLES = 10
 GOAL_TOL_FRACTION = 0.05
 MAX_UNITS_CHARS = 32           # the units' name, e.g. 'mm' (a model file holds it)
+#: Besides letters and digits (any script: 'µm', 'm²'), the only characters a units' name may hold:
+#: it reaches model files, plot labels and generated code, so no quotes, backslashes, ':', '=' or '#'.
+UNITS_SYMBOLS = " /.-_^*()%°·"
 _SG_WINDOW, _SG_ORDER = 9, 3
 
 
@@ -61,6 +64,19 @@ class Demonstration:
         return float(self.t[-1] - self.t[0])
 
 
+def units_problem(units) -> str | None:
+    """None if ``units`` is a valid units' name -- a string of at most MAX_UNITS_CHARS characters,
+    each a letter, a digit or one of UNITS_SYMBOLS -- else what is wrong (a phrase after "units")."""
+    if not isinstance(units, str):
+        return f"must be a string, got {type(units).__name__}"
+    bad = sorted({c for c in units if not (c.isalnum() or c in UNITS_SYMBOLS)})
+    if len(units) > MAX_UNITS_CHARS or bad:
+        extra = f" (not {''.join(bad)!r:.40})" if bad else ""
+        return (f"must be at most {MAX_UNITS_CHARS} characters, each a letter, a digit or one of "
+                f"{UNITS_SYMBOLS.strip()!r}{extra}; got {units!r:.60}")
+    return None
+
+
 class Demonstrations(Sequence):
     """An immutable sequence of :class:`Demonstration` sharing a ``name`` and ``units``."""
 
@@ -75,9 +91,9 @@ class Demonstrations(Sequence):
                     "Demonstration(t, pos, vel) or Demonstration.from_positions(t, pos)."
                 )
         units = str(units)
-        if len(units) > MAX_UNITS_CHARS or not units.isprintable():
-            raise InputError(f"units must be printable and at most {MAX_UNITS_CHARS} characters, got "
-                             f"{units!r:.60}. Try: a short name such as 'm' or 'mm'.")
+        problem = units_problem(units)
+        if problem:
+            raise InputError(f"units {problem}. Try: a short name such as 'm' or 'mm'.")
         self._demos, self._name, self._units = demos, str(name), units
 
     name = property(lambda self: self._name, doc="Name of the set, e.g. 'Leaf_1' or a file stem.")

@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from sosdyn.errors import InputError, ModelFileError
+from ..data.demonstrations import units_problem
 from ..fit.contraction import field_exponents, metric_exponents
 from ..fit.gmm import PositionMixture
 from ..fit.warp import check_maps
@@ -44,13 +45,6 @@ def positive(value, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
         raise ModelFileError(f"malformed: {where} must be a positive number, got {value!r:.40}")
     return float(value)
-
-
-def short_string(value, where: str, max_len: int = 32) -> str:
-    if not isinstance(value, str) or len(value) > max_len or not value.isprintable():
-        raise ModelFileError(f"malformed: {where} must be a printable string of at most {max_len} "
-                             f"characters, got {value!r:.60}")
-    return value
 
 
 def array(value, where: str, shape: tuple, dtype=float) -> np.ndarray:
@@ -105,7 +99,9 @@ def validate_state(st: dict, n_components, field_degree: int, metric_degree: int
     out["goal_"] = array(need(st, "goal_", "state"), "state.goal_", (n,))
     out["scale_"] = positive(need(st, "scale_", "state"), "state.scale_")
     out["dt_"] = positive(need(st, "dt_", "state"), "state.dt_")
-    out["units_"] = short_string(need(st, "units_", "state"), "state.units_")
+    out["units_"] = units = need(st, "units_", "state")
+    if units_problem(units):
+        raise ModelFileError(f"malformed: state.units_ {units_problem(units)}")
     out["gmr_cost_"] = float(array(need(st, "gmr_cost_", "state"), "state.gmr_cost_", ()))
     out["C_"] = array(need(st, "C_", "state"), "state.C_", (K, n, len(fexps)))
     W = out["W_"] = array(need(st, "W_", "state"), "state.W_", (n, n, len(mexps)))

@@ -73,7 +73,7 @@ FORGED_CASES = [
      r"constraints\[1\]\.gram\[0\]\[0\] is nan"),
     ("scale_ = 0", setin(["state", "scale_"], 0.0), r"state\.scale_ must be a positive"),
     ("dt_ negative", setin(["state", "dt_"], -0.1), r"state\.dt_ must be a positive"),
-    ("units_ not a string", setin(["state", "units_"], 5), r"state\.units_ must be a printable string"),
+    ("units_ not a string", setin(["state", "units_"], 5), r"state\.units_ must be a string"),
     ("units_ too long", setin(["state", "units_"], "m" * 500), r"state\.units_ .*at most 32"),
     ("negative mixture weight", setin(["state", "mixture_", "weights"], [1.5, -0.5]), "positive and sum to 1"),
     ("weights not summing to 1", setin(["state", "mixture_", "weights"], [0.5, 0.6]), "sum 1.1"),
