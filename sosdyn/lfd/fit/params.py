@@ -15,7 +15,7 @@ from sosdyn.errors import InputError
 from sosdyn.sos import SOLVERS
 from .certificate import check_sample_count
 from .corrective import MIN_DIST, TAU
-from .warp import MATCHES, TARGETS, WARP_DEFAULTS
+from .warp import MATCHES, MAX_MAPS, TARGETS, WARP_DEFAULTS
 
 METHODS = ("alternating", "ica")
 METRICS = ("learned", "identity")
@@ -26,7 +26,7 @@ PARAMS = ("n_components", "metric_degree", "field_degree", "gamma", "metric", "s
           "random_state", "verify_samples", "allow_uncertified", "corrective_rounds", "corrective_tau",
           "corrective_min_dist", "warp")                              # what get_params and a file hold
 WARPS = ("auto", "none")        # warp: one of these, or a dict of WARP_DEFAULTS' keys (one fixed warp)
-MAX_MAPS, MAX_POINTS = 10_000, 10_000
+MAX_POINTS = 10_000
 CORRECTIVE_OFF = {"corrective_rounds": 0}     # no corrective refits
 PLAIN = {**CORRECTIVE_OFF, "warp": "none"}    # one plain fit: no corrective refits, no warp
 #: Named configurations (``CDSP.preset(name)``): the parameters each sets, the rest default.

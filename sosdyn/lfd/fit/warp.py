@@ -54,6 +54,11 @@ CHECK_BOX = 2.0                 # the singular-value check samples |z|_inf <= CH
 BOUND_TOL = 1e-9                # relative slack of the sampled singular-value bound
 LIP_FACTOR = math.sqrt(2.0) * math.exp(-0.5)     # sup |grad exp(-|x|^2/s^2)| * s
 SIGMA_GRID = np.geomspace(0.03, 1.0, 12)        # sigma / data scale tried at each fitting step
+MAX_MAPS = 10_000               # bumps of one warp, fitted or loaded (a load checks J_phi at 10^4 states each)
+#: The floor of prod_j (1 - l_j), the certified lower bound on sigma_min(J_phi): below it J_phi may be
+#: so near singular that J_phi^-1 multiplies velocities by up to 1 / floor. Fitted warps stay far above
+#: it: the 30 LASA shapes under the three warp settings of "auto" reach 7.0e-8 at the lowest.
+MIN_CONDITION = 1e-12
 
 
 def lipschitz_numbers(vectors: np.ndarray, sigmas: np.ndarray) -> np.ndarray:
@@ -71,12 +76,20 @@ def check_maps(centers, vectors, sigmas, goal, *, what: str = "warp") -> tuple[n
                          "must have shapes (m, n), (m, n), (m,) and (n,). Try: arrays from fit_maps.")
     if not all(np.isfinite(a).all() for a in (C, V, S, g)) or not (S > 0).all():
         raise InputError(f"{what}: every number must be finite and every sigma > 0. Try: arrays from fit_maps.")
+    if m > MAX_MAPS:
+        raise InputError(f"{what}: {m} maps, more than {MAX_MAPS} (what a fit makes at most). "
+                         f"Try: a warp of at most {MAX_MAPS} maps (CDSP(warp={{'n_maps': ...}})).")
     lip = lipschitz_numbers(V, S)
     if m and lip.max() >= 1:
         j = int(lip.argmax())
         raise InputError(f"{what}: map {j} has Lipschitz number {lip[j]:.6g} >= 1 (|v| = "
                          f"{np.linalg.norm(V[j]):.6g}, sigma = {S[j]:.6g}): it may not be invertible. "
                          "Try: a smaller |v| or a larger sigma (l_max < 1 in fit_maps).")
+    if m and np.sum(np.log1p(-lip)) < math.log(MIN_CONDITION):
+        raise InputError(f"{what}: prod_j (1 - l_j) = {np.exp(np.sum(np.log1p(-lip))):.3g} is below "
+                         f"{MIN_CONDITION:g}, so J_phi may be near singular (velocities multiplied by up "
+                         f"to 1 / that); the largest l_j is {lip.max():.17g} (map {int(lip.argmax())}). "
+                         "Try: fewer maps or a smaller l_max (fit_maps stops before this floor).")
     return C, V, S, g
 
 
@@ -158,12 +171,16 @@ def radial_targets(curve: np.ndarray, goal: np.ndarray, decay: float = 0.0) -> n
 def fit_maps(X: np.ndarray, Y: np.ndarray, goal: np.ndarray, n_maps: int, l_max: float, beta: float,
              scale: float, n_candidates: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Greedy matching of X onto Y (module docstring): (centers (m, n), vectors (m, n), sigmas (m,)),
-    m <= n_maps, every l_j <= l_max; sigmas from ``scale`` * SIGMA_GRID; centres among the
+    m <= n_maps, every l_j <= l_max, prod_j (1 - l_j) >= MIN_CONDITION (the fit stops before a map
+    would take it lower); sigmas from ``scale`` * SIGMA_GRID; centres among the
     ``n_candidates`` points of largest mismatch (the one whose best bump lowers the mismatch most)."""
     cur, goal = np.array(X, dtype=float), np.asarray(goal, dtype=float)
     centers, vectors, sigmas = [], [], []
     err = float(np.sum((Y - cur) ** 2))
-    for _ in range(n_maps):
+    log_cond, floor = 0.0, math.log(MIN_CONDITION) - math.log1p(-l_max) + 1e-9   # log prod (1 - l_j); floor
+    for _ in range(min(n_maps, MAX_MAPS)):
+        if log_cond < floor:            # one more map might take prod (1 - l_j) below MIN_CONDITION
+            break
         miss = Y - cur
         best = None
         for i in np.argsort(-np.sum(miss ** 2, axis=1))[:n_candidates]:
@@ -177,6 +194,7 @@ def fit_maps(X: np.ndarray, Y: np.ndarray, goal: np.ndarray, n_maps: int, l_max:
         if best[0] >= err * (1 - 1e-6):
             break
         err, c, s, v, cur = best
+        log_cond += math.log1p(-float(lipschitz_numbers(v[None], np.array([s]))[0]))
         centers.append(c)
         vectors.append(v)
         sigmas.append(s)
@@ -227,6 +245,7 @@ def check_warp(maps, n_samples: int, seed: int) -> dict:
             "min_singular": sv, "passed": passed}
 
 
-__all__ = ["AUTO_WARPS", "BOUND_TOL", "CHECK_BOX", "LIP_FACTOR", "MATCHES", "SIGMA_GRID", "TARGETS", "WARP_DEFAULTS",
+__all__ = ["AUTO_WARPS", "BOUND_TOL", "CHECK_BOX", "LIP_FACTOR", "MATCHES", "MAX_MAPS", "MIN_CONDITION", "SIGMA_GRID",
+           "TARGETS", "WARP_DEFAULTS",
            "apply", "arc_fraction", "bumps_at", "check_maps", "check_warp", "fit_maps", "fit_warp", "invert",
            "jacobian", "line_targets", "lipschitz_numbers", "pulled_back", "radial_targets"]
