@@ -5,7 +5,8 @@ their conic lowering) -> :mod:`sosdyn.lfd` (learning from demonstrations).
 """
 from .errors import (DemonstrationError, InfeasibleError, InputError, ModelFileError,
                      NoAtomsError, NotCertifiedError, NotFittedError, NotSymmetricError, PolynomialError,
-                     ResourceLimitError, SolverError, SosdynError, UnboundedError, UnverifiedSolutionError)
+                     ResourceLimitError, SolverError, SosdynError, UnboundedError, UnverifiedSolutionError,
+                     WorkLimitError)
 from .limits import get_limits, limits, set_limits
 from .poly import PolyMatrix, Polynomial, from_sympy, jacobian, to_sympy, variables
 from .sos import BasicSet, SOSProgram, Solution, minimize_on, sum_squares
@@ -17,7 +18,7 @@ __version__ = "0.1.0"
 __all__ = [
     "SosdynError", "InputError", "PolynomialError", "NotSymmetricError", "DemonstrationError",
     "ModelFileError", "SolverError", "InfeasibleError", "NotCertifiedError", "NotFittedError",
-    "ResourceLimitError", "UnverifiedSolutionError", "UnboundedError", "NoAtomsError", "get_limits", "set_limits", "limits",
+    "ResourceLimitError", "UnverifiedSolutionError", "UnboundedError", "NoAtomsError", "WorkLimitError", "get_limits", "set_limits", "limits",
     "Polynomial", "PolyMatrix", "variables", "jacobian", "from_sympy", "to_sympy",
     "SOSProgram", "Solution", "sum_squares", "BasicSet", "minimize_on",
     "CDSP", "Demonstration", "Demonstrations", "Trajectory", "check_demonstrations",

@@ -79,6 +79,16 @@ class NoAtomsError(SolverError):
     """
 
 
+class WorkLimitError(SolverError):
+    """An integration stopped by its work limit (``max_rollout_calls`` field calls or
+    ``max_rollout_seconds`` in :mod:`sosdyn.limits`), saying how far it got: ``t`` the time reached,
+    ``x`` the state there, ``calls`` and ``seconds`` the work done."""
+
+    def __init__(self, message, hint=None, *, t=None, x=None, calls=0, seconds=0.0):
+        self.t, self.x, self.calls, self.seconds = t, x, calls, seconds
+        super().__init__(message, "solver_error", hint)
+
+
 class NotCertifiedError(SolverError):
     """A learned model whose independent check of the certificate failed."""
 

@@ -27,6 +27,8 @@ class Limits:
 
     max_bytes: int = 4 * 2**30            # estimated working memory of one solve or rollout
     max_rollout_steps: int = 10**7        # integration steps of one rollout (all starts)
+    max_rollout_calls: int = 100_000      # field evaluations of one adaptive rollout
+    max_rollout_seconds: int = 120        # wall-clock seconds of one adaptive rollout
     max_file_bytes: int = 64 * 2**20      # a model or results file read from disk
     max_json_depth: int = 64              # nesting depth accepted in a JSON file
 

@@ -346,12 +346,14 @@ class CDSP:
     def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=()):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.
 
-        ``dt`` None means the model's ``dt_``; duration and dt are checked by the integrator."""
+        ``dt`` None means the model's ``dt_``; duration and dt are checked by the integrator, whose
+        absolute tolerance is relative to the data's scale ``scale_`` (the same relative accuracy
+        in any units) and whose work is bounded (``max_rollout_calls``, ``max_rollout_seconds``)."""
         self._check_fitted()
         x0 = self._check_points(x0, "x0")[0]
         goal = self.goal_ if goal is None else self._check_points(goal, "goal")[0]
         return integrate(self.field, x0, duration=duration, dt=self.dt_ if dt is None else dt, goal=goal,
-                         perturbations=perturbations, goal_changes=goal_changes)
+                         perturbations=perturbations, goal_changes=goal_changes, scale=self.scale_)
 
     # ------------------------------------------------------------------ evidence
     def verify(self, n_samples=None, seed=None) -> CertificateReport:

@@ -11,16 +11,16 @@ whose state or velocity stops being finite raises :class:`~sosdyn.errors.SolverE
 no integrator returns NaN or inf.
 """
 
-from sosdyn.lfd.rollout.adaptive import BATCH_INTEGRATORS, INTEGRATORS, final_states, rollout
+from sosdyn.lfd.rollout.adaptive import ATOL_REL, BATCH_INTEGRATORS, INTEGRATORS, final_states, motion_scale, rollout
 from sosdyn.lfd.rollout.budget import (GRID_BUDGETS, ROLLOUT_BUDGETS, BudgetExceeded, BudgetRollout,
                                        CountedField, run_with_budget)
 from sosdyn.lfd.rollout.euler import euler_until_rest
-from sosdyn.lfd.rollout.events import (Field, Trajectory, as_positive, as_vector, check_rollout_size,
-                                       parse_events)
+from sosdyn.lfd.rollout.events import (Field, Trajectory, WorkMeter, as_positive, as_vector,
+                                       check_rollout_size, parse_events)
 
 __all__ = [
-    "BATCH_INTEGRATORS", "INTEGRATORS", "final_states", "rollout",
+    "ATOL_REL", "BATCH_INTEGRATORS", "INTEGRATORS", "final_states", "motion_scale", "rollout",
     "GRID_BUDGETS", "ROLLOUT_BUDGETS", "BudgetExceeded", "BudgetRollout", "CountedField", "run_with_budget",
-    "euler_until_rest", "Field", "Trajectory", "as_positive", "as_vector", "check_rollout_size",
+    "euler_until_rest", "Field", "Trajectory", "WorkMeter", "as_positive", "as_vector", "check_rollout_size",
     "parse_events",
 ]

@@ -1,7 +1,12 @@
 """Adaptive integration (``scipy.integrate.solve_ivp``): rollouts with events, batched final states.
 
 Fixed-step schemes blow up on the cubic fields that SOS models produce, so both functions use
-a stiffness-aware adaptive solver (LSODA by default) with rtol 1e-6 and atol 1e-8.
+a stiffness-aware adaptive solver (LSODA by default). :func:`rollout`'s tolerances are relative
+to the motion's scale s (the model's ``scale_``, or the distance from the start to the goal):
+rtol 1e-6, atol ATOL_REL s = 1e-9 s, so the same motion in metres, millimetres or nanometres is
+integrated with the same relative accuracy; its work is bounded by ``max_rollout_calls`` and
+``max_rollout_seconds`` (:mod:`sosdyn.limits`, :class:`~sosdyn.errors.WorkLimitError`).
+:func:`final_states` uses rtol 1e-6 and atol 1e-8 (data units).
 """
 
 from __future__ import annotations
@@ -11,19 +16,31 @@ from scipy.integrate import solve_ivp
 from scipy.sparse import block_diag
 
 from sosdyn.errors import InputError, SolverError
-from sosdyn.lfd.rollout.events import (Field, Trajectory, as_positive, as_vector, check_rollout_size,
-                                       parse_events)
+from sosdyn.lfd.rollout.events import (Field, Trajectory, WorkMeter, as_positive, as_vector,
+                                       check_rollout_size, parse_events)
 
 INTEGRATORS = ("LSODA", "Radau", "BDF", "RK45", "DOP853", "RK23")   # solve_ivp methods for rollout
 BATCH_INTEGRATORS = ("LSODA", "BDF", "Radau")                        # those final_states supports
 _SOLVER_HINT = "a smaller dt or tighter rtol/atol, integrator='Radau' for stiff fields, or check the model"
+ATOL_REL = 1e-9             # a rollout's absolute tolerance, relative to the motion's scale
 
 
-def _ode(fld: Field, goal: np.ndarray, n: int):
-    """``rhs(t, y)`` for solve_ivp (``y`` (n,) or (n, k)), checking the field's output."""
+def motion_scale(x0: np.ndarray, goal: np.ndarray, events) -> float:
+    """The scale of a rollout when the model gives none: the largest of |x0 - goal|_inf, every push
+    |dx|_inf and every goal change |g' - goal|_inf (1.0 when all are 0: the state then stays put)."""
+    moves = [np.abs(x0 - goal).max()] + [np.abs(v - (goal if kind == "goal_change" else 0.0)).max()
+                                         for _, kind, v in events]
+    return float(max(moves)) or 1.0
+
+
+def _ode(fld: Field, goal: np.ndarray, n: int, meter: WorkMeter | None = None):
+    """``rhs(t, y)`` for solve_ivp (``y`` (n,) or (n, k)), checking the field's output and counting
+    its work on ``meter``."""
 
     def rhs(t, y):
         X = np.atleast_2d(y.T)
+        if meter is not None:
+            meter.tick(t, X, goal)
         if not np.all(np.isfinite(X)):
             raise SolverError(f"The trajectory blew up: the state is not finite at t = {t:g}.",
                               status="solver_error", hint=_SOLVER_HINT)
@@ -41,7 +58,8 @@ def _ode(fld: Field, goal: np.ndarray, n: int):
 
 
 def rollout(field: Field, x0, *, duration: float, dt: float, goal, perturbations=(), goal_changes=(),
-            rtol: float = 1e-6, atol: float = 1e-8, integrator: str = "LSODA") -> Trajectory:
+            rtol: float = 1e-6, atol: float | None = None, scale: float | None = None,
+            integrator: str = "LSODA") -> Trajectory:
     """Integrate ``xdot = field(x, goal)`` from ``x0`` for ``duration`` seconds.
 
     The output grid is ``linspace(0, duration, round(duration / dt) + 1)``: step ``dt`` up to
@@ -51,10 +69,14 @@ def rollout(field: Field, x0, *, duration: float, dt: float, goal, perturbations
     ``time`` the state jumps ``x -> x + dx``; ``goal_changes``: pairs ``(time, new_goal)``,
     from ``time`` on the field uses ``new_goal`` (:func:`parse_events`). The ODE is integrated
     piecewise between event times with ``solve_ivp(method=integrator)``; events are
-    right-continuous (the sample at an event time already shows it). Raises
+    right-continuous (the sample at an event time already shows it). ``atol`` None means
+    ATOL_REL * ``scale``, the motion's scale (None: :func:`motion_scale`), so the accuracy
+    relative to the motion does not depend on the units. Raises
     :class:`InputError` for bad inputs, :class:`~sosdyn.errors.ResourceLimitError` for a grid
-    over the limits, and :class:`SolverError` (status "solver_error") if the integrator fails
-    or the state or the field stops being finite (no NaN is ever returned).
+    over the limits, :class:`~sosdyn.errors.WorkLimitError` (a SolverError saying how far it got)
+    after ``max_rollout_calls`` field calls or ``max_rollout_seconds``, and :class:`SolverError`
+    (status "solver_error") if the integrator fails or the state or the field stops being finite
+    (no NaN is ever returned).
     """
     if not callable(field):
         raise InputError("field must be callable field(X (m, n), goal (n,)) -> (m, n), "
@@ -63,14 +85,18 @@ def rollout(field: Field, x0, *, duration: float, dt: float, goal, perturbations
     n = len(x)
     g = as_vector(goal, n, "goal")
     duration, dt = as_positive(duration, "duration"), as_positive(dt, "dt")
-    rtol, atol = as_positive(rtol, "rtol"), as_positive(atol, "atol")
+    rtol = as_positive(rtol, "rtol")
     if integrator not in INTEGRATORS:
         raise InputError(f"integrator must be one of {', '.join(INTEGRATORS)}, got {integrator!r}.")
     if dt > duration:
         raise InputError(f"dt = {dt:g} is larger than duration = {duration:g}. "
                          "Try: a smaller dt or a longer duration.")
     events = parse_events(perturbations, goal_changes, n, duration)
+    if atol is None:
+        atol = ATOL_REL * (motion_scale(x, g, events) if scale is None else as_positive(scale, "scale"))
+    atol = as_positive(atol, "atol")
     grid = np.linspace(0.0, duration, check_rollout_size(duration, dt, n))
+    meter = WorkMeter(duration)
     pos, goals, log = np.empty((len(grid), n)), np.empty((len(grid), n)), []
     starts = sorted({0.0, *(time for time, _, _ in events)})
     ends = starts[1:] + [duration]
@@ -91,7 +117,7 @@ def rollout(field: Field, x0, *, duration: float, dt: float, goal, perturbations
         if end > start:
             t_eval = np.union1d(grid[mask], [end])  # grid[mask] are its first entries
             with np.errstate(over="ignore", invalid="ignore"):
-                sol = solve_ivp(_ode(field, g, n), (start, end), x, method=integrator, t_eval=t_eval,
+                sol = solve_ivp(_ode(field, g, n, meter), (start, end), x, method=integrator, t_eval=t_eval,
                                 rtol=rtol, atol=atol, vectorized=True)
             if not sol.success or sol.y.shape[1] != len(t_eval) or not np.all(np.isfinite(sol.y)):
                 raise SolverError(f"Integration failed in t = [{start:g}, {end:g}] from x = {x}: "

@@ -84,7 +84,7 @@ class BudgetRollout:
 
         def run(field, integrator):
             return rollout(field, x0, duration=duration, dt=dt, goal=goal, perturbations=perturbations,
-                           goal_changes=goal_changes, integrator=integrator)
+                           goal_changes=goal_changes, scale=getattr(model, "scale_", None), integrator=integrator)
 
         try:
             traj, integrator = run_with_budget(run, model.field, self.budgets)

@@ -8,13 +8,14 @@ changes before pushes at equal times.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from sosdyn.errors import InputError
-from sosdyn.limits import check_bytes, check_count
+from sosdyn.errors import InputError, WorkLimitError
+from sosdyn.limits import check_bytes, check_count, get_limits
 
 Field = Callable[[np.ndarray, np.ndarray], np.ndarray]  # field(X (m, n), goal (n,)) -> Xdot (m, n)
 
@@ -73,6 +74,33 @@ def check_rollout_size(duration: float, dt: float, dim: int, starts: int = 1) ->
     check_count(samples * starts, "max_rollout_steps", f"{what} sample count", SIZE_HINT)
     check_bytes(samples * starts * (3 * dim + 2) * 8.0, f"{what} arrays", SIZE_HINT)
     return int(round(duration / dt)) + 1
+
+
+class WorkMeter:
+    """The work of one integration -- field calls and wall-clock seconds -- against the limits
+    ``max_rollout_calls`` and ``max_rollout_seconds`` (:mod:`sosdyn.limits`, read when the meter is
+    made); remembers how far the integration got (the latest time and state the field was asked for)."""
+
+    def __init__(self, duration: float):
+        lim = get_limits()
+        self.max_calls, self.max_seconds, self.duration = lim.max_rollout_calls, lim.max_rollout_seconds, duration
+        self.calls, self.start, self.t, self.x = 0, time.perf_counter(), 0.0, None
+
+    def tick(self, t: float, X: np.ndarray, goal: np.ndarray) -> None:
+        """Count one field call at time ``t`` and states ``X`` (m, n); WorkLimitError over a limit."""
+        self.calls += 1
+        if t >= self.t or self.x is None:
+            self.t, self.x = float(t), np.array(X[0])
+        seconds = time.perf_counter() - self.start
+        if self.calls > self.max_calls or seconds > self.max_seconds:
+            dist = float(np.linalg.norm(self.x - goal))
+            raise WorkLimitError(
+                f"The rollout was stopped after {self.calls} field calls and {seconds:.3g} s, at t = "
+                f"{self.t:.4g} of {self.duration:g} s, x = {self.x} ({dist:.3g} from the goal): over "
+                f"max_rollout_calls = {self.max_calls} or max_rollout_seconds = {self.max_seconds}.",
+                "a start nearer the data or a shorter duration; or raise the limits, e.g. "
+                "sosdyn.set_limits(max_rollout_calls=10**6, max_rollout_seconds=3600).",
+                t=self.t, x=self.x, calls=self.calls, seconds=seconds)
 
 
 def _event_list(items, n: int, duration: float, kind: str) -> list[tuple[float, str, np.ndarray]]:

@@ -1,0 +1,72 @@
+"""Bounded, unit-independent rollouts (issue 23, items 3 and 4): a call and time budget with a
+typed error saying how far the rollout got, and an absolute tolerance relative to the motion."""
+import time
+
+import numpy as np
+import pytest
+
+import sosdyn as sd
+from sosdyn.errors import InputError, SolverError, WorkLimitError
+from sosdyn.lfd.rollout import ATOL_REL, motion_scale, parse_events, rollout
+
+GOAL = np.array([1.0, -2.0])
+
+
+def cubic(X, goal):
+    """xdot = -(x - goal)^3 componentwise: stiff far away (|x - g| ~ 1e4 gives rates ~ 1e8)."""
+    return -(X - goal) ** 3
+
+
+def test_a_rollout_over_its_call_budget_says_how_far_it_got():
+    x0 = GOAL + 1e4
+    with sd.limits(max_rollout_calls=300):
+        with pytest.raises(WorkLimitError, match=r"stopped after 301 field calls .* at t = .* of 10 s, x = .*"
+                                                 r"from the goal\): over max_rollout_calls = 300") as info:
+            rollout(cubic, x0, duration=10.0, dt=0.01, goal=GOAL, integrator="RK45")
+    exc = info.value
+    assert isinstance(exc, SolverError) and exc.status == "solver_error"
+    assert exc.calls == 301 and 0 < exc.t < 10.0 and np.all(np.abs(exc.x - GOAL) < 1e4)   # it had moved in
+    assert "Try: a start nearer the data or a shorter duration; or raise the limits" in str(exc)
+    assert "sosdyn.set_limits(max_rollout_calls=" in str(exc)
+
+
+def test_a_rollout_over_its_time_budget_stops_within_it():
+    def slow(X, goal):
+        time.sleep(0.01)
+        return -(X - goal)
+
+    t0 = time.perf_counter()
+    with sd.limits(max_rollout_seconds=1), pytest.raises(WorkLimitError, match="max_rollout_seconds = 1"):
+        rollout(slow, GOAL + 1.0, duration=1e6, dt=1e3, goal=GOAL, integrator="RK45", rtol=1e-12)
+    assert time.perf_counter() - t0 < 2.0
+
+
+def test_the_default_budget_lets_ordinary_rollouts_through():
+    assert sd.get_limits().max_rollout_calls == 100_000 and sd.get_limits().max_rollout_seconds == 120
+    traj = rollout(cubic, GOAL + 3.0, duration=10.0, dt=0.01, goal=GOAL)
+    # x(t) - g = d / sqrt(1 + 2 d^2 t) for xdot = -(x - g)^3, d = 3
+    np.testing.assert_allclose(traj.pos[-1] - GOAL, 3.0 / np.sqrt(1 + 2 * 9 * 10.0), rtol=1e-5)
+
+
+@pytest.mark.parametrize("c", [1.0, 1e-6, 1e-9, 1e6])
+def test_the_same_motion_in_any_units_has_the_same_relative_error(c):
+    """xdot = -(x - g) in units where the numbers are c times larger: the relative error against
+    the exact solution is the same for every c (with a fixed atol 1e-8 it was 6e-3 at c = 1e-9)."""
+    x0, goal = np.array([4.0, 3.0]) * c, GOAL * c
+    traj = rollout(lambda X, g: -(X - g), x0, duration=5.0, dt=0.01, goal=goal)
+    exact = goal + (x0 - goal) * np.exp(-traj.t)[:, None]
+    rel = np.abs(traj.pos - exact).max() / np.abs(x0 - goal).max()
+    assert 1e-8 < rel < 2e-6, rel
+    ref = rollout(lambda X, g: -(X - g), x0 / c, duration=5.0, dt=0.01, goal=goal / c)
+    np.testing.assert_allclose(traj.pos / c, ref.pos, rtol=1e-9, atol=1e-12)
+
+
+def test_motion_scale_and_explicit_tolerances():
+    x0 = np.array([4.0, 3.0])
+    events = parse_events([(1.0, [0.0, 9.0])], [(2.0, [1.0, 7.0])], 2, 5.0)
+    assert motion_scale(x0, GOAL, events) == 9.0                    # the push is the largest move
+    assert motion_scale(x0, GOAL, []) == 5.0 and motion_scale(GOAL, GOAL, []) == 1.0
+    assert ATOL_REL == 1e-9
+    for kw, match in ((dict(atol=0.0), "atol must be"), (dict(scale=-1.0), "scale must be")):
+        with pytest.raises(InputError, match=match):
+            rollout(cubic, x0, duration=1.0, dt=0.1, goal=GOAL, **kw)
