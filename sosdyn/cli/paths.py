@@ -63,25 +63,33 @@ DEMO_SUFFIXES = (".csv", ".npy")
 _GLOB_CHARS = frozenset("*?[")
 
 
+def _visible(path: Path) -> bool:
+    """Not a dotfile (``.x.csv``, macOS's ``._x.csv`` resource forks, editors' ``.#x.csv``)."""
+    return not path.name.startswith(".")
+
+
 def demo_inputs(specs: Sequence[str]) -> list[Path]:
-    """The demonstration files that ``specs`` name, in order, each once: a file as given, a
-    folder as its ``*.csv`` and ``*.npy`` files (sorted by name, not recursive), a pattern with
-    ``*``, ``?`` or ``[`` as its matching files (sorted; quote it so the shell leaves it alone).
-    FileNotFoundError / InputError when a spec names nothing."""
+    """The demonstration files that ``specs`` name, in order, each once: a name that exists as it
+    is, a file (``run[1].csv`` is that file, never a pattern) or a folder (its ``*.csv`` and ``*.npy``
+    files, sorted by name, not recursive, dotfiles skipped); otherwise a pattern with ``*``, ``?`` or
+    ``[`` as its matching files (sorted, dotfiles skipped unless the pattern's name starts with a dot;
+    quote it so the shell leaves it alone). FileNotFoundError / InputError when a spec names nothing."""
     files: list[Path] = []
     for spec in specs:
         path = Path(spec)
-        if _GLOB_CHARS & set(spec):
-            anchor = Path(path.anchor) if path.is_absolute() else Path()
-            found = sorted(p for p in anchor.glob(str(path.relative_to(anchor))) if p.is_file())
-            if not found:
-                raise InputError(f"no file matches {spec}. Try: check the pattern (e.g. 'demos/*.csv').")
-        elif path.is_dir():
-            found = sorted(p for p in path.iterdir() if p.suffix.lower() in DEMO_SUFFIXES and p.is_file())
+        if path.is_dir():
+            found = sorted(p for p in path.iterdir()
+                           if p.suffix.lower() in DEMO_SUFFIXES and _visible(p) and p.is_file())
             if not found:
                 raise InputError(f"the folder {path} holds no .csv or .npy file. Try: the folder of the "
                                  "demonstration files, or the files themselves.")
-        else:
+        elif path.exists() or not _GLOB_CHARS & set(spec):
             found = [existing(path, "demonstration file")]
+        else:
+            anchor = Path(path.anchor) if path.is_absolute() else Path()
+            found = sorted(p for p in anchor.glob(str(path.relative_to(anchor)))
+                           if p.is_file() and (_visible(p) or path.name.startswith(".")))
+            if not found:
+                raise InputError(f"no file matches {spec}. Try: check the pattern (e.g. 'demos/*.csv').")
         files.extend(p for p in found if not any(same_file(p, q) for q in files))
     return files

@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..files import replace_atomically
 from .html import jinja_environment, markdown_html
 
 BENCH_PAGES = (("summary.md", "Learner benchmarks", "make bench"),
@@ -67,6 +68,4 @@ def render_bench(bench_dir: str | Path) -> Path:
     raw = sorted(p.name for p in bench_dir.glob("*.json"))
     html = jinja_environment().get_template("bench.html.j2").render(
         sections=sections, predict={"headers": PREDICT_COLUMNS, "rows": rows}, raw=raw)
-    out = bench_dir / "index.html"
-    out.write_text(html, encoding="utf-8")
-    return out
+    return replace_atomically(bench_dir / "index.html", html.encode("utf-8"))

@@ -41,7 +41,10 @@ leads outside ``base_dir`` (``..``, an absolute path, a symlink out) is refused.
 ``<br>`` and character entities); anything else in it is escaped. ``findings[*].numbers``
 whose labels read ``"<shape>: <quantity>"`` are shown as one table (a row per shape, a column
 per quantity), the others as labelled values. Benchmarks have their own page
-(:mod:`sosdyn.report.bench`).
+(:mod:`sosdyn.report.bench`). A figure file over ``max_file_bytes`` (:mod:`sosdyn.limits`) is
+refused before it is read. ``index.html`` and ``report.pdf`` are written atomically
+(:func:`sosdyn.files.replace_atomically`): a failed write leaves the previous report whole, and a
+symlink in their place is replaced, never followed.
 """
 
 from __future__ import annotations
@@ -57,6 +60,8 @@ import jinja2
 from markupsafe import Markup, escape
 
 from ..errors import InputError, SosdynError
+from ..files import replace_atomically
+from ..limits import format_bytes, get_limits
 from .results import check_results, load_results
 
 __all__ = ["REPORT_FILES", "build_report", "check_results", "load_results", "render_html", "render_pdf"]
@@ -278,6 +283,15 @@ def _inside(path: Path, folder: Path) -> bool:
     return path.resolve().is_relative_to(folder.resolve())
 
 
+def _check_figure_size(name: str, path: Path) -> None:
+    """InputError if the figure file is over ``max_file_bytes`` (checked before it is read)."""
+    size, limit = path.stat().st_size, get_limits().max_file_bytes
+    if size > limit:
+        raise InputError(f"figure {name!r}: {path} is {format_bytes(size)}, over max_file_bytes = "
+                         f"{format_bytes(limit)}; a report embeds its figures whole. Try: a smaller figure "
+                         "(a lower dpi), or sosdyn.set_limits(max_file_bytes=...) if it is meant to be embedded.")
+
+
 def _figures(section: Mapping, base_dir: Path, trusted: bool = False) -> list[dict]:
     """Each figure as a data URI: the SVG unless it is over the size limit and a PNG exists.
     Untrusted results: InputError for a path outside ``base_dir``, before any file is read."""
@@ -296,6 +310,7 @@ def _figures(section: Mapping, base_dir: Path, trusted: bool = False) -> list[di
         src = None
         if found:
             kind, path = next(iter(found.items()))
+            _check_figure_size(name, path)
             src = f"data:{_MIME_TYPES[kind]};base64,{base64.b64encode(path.read_bytes()).decode('ascii')}"
         missing = ", ".join(str(spec[kind]) for kind in given) or "no file given"
         figures.append({"name": name, "caption": spec.get("caption", name), "src": src,
@@ -343,9 +358,7 @@ def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path |
     context["meta_raw"] = results.get("meta") or {}
     context["bench_href"] = BENCH_PAGE if (out_dir / BENCH_PAGE).is_file() else None
     html = jinja_environment().get_template("report.html.j2").render(**context)
-    path = out_dir / REPORT_FILES["html"]
-    path.write_text(html, encoding="utf-8")
-    return path
+    return replace_atomically(out_dir / REPORT_FILES["html"], html.encode("utf-8"))
 
 
 def render_pdf(html_path: str | Path, pdf_path: str | Path) -> Path:
@@ -363,8 +376,7 @@ def render_pdf(html_path: str | Path, pdf_path: str | Path) -> Path:
                               "Try: pip install 'sosdyn[report]'") from exc
     pdf_path = Path(pdf_path)
     pdf_path.parent.mkdir(parents=True, exist_ok=True)
-    weasyprint.HTML(filename=str(html_path)).write_pdf(str(pdf_path))
-    return pdf_path
+    return replace_atomically(pdf_path, weasyprint.HTML(filename=str(html_path)).write_pdf())
 
 
 def build_report(results_json_path: str | Path, out_dir: str | Path, *,

@@ -36,13 +36,13 @@ import hmac
 import json
 import math
 import os
-import secrets
 import stat
 from pathlib import Path
 
 import numpy as np
 
 from sosdyn.errors import InputError, ModelFileError, ResourceLimitError
+from sosdyn.files import replace_atomically as write_atomically
 from sosdyn.limits import check_json_depth, format_bytes, get_limits
 
 FORMAT, VERSION = "sosdyn-cdsp", 2
@@ -139,41 +139,13 @@ def write_model_file(content: dict, path, key=None) -> Path:
 
 
 def replace_atomically(path: Path, data: bytes) -> None:
-    """Write ``data`` to a temporary file beside ``path``, fsync it, rename it over ``path``."""
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(6)}.tmp")
+    """:func:`sosdyn.files.replace_atomically`, its OSError as a ModelFileError."""
     try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)   # the umask applies
-        try:
-            with os.fdopen(fd, "wb") as f:
-                f.write(data)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
+        write_atomically(path, data)
     except OSError as exc:
         raise ModelFileError(f"could not write the model file {path}: {exc.strerror or exc}; the previous "
                              "file there, if any, is unchanged. Try: a folder that exists and is "
                              "writable, with free space.") from exc
-    _sync_folder(path.parent)
-
-
-def _sync_folder(folder: Path) -> None:
-    """Make the rename durable (POSIX). The new file is already complete and in place, so a
-    filesystem that cannot fsync a folder only loses that durability, not the file."""
-    if os.name != "posix":
-        return
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
 
 
 # ---------------------------------------------------------------------- reading
