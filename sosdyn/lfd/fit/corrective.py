@@ -32,7 +32,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from sosdyn.errors import SolverError
-from sosdyn.limits import get_limits
+from sosdyn.limits import check_count, get_limits
 from ..data.demonstrations import Demonstration, Demonstrations, sample_step
 from ..rollout import euler_until_rest
 
@@ -103,12 +103,24 @@ def training_rollouts(field: Callable[[np.ndarray], np.ndarray], demos: Demonstr
     return _rollouts(field, demos, rollout_starts(demos), dt, vel_tol, max_steps)
 
 
+def score_steps(demos: Demonstrations) -> int:
+    """The Euler steps of :func:`demo_score`'s rollouts, the longest demonstration's samples + 1 (at
+    least 2 REST_WINDOW), checked for all len(demos) starts against max_rollout_steps before any fit
+    (ResourceLimitError whose hint names what a CDSP user can change)."""
+    steps = max(max(len(d.pos) for d in demos) + 1, 2 * REST_WINDOW)
+    check_count(steps * len(demos), "max_rollout_steps",
+                f"The rollouts that score warp='auto' ({len(demos)} demonstrations x {steps} steps, one per "
+                "sample of the longest)", "fewer samples per demonstration (demos.subsample(k)), or "
+                "warp='none' or a warp dict (no scoring rollouts)")
+    return steps
+
+
 def demo_score(field: Callable[[np.ndarray], np.ndarray], demos: Demonstrations) -> float:
     """:func:`training_score` of Euler rollouts of ``field`` from the demonstrations' first samples
-    only, as long as the longest demonstration (:func:`rest_rule`'s dt and rest test): the score of
-    the first len(demos) :func:`training_rollouts` at a fraction of their cost."""
+    only, as long as the longest demonstration (:func:`rest_rule`'s dt and rest test, :func:`score_steps`):
+    the score of the first len(demos) :func:`training_rollouts` at a fraction of their cost."""
     dt, vel_tol, _ = rest_rule(demos)
-    steps = max(max(len(d.pos) for d in demos) + 1, 2 * REST_WINDOW)
+    steps = score_steps(demos)
     return training_score(_rollouts(field, demos, np.array([d.pos[0] for d in demos]), dt, vel_tol, steps), demos)
 
 
@@ -151,4 +163,4 @@ def augmented(demos: Demonstrations, extra: list[Demonstration]) -> Demonstratio
 __all__ = ["DIVERGED", "MAX_PAIRS", "MIN_DIST", "MIN_PAIRS", "REST_FRACTION", "REST_WINDOW",
            "ROLLOUT_SPAN", "ROUNDS", "TAU", "augmented", "corrective_demonstration",
            "corrective_pairs", "demo_score", "nearest", "rest_rule", "rollout_deviation", "rollout_starts",
-           "thin", "training_rollouts", "training_score"]
+           "score_steps", "thin", "training_rollouts", "training_score"]

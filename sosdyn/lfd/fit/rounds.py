@@ -7,18 +7,21 @@ with ``field(X, goal)``, ``goal_``, ``scale_``, ``certified_`` and ``history_``.
 """
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 
 import numpy as np
 
-from sosdyn.errors import NotCertifiedError
+from sosdyn.errors import InputError, NotCertifiedError, SolverError
 from .corrective import (
     MAX_PAIRS,
+    TAU,
     MIN_PAIRS,
     augmented,
     corrective_demonstration,
     corrective_pairs,
     demo_score,
+    score_steps,
     thin,
     training_rollouts,
     training_score,
@@ -30,19 +33,30 @@ def corrective_fits(fit_round: Callable, demos: Demonstrations, n_rounds: int, t
     """Rounds 0..n_rounds (:mod:`.corrective`): ``fit_round(r, data)`` fits round r on the
     demonstrations plus the corrective pseudo-demonstrations of rounds < r; round r's training
     rollouts give the pairs of round r + 1 (states farther than ``min_dist`` x round 0's scale from
-    the demos). Stops after an uncertified refit (r > 0), a diverged rollout or fewer than MIN_PAIRS
-    pairs. Returns (kept round, its model, every round's score, pairs per round, every round's
-    history rows tagged with ``round``)."""
+    the demos). ``tau`` must be at least the data's sample step dt (InputError before any fit: a
+    pull-back faster than one step makes labels of |p - x| / tau that Euler with step dt overshoots).
+    Stops after a refit (r > 0) that is not certified or fails (a SolverError such as an infeasible
+    or unbounded step, or a ValueError; a warning says which, and the rounds so far compete), a
+    diverged rollout or fewer than MIN_PAIRS pairs. Returns (kept round, its model, every round's
+    score, pairs per round, every round's history rows tagged with ``round``)."""
     goal, dt = np.asarray(demos.goal, dtype=float), sample_step(demos)
+    if n_rounds and not tau >= dt:
+        raise InputError(f"corrective_tau = {tau:.6g} s is shorter than the demonstrations' sample step "
+                         f"{dt:.6g} s: the corrective labels v + (p - x) / tau would pull back faster than "
+                         f"one step. Try: corrective_tau >= {dt:.3g} (the default is {TAU}), or "
+                         "corrective_rounds=0.")
     P, V = demos.stacked()
     models, extra, history, scores, pairs = [], [], [], [], []
     for r in range(n_rounds + 1):
         try:
             model = fit_round(r, augmented(demos, extra))
-        except NotCertifiedError:
+        except (SolverError, ValueError) as exc:
             if r == 0:
                 raise
-            break                       # an uncertified refit: the certified rounds so far compete
+            if not isinstance(exc, NotCertifiedError):
+                warnings.warn(f"corrective round {r} failed ({type(exc).__name__}: {exc}); keeping the best "
+                              f"of rounds 0..{r - 1}, all certified.", stacklevel=2)
+            break                       # an uncertified or failed refit: the certified rounds so far compete
         models.append(model)
         history += [dict(row, round=r) for row in model.history_]
         reps = training_rollouts(lambda X, m=model: m.field(X, m.goal_), demos)
@@ -62,7 +76,9 @@ def warp_choice(fit_candidate: Callable, candidates: dict, demos: Demonstrations
     """``fit_candidate(name, settings)`` for every ``candidates`` item (settings None: no warp, must
     certify; a warped candidate that does not certify scores inf), each scored by
     :func:`~.corrective.demo_score` (once per distinct model: a candidate may return an earlier
-    one's fit). Returns (the kept model, {name: score}); ties: the first candidate."""
+    one's fit). Returns (the kept model, {name: score}); ties: the first candidate. The scoring
+    rollouts' size is checked before any fit (:func:`~.corrective.score_steps`)."""
+    score_steps(demos)
     fits, scores = {}, {}
     for name, settings in candidates.items():
         try:
