@@ -75,3 +75,16 @@ def field_model(request, linear_demos):
         assert len(m.warp_["sigmas"]) >= 10      # measured 19 (the fit stops when no bump helps)
         return m
     return CDSP(n_components=3, field_degree=request.param, warp="none").fit(linear_demos)
+
+
+@pytest.fixture(scope="session")
+def hook_demos():
+    """Three demonstrations of a hook: out to 3.5x the start's distance from the goal (the origin),
+    around it by 270 degrees, then in; no constant metric sees the distance decrease."""
+    t = np.linspace(0, 4, 200)
+    sm = 3 * (t / 4) ** 2 - 2 * (t / 4) ** 3
+    demos = []
+    for k, (r0, th0) in enumerate(((1.0, 0.6), (1.1, 0.75), (0.9, 0.5))):
+        r, th = r0 * (1 + 2.5 * np.sin(np.pi * sm)) * (1 - sm), th0 + 1.5 * np.pi * sm
+        demos.append(Demonstration.from_positions(t, np.column_stack([r * np.cos(th), r * np.sin(th)]), f"hook {k}"))
+    return Demonstrations(demos, "hook")

@@ -101,8 +101,9 @@ class CDSP:
                                  rollouts from the training demos' starts deviate least from them.
 
     Warp (z = (x - x*)/s): the core f is fitted on (phi(z_i), J_phi(z_i) zdot_i) and certified in
-    u as always; the model is zdot = J_phi(z)^{-1} f(phi(z)). Since du = J_phi dz, the x-system
-    contracts at rate gamma in the metric J_phi^T M J_phi, uniformly definite because every bump's
+    u as always; the model is zdot = J_phi(z)^{-1} f(phi(z)). Since du = J_phi dz, the x-system is
+    partially contracting at rate gamma in the metric J_phi^T M J_phi (every trajectory converges to
+    the goal; nearby ones need not approach each other: docs/theory.md), uniformly definite because every bump's
     Lipschitz number l_j < 1 (prod (1 - l_j)^2 M <= J^T M J <= prod (1 + l_j)^2 M); phi(0) = 0 keeps
     the goal, and goal changes and rescaling work as without a warp. ``verify`` adds the warp's
     check (every l_j < 1 recomputed, sampled sigma_min(J_phi) >= prod (1 - l_j)) to the report.

@@ -110,24 +110,12 @@ def test_fit_maps_respects_l_max_and_reduces_the_mismatch():
     assert after < 0.05 * before                    # measured 0.25 -> 0.0037
 
 
-def hook_demos():
-    """Three demonstrations of a hook: out to 3.5x the start's distance from the goal (the origin),
-    around it by 270 degrees, then in; no constant metric sees the distance decrease."""
-    t = np.linspace(0, 4, 200)
-    sm = 3 * (t / 4) ** 2 - 2 * (t / 4) ** 3
-    demos = []
-    for k, (r0, th0) in enumerate(((1.0, 0.6), (1.1, 0.75), (0.9, 0.5))):
-        r, th = r0 * (1 + 2.5 * np.sin(np.pi * sm)) * (1 - sm), th0 + 1.5 * np.pi * sm
-        demos.append(Demonstration.from_positions(t, np.column_stack([r * np.cos(th), r * np.sin(th)]), f"hook {k}"))
-    return Demonstrations(demos, "hook")
-
-
 CDSP_SMALL = {"n_components": 3, "max_samples": 300, "verify_samples": 500}
 
 
 @pytest.fixture(scope="module")
-def hook_models():
-    demos = hook_demos()
+def hook_models(hook_demos):
+    demos = hook_demos
     return demos, CDSP(**CDSP_SMALL, warp="none").fit(demos), CDSP(**CDSP_SMALL, warp={}).fit(demos)
 
 
@@ -219,10 +207,10 @@ def test_auto_keeps_no_warp_where_it_reproduces_best(linear_demos):
 @pytest.mark.parametrize("warp", [{"n_maps": -1}, {"n_maps": 2.5}, {"n_maps": True}, {"l_max": 1.0},
                                   {"l_max": 0}, {"beta": 0}, {"beta": 1.5}, {"decay": 1.5}, {"n_points": 3},
                                   {"match": "median"}, {"target": "circle"}, {"n_map": 10}, "yes", 3, None])
-def test_bad_warp_parameters_are_input_errors_before_fitting(warp, monkeypatch):
+def test_bad_warp_parameters_are_input_errors_before_fitting(warp, monkeypatch, hook_demos):
     monkeypatch.setattr("sosdyn.lfd.model.cdsp.fit_joint_gmm", lambda *a: pytest.fail("fitted"))
     with pytest.raises(InputError, match="Try:"):
-        CDSP(warp=warp).fit(hook_demos())
+        CDSP(warp=warp).fit(hook_demos)
 
 
 def test_save_load_round_trip_and_tampering(hook_models, tmp_path):
