@@ -1,5 +1,6 @@
 """The bad-input catalogue (docs/errors.md): every case must raise a typed SosdynError whose
 message says what was wrong; none may end in a bare traceback, a NaN or a silent answer."""
+import functools
 import json
 
 import numpy as np
@@ -7,6 +8,8 @@ import pytest
 
 import sosdyn as sd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
+from sosdyn.lfd.fit.warp import LIP_FACTOR, check_maps
+from sosdyn.lfd.runtime.export import export
 from sosdyn.poly import PolyMatrix
 
 
@@ -23,9 +26,24 @@ def _demos(goals=((0.0, 0.0), (0.0, 0.0)), T=50, nan=False, dims=None):
     return Demonstrations(out, name="synthetic")
 
 
+@functools.cache
+def _fitted_once():
+    return sd.CDSP(n_components=1, gamma=0.5, warp="none").fit(_demos())
+
+
 @pytest.fixture(scope="module")
 def fitted():
-    return sd.CDSP(n_components=1, gamma=0.5, warp="none").fit(_demos())
+    return _fitted_once()
+
+
+def _bump(lip):
+    """One warp bump (centers, vectors, sigmas) with Lipschitz number ``lip``."""
+    return np.array([[0.3, 0.0]]), np.array([[lip * 0.5 / LIP_FACTOR, 0.0]]), np.array([0.5])
+
+
+def _rollout_over_budget(model):
+    with sd.limits(max_rollout_calls=20):
+        return model.rollout([1.0, 2.0], duration=100.0)
 
 
 x, y = sd.variables("x y")
@@ -90,6 +108,15 @@ CATALOGUE = [
     ("even field degree (no certificate can exist)", lambda: sd.CDSP(field_degree=2).fit(_demos()), sd.InputError, "even"),
     ("negative contraction rate", lambda: sd.CDSP(gamma=-0.1).fit(_demos()), sd.InputError, "gamma"),
     ("more components than the data supports", lambda: sd.CDSP(n_components=40).fit(_demos()), sd.InputError, "too few"),
+    # issue 23: exports, warps, corrective refits
+    ("units that could carry code into an export", lambda: Demonstrations([], units="coding:unicode_escape\\nprint(1)#"),
+     sd.InputError, "each a letter, a digit or one of"),
+    ("export to an unknown target", lambda: export(_fitted_once(), "rust"), sd.InputError, "unknown export target"),
+    ("a near-singular warp", lambda: check_maps(*_bump(1 - 1e-13), np.zeros(2)), sd.InputError, "near singular"),
+    ("a warp of more than 10,000 bumps", lambda: check_maps(*(np.repeat(a, 10_001, axis=0) for a in _bump(1e-6)),
+                                                             np.zeros(2)), sd.InputError, "more than 10000"),
+    ("corrective_tau shorter than the sample step",
+     lambda: sd.CDSP(corrective_rounds=1, corrective_tau=1e-12).fit(_demos()), sd.InputError, "shorter than the demonstrations"),
 ]
 
 
@@ -107,6 +134,7 @@ def test_catalogue(what, call, exc, match):
     ("rollout from a wrong-sized start", lambda m: m.rollout([1.0, 2.0, 3.0], duration=1.0), "shape"),
     ("rollout with a non-positive duration", lambda m: m.rollout([1.0, 2.0], duration=0.0), "duration"),
     ("rollout with a push after the end", lambda m: m.rollout([1.0, 2.0], duration=1.0, perturbations=[(5.0, [1, 1])]), "5"),
+    ("rollout over max_rollout_calls", _rollout_over_budget, "stopped after 21 field calls"),
 ])
 def test_model_boundary(fitted, what, call, match):
     with pytest.raises(sd.SosdynError, match=match):
