@@ -14,7 +14,7 @@ from sosdyn.lfd.data.demonstrations import Demonstrations
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.fileformat import _digest
 from sosdyn.lfd.model.files import load_model
-from sosdyn.lfd.runtime.export import cpp_string, export, to_cpp, to_python
+from sosdyn.lfd.runtime.export import PREAMBLE, cpp_string, export, to_cpp, to_python
 
 # Each would run code or break the file if it reached the source as text: an encoding declaration
 # (line 1 or 2 of a Python file), quotes and newlines that end a literal or a comment, a C++
@@ -37,7 +37,7 @@ def _with_units(model, units):
 @pytest.mark.parametrize("units", HOSTILE, ids=range(len(HOSTILE)))
 def test_python_export_of_hostile_units_imports_silently(fitted, tmp_path, units):
     source = to_python(_with_units(fitted, units))
-    assert source.splitlines()[:2] == to_python(fitted).splitlines()[:2]      # fixed text
+    assert source.splitlines()[:2] == [f"# {line}" for line in PREAMBLE]      # fixed text
     (tmp_path / "field.py").write_text(source, encoding="utf-8")
     probe = ("import json, field; print(json.dumps({'units': field.UNITS, "
              "'v': field.predict([1.0, 2.0]).tolist()}))")
@@ -62,7 +62,9 @@ int main() {
 @pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
 def test_cpp_export_of_hostile_units_compiles_and_keeps_them(fitted, tmp_path):
     for i, units in enumerate(u for u in HOSTILE if "\x00" not in u):   # a C string ends at NUL
-        (tmp_path / "model.hpp").write_text(to_cpp(_with_units(fitted, units)), encoding="utf-8")
+        source = to_cpp(_with_units(fitted, units))
+        assert source.splitlines()[:2] == [f"// {line}" for line in PREAMBLE]
+        (tmp_path / "model.hpp").write_text(source, encoding="utf-8")
         (tmp_path / "main.cpp").write_text(MAIN)
         exe = tmp_path / f"main{i}"
         subprocess.run(["g++", "-std=c++17", "-Wall", "-Wextra", "-Werror", "-trigraphs", "-o", str(exe),
