@@ -30,7 +30,7 @@ def monomial_keys(exps: np.ndarray, base: int | None = None) -> np.ndarray | Non
         base = int(exps.max()) + 1 if exps.size else 1
     if n == 0:
         return np.zeros(m, dtype=np.int64)
-    if float(base) ** n >= _MAX_KEY:
+    if int(base) ** n >= _MAX_KEY:            # exact integers: a float power overflows for n > ~400
         return None
     weights = base ** np.arange(n - 1, -1, -1, dtype=np.int64)
     return exps.astype(np.int64, copy=False) @ weights

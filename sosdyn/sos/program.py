@@ -31,6 +31,7 @@ from .constraints import (Basis, Block, EqualityMultiplier, FamilySOSConstraint,
 from .gram import SQRT2, svec_pairs, svec_size
 from .objective import QuadraticForm, is_cvxpy
 from .sets import as_set, putinar_terms
+from .sparse_constraint import SparseSOSConstraint, local_basis
 from .sparsity import clique_vars, constraint_cliques, sparse_bases
 
 
@@ -167,16 +168,28 @@ class SOSProgram:
 
     # ------------------------------------------------------------------ constraints
     def _register(self, name, kind, poly, bases, cone="psd", multipliers=(), source=None, **handles):
-        """An SOSConstraint over ``bases``: the first the main block, the others "clique" multipliers of 1."""
-        psd = self._block(name, svec_size(bases[0].shape[0]), bases[0].shape[0]).psd
+        """An SOS constraint over ``bases`` ((variable indices, exponent rows) per block, from
+        :func:`.sparsity.sparse_bases`): one block over all variables is an SOSConstraint; else a
+        SparseSOSConstraint, the first block the main one, the others "clique" multipliers of 1."""
+        vars, mults = poly.vars, list(multipliers)
+        (cols, exps), rest = bases[0], bases[1:]
+        if cols.size == len(vars):
+            main = Basis(vars, exps)
+        else:                                 # the first block over all the variables, zeros elsewhere
+            main = Basis(vars, np.zeros((exps.shape[0], len(vars)), dtype=np.int64))
+            main.exps[:, cols] = exps
+        psd = self._block(name, svec_size(len(main)), len(main)).psd
         self._in_cone(psd, cone)
-        vars, rest, mults = poly.vars, poly, list(multipliers)
-        for k, exps in enumerate(bases[1:], start=1):
-            sigma, block = self._gram(Basis(vars, exps), f"{name}.block{k}", "clique", cone)
-            mults.append(Multiplier(Polynomial.constant(1.0).with_vars(vars), sigma, Basis(vars, exps), block))
-            rest = rest - sigma
-        con = SOSConstraint(self, name, kind, rest.with_vars(vars), Basis(vars, bases[0]), psd, multipliers=mults,
-                            source=poly if source is None else source, **handles)
+        if not rest and cols.size == len(vars):
+            con = SOSConstraint(self, name, kind, poly, main, psd, multipliers=mults,
+                                source=poly if source is None else source, **handles)
+        else:
+            for k, (cols_k, exps_k) in enumerate(rest, start=1):
+                basis = local_basis(vars, cols_k, exps_k)
+                sigma, block = self._gram(basis, f"{name}.block{k}", "clique", cone)
+                mults.append(Multiplier(Polynomial.constant(1.0), sigma, basis, block))
+            con = SparseSOSConstraint(self, name, kind, poly, main, psd, multipliers=mults,
+                                      source=source, **handles)
         self.sos_constraints.append(con)
         return con
 
@@ -239,7 +252,7 @@ class SOSProgram:
         check_cone(cone)
         name = self._name("sosmat", name)
         q, exps = matrix_form(P)
-        return self._register(name, "sos_matrix", q, [exps], cone=cone)
+        return self._register(name, "sos_matrix", q, [(np.arange(q.nvars), exps)], cone=cone)
 
     @_timed
     def add_nonneg_on(self, expr, ineqs=(), eqs=(), degree=None, name=None, cone="psd",
