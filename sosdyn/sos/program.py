@@ -23,13 +23,13 @@ import numpy as np
 from ..errors import InputError, PolynomialError, UnverifiedSolutionError
 from ..poly import PolyMatrix, Polynomial, allocate, monomials_up_to, variable_names
 from . import conic
-from .backends import solve_program
 from .cones import auxiliary_count, check_cone, cone_rows, face_rows
 from .constraints import (Basis, Block, EqualityMultiplier, FamilySOSConstraint, LinearRows, Multiplier,
                           PsdBlock, SOSConstraint, as_sos_polynomial, user_basis,
                           affine_items, affine_rows, gram_polynomial, matrix_form)
 from .gram import SQRT2, svec_pairs, svec_size
 from .objective import QuadraticForm, is_cvxpy
+from .remedies import solve_with_remedies
 from .sets import as_set, putinar_terms
 from .sparse_constraint import SparseSOSConstraint, local_basis
 from .sparsity import clique_vars, constraint_cliques, sparse_bases
@@ -168,28 +168,18 @@ class SOSProgram:
 
     # ------------------------------------------------------------------ constraints
     def _register(self, name, kind, poly, bases, cone="psd", multipliers=(), source=None, **handles):
-        """An SOS constraint over ``bases`` ((variable indices, exponent rows) per block, from
-        :func:`.sparsity.sparse_bases`): one block over all variables is an SOSConstraint; else a
-        SparseSOSConstraint, the first block the main one, the others "clique" multipliers of 1."""
+        """An SOSConstraint over one block of ``bases`` (:func:`.sparsity.sparse_bases`), else a
+        SparseSOSConstraint: the first block the main one, the others "clique" multipliers of 1."""
         vars, mults = poly.vars, list(multipliers)
-        (cols, exps), rest = bases[0], bases[1:]
-        if cols.size == len(vars):
-            main = Basis(vars, exps)
-        else:                                 # the first block over all the variables, zeros elsewhere
-            main = Basis(vars, np.zeros((exps.shape[0], len(vars)), dtype=np.int64))
-            main.exps[:, cols] = exps
+        main = local_basis(vars, *bases[0], spread=True)
         psd = self._block(name, svec_size(len(main)), len(main)).psd
         self._in_cone(psd, cone)
-        if not rest and cols.size == len(vars):
-            con = SOSConstraint(self, name, kind, poly, main, psd, multipliers=mults,
-                                source=poly if source is None else source, **handles)
-        else:
-            for k, (cols_k, exps_k) in enumerate(rest, start=1):
-                basis = local_basis(vars, cols_k, exps_k)
-                sigma, block = self._gram(basis, f"{name}.block{k}", "clique", cone)
-                mults.append(Multiplier(Polynomial.constant(1.0), sigma, basis, block))
-            con = SparseSOSConstraint(self, name, kind, poly, main, psd, multipliers=mults,
-                                      source=source, **handles)
+        for k, (cols, exps) in enumerate(bases[1:], start=1):
+            basis = local_basis(vars, cols, exps)
+            sigma, block = self._gram(basis, f"{name}.block{k}", "clique", cone)
+            mults.append(Multiplier(Polynomial.constant(1.0), sigma, basis, block))
+        kind_of = SparseSOSConstraint if len(bases) > 1 or bases[0][0].size != len(vars) else SOSConstraint
+        con = kind_of(self, name, kind, poly, main, psd, multipliers=mults, source=source, **handles)
         self.sos_constraints.append(con)
         return con
 
@@ -384,21 +374,20 @@ class SOSProgram:
 
     def solve(self, solver: str = "CLARABEL", backend: str = "auto", scale: bool = True,
               verbose: bool = False, raise_on_failure: bool = False, rigorous: bool = False,
-              **settings):
+              retry: bool = True, **settings):
         """Solve and return a :class:`~sosdyn.sos.solution.Solution`.
 
         ``backend``: "direct" hands the conic data straight to Clarabel (no canonicalisation;
         the fast re-solve path); "cvxpy" goes through cvxpy (any cvxpy solver, and needed for
-        cvxpy constraints/objectives); "auto" picks direct when it can.
-        ``raise_on_failure``: raise SolverError/InfeasibleError/UnverifiedSolutionError
-        instead of returning a Solution that is not verified.
-        ``rigorous``: the objective (and every value) is read at a point where the whole
+        cvxpy constraints/objectives); "auto" picks direct when it can. ``raise_on_failure``:
+        raise SolverError/InfeasibleError/UnverifiedSolutionError instead of returning a
+        Solution that is not verified. ``rigorous``: the objective (and every value) is read at a point where the whole
         certificate holds exactly: ``sol.objective`` is the proven bound, ``sol.bound``
-        compares it with the solver's value (see :mod:`sosdyn.sos.rigorous`).
+        compares it with the solver's value (see :mod:`sosdyn.sos.rigorous`). ``retry``: re-solve
+        with other settings after a numerical failure; after "unbounded", check the constraints (:mod:`.remedies`).
         """
-        build = self.build_seconds - self.build_reported
-        sol = solve_program(self, solver=solver, backend=backend, scale=scale, verbose=verbose,
-                            build=build, **settings)
+        sol = solve_with_remedies(self, solver, backend, scale, verbose, self.build_seconds - self.build_reported,
+                                  settings, retry)
         self.build_reported = self.build_seconds
         sol.rigorous = rigorous
         sol.verify()                        # now, while the program is the one that was solved

@@ -159,6 +159,11 @@ class SparseSOSConstraint(SOSConstraint):
         return self
 
 
-def local_basis(vars: tuple, cols: np.ndarray, exps: np.ndarray) -> Basis:
-    """The basis of exponent rows ``exps`` over the variables ``vars[cols]``."""
-    return Basis(tuple(vars[c] for c in cols), exps)
+def local_basis(vars: tuple, cols: np.ndarray, exps: np.ndarray, spread: bool = False) -> Basis:
+    """The basis of exponent rows ``exps`` over the variables ``vars[cols]``; with ``spread``,
+    the same monomials over all of ``vars`` (zero exponents outside ``cols``)."""
+    if not spread:
+        return Basis(tuple(vars[c] for c in cols), exps)
+    full = np.zeros((exps.shape[0], len(vars)), dtype=np.int64)
+    full[:, cols] = exps
+    return Basis(tuple(vars), full)
