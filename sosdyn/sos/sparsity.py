@@ -148,14 +148,17 @@ def clique_bases(support: np.ndarray, cliques: list) -> list:
     """
     deg = support.sum(axis=1)
     lo, hi = int(np.ceil(deg.min() / 2)), int(deg.max() // 2)
-    out = []
+    out, memo = [], {}            # a chain repeats its faces (in clique coordinates): each is solved once
     for C, face in zip(cliques, clique_faces(support, cliques)):
-        basis = np.zeros((0, C.size), dtype=np.int64)
-        if face.shape[0]:
-            cand = monomials_up_to(C.size, hi, lo, max_per_var=face.max(axis=0) // 2)
-            cand = cand[(2 * cand >= face.min(axis=0)).all(axis=1)]
-            basis = cand[in_hull(2 * cand, face)] if cand.shape[0] else cand
-        out.append(basis)
+        key = (face.shape, face.tobytes())
+        if key not in memo:
+            basis = np.zeros((0, C.size), dtype=np.int64)
+            if face.shape[0]:
+                cand = monomials_up_to(C.size, hi, lo, max_per_var=face.max(axis=0) // 2)
+                cand = cand[(2 * cand >= face.min(axis=0)).all(axis=1)]
+                basis = cand[in_hull(2 * cand, face)] if cand.shape[0] else cand
+            memo[key] = basis
+        out.append(memo[key])
     return out
 
 
