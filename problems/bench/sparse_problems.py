@@ -30,6 +30,7 @@ from .timing import fmt_ratio, fmt_s, md_table, now
 NS = (10, 20, 30, 40)
 VARIANTS = ("dense", "correlative", "correlative+term")
 PROBE_S = 30.0          # budget of a variant's larger n once it ran over the full budget
+ROW_PROBLEMS = ("chained Rosenbrock", "chained Wood")    # the dense-against-sparse rows (run_rows)
 KNOWN_MIN = {"chained Rosenbrock": 0.0, "chained Wood": 1.0, "Broyden tridiagonal": 0.0, "chained singular": 0.0}
 
 
@@ -161,7 +162,7 @@ def run_rows(ns=NS, budget_s=120.0, probe_s=PROBE_S) -> list:
     the solve starts), not to sit through another full budget."""
     sparse_ok = sparsity_supported()
     rows = []
-    for name in ("chained Rosenbrock", "chained Wood"):
+    for name in ROW_PROBLEMS:
         limited = set()
         for n in ns:
             for variant in VARIANTS:
