@@ -14,7 +14,9 @@ ordering family of the solver's AMD), each costing one entry per neighbour left.
 For a single dense block over m rows this is (s + m)(s + m + 1) / 2, the dense group the
 estimate was calibrated on; on a chain of small blocks (correlative sparsity) every term is
 local and F grows linearly with the chain. When the row graph has more than a quarter of all
-possible edges it is counted dense (m (m + 1) / 2) without running the elimination.
+possible edges it is counted dense (m (m + 1) / 2) without running the elimination, and an
+elimination that has spent ``ELIMINATION_WORK`` set updates counts the rows it has not reached
+as dense (an upper bound of any continuation): the estimate stays fast on every program.
 """
 from __future__ import annotations
 
@@ -24,6 +26,8 @@ import scipy.sparse as sp
 from .sparsity import min_degree_elimination
 
 DENSE_ROW_GRAPH = 0.25     # edge share above which the row graph is counted dense
+ELIMINATION_WORK = 2e7     # set updates the elimination may spend (sum of degree^2) before the
+                           # rows left are counted dense
 
 
 def column_groups(data) -> tuple:
@@ -58,4 +62,9 @@ def factor_entries(data) -> float:
             adj[r].update(rows)
     for r in range(m):
         adj[r].discard(r)
-    return float(groups + sum(len(nb) + 1 for _, nb in min_degree_elimination(adj)))
+    rows, work, left = 0.0, 0.0, m
+    for _, nb in min_degree_elimination(adj):
+        rows, work, left = rows + len(nb) + 1, work + len(nb) ** 2, left - 1
+        if work > ELIMINATION_WORK:           # the rest at most dense: left (left + 1) / 2 entries
+            return float(groups + rows + left * (left + 1) / 2)
+    return float(groups + rows)

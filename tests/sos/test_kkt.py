@@ -7,6 +7,7 @@ import sys
 import pytest
 
 import sosdyn as sd
+from sosdyn.sos import kkt
 from sosdyn.sos.backends import BASE_BYTES, solver_bytes
 from sosdyn.sos.kkt import factor_entries
 
@@ -78,3 +79,12 @@ def test_estimate_is_above_the_measured_peak_and_not_far_above_it():
     for est, measured in got.values():
         assert measured <= est <= BASE_BYTES + 8 * max(measured, MiB)
     assert got["dense"][1] > 3 * got["sparse"][1]    # measured: about 58 MiB and 7 MiB
+
+
+def test_a_long_elimination_stops_at_an_upper_bound(monkeypatch):
+    # past ELIMINATION_WORK the rows not yet eliminated are counted dense: never below the count
+    data = lower_bound_program(broyden(31), sparsity="correlative")[0].compile()
+    exact = factor_entries(data)
+    monkeypatch.setattr(kkt, "ELIMINATION_WORK", 0.0)
+    m = data.A_eq.shape[0]
+    assert exact < factor_entries(data) <= exact + m * (m + 1) / 2
