@@ -377,14 +377,13 @@ class SOSProgram:
               retry: bool = True, **settings):
         """Solve and return a :class:`~sosdyn.sos.solution.Solution`.
 
-        ``backend``: "direct" hands the conic data straight to Clarabel (no canonicalisation;
-        the fast re-solve path); "cvxpy" goes through cvxpy (any cvxpy solver, and needed for
-        cvxpy constraints/objectives); "auto" picks direct when it can. ``raise_on_failure``:
-        raise SolverError/InfeasibleError/UnverifiedSolutionError instead of returning a
-        Solution that is not verified. ``rigorous``: the objective (and every value) is read at a point where the whole
-        certificate holds exactly: ``sol.objective`` is the proven bound, ``sol.bound``
-        compares it with the solver's value (see :mod:`sosdyn.sos.rigorous`). ``retry``: re-solve
-        with other settings after a numerical failure; after "unbounded", check the constraints (:mod:`.remedies`).
+        ``backend``: "direct" hands the conic data straight to Clarabel (no canonicalisation: the fast
+        re-solve path); "cvxpy" goes through cvxpy (any cvxpy solver; needed for cvxpy constraints and
+        objectives); "auto" picks direct when it can. ``raise_on_failure``: raise SolverError /
+        InfeasibleError / UnverifiedSolutionError instead of returning an unverified Solution.
+        ``rigorous``: every number is read where the whole certificate holds exactly (``sol.bound``
+        compares the proven bound with the solver's; :mod:`.rigorous`). ``retry``: re-solve with other
+        settings after a numerical failure; after "unbounded", check the constraints alone (:mod:`.remedies`).
         """
         sol = solve_with_remedies(self, solver, backend, scale, verbose, self.build_seconds - self.build_reported,
                                   settings, retry)
