@@ -6,7 +6,8 @@ solver picos finds here) and in Drake (pydrake, solved by Clarabel as ours; :mod
 with ratios (against Drake with our stages split as Drake's are, :func:`.sos_split.like_drake`, and
 on the problems Drake solves in under 2 ms the floor of a sosdyn solve, :func:`.sos_split.floor`),
 the re-solve overhead of the compiled problem (``con.update(p)`` + solve minus the solver's own
-time), and the sparsity rows (chained Rosenbrock / Wood, :mod:`.sparse_problems`).
+time), the sparsity rows (chained Rosenbrock / Wood, :mod:`.sparse_problems`) and the sparse
+scaling rows to n = 1000 (:mod:`.sparse_scaling`).
 Writes ``reports/bench/sos.json`` and ``sos.md`` (:mod:`.sos_report`).
 
 Options: ``--quick`` (small problems, few repetitions: the smoke test), ``--no-theirs``,
@@ -26,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..settings import BENCH
-from . import drake_problems, sos_problems, sparse_problems
+from . import drake_problems, sos_problems, sparse_problems, sparse_scaling
 from .catalog import problems
 from .cdsp_problems import cdsp_fields
 from .profiling import profile_call
@@ -203,7 +204,7 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="small sizes, one repetition (smoke test)")
     ap.add_argument("--no-theirs", action="store_true", help="skip SumOfSquares.py")
     ap.add_argument("--no-drake", action="store_true", help="skip Drake (skipped anyway when not installed)")
-    ap.add_argument("--no-sparse", action="store_true", help="skip the chained Rosenbrock / Wood rows")
+    ap.add_argument("--no-sparse", action="store_true", help="skip the chained Rosenbrock / Wood / scaling rows")
     ap.add_argument("--sparse-budget", type=float, default=None,
                     help="wall-time budget of one sparsity row, seconds (default 120, quick 30)")
     ap.add_argument("--out", default=str(BENCH))
@@ -246,6 +247,9 @@ def main(argv=None):
     result["sparse"] = None if args.no_sparse else sparse_problems.run_rows((4,) if args.quick else
                                                                            sparse_problems.NS, budget)
     result["summary"]["sparse_speedups"] = sparse_problems.speedups(result["sparse"] or [])
+    result["sparse_scaling"] = None if args.no_sparse else sparse_scaling.run_scaling((40, 100) if args.quick else
+                                                                                      sparse_scaling.NS)
+    result["summary"]["sparse_scaling_targets"] = sparse_scaling.targets(result["sparse_scaling"] or [])
     result["profiles"] = profiles(probs, result["summary"], args.quick)
     result["elapsed_s"] = now() - t_start
     write_json(out_dir / "sos.json", result)

@@ -6,6 +6,7 @@ from collections import Counter
 from .profiling import profile_markdown
 from .sos_split import FLOOR_BELOW_S, like_drake
 from .sparse_problems import markdown as sparse_markdown
+from .sparse_scaling import markdown as scaling_markdown
 from .timing import fmt_ratio, fmt_s, md_table, verdict
 
 
@@ -86,6 +87,8 @@ def markdown(res) -> str:
                     for r in rows if r["resolve"]["direct"]]), ""]
     if res.get("sparse") is not None:
         L += sparse_markdown(res["sparse"], res["sparse_budget_s"])
+    if res.get("sparse_scaling"):
+        L += scaling_markdown(res["sparse_scaling"])
     if res.get("profiles"):
         L += ["## Profiles of the missed targets", ""]
         for p in res["profiles"]:

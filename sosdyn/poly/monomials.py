@@ -30,10 +30,33 @@ def monomial_keys(exps: np.ndarray, base: int | None = None) -> np.ndarray | Non
         base = int(exps.max()) + 1 if exps.size else 1
     if n == 0:
         return np.zeros(m, dtype=np.int64)
-    if float(base) ** n >= _MAX_KEY:
+    if int(base) ** n >= _MAX_KEY:            # exact integers: a float power overflows for n > ~400
         return None
     weights = base ** np.arange(n - 1, -1, -1, dtype=np.int64)
     return exps.astype(np.int64, copy=False) @ weights
+
+
+def wide_keys(exps: np.ndarray) -> np.ndarray | None:
+    """int64 keys of exponent rows too wide for :func:`monomial_keys` (n variables, few of them
+    in each monomial), ordered and equal as the rows are lexicographically; None if they overflow.
+
+    Row i's nonzero entries (c, e), by column, become (n - c) E + e (E = max exponent + 1), padded
+    with 0: at the first position where two rows differ, a smaller column (the other row is 0
+    there) or a larger exponent gives the larger number -- dense lexicographic order, in a key
+    as wide as the monomial's number of variables instead of n."""
+    m, n = exps.shape
+    r, c = np.nonzero(exps)
+    per = np.bincount(r, minlength=m)
+    E = int(exps.max(initial=0)) + 1
+    pairs = np.zeros((m, int(per.max(initial=0))), dtype=np.int64)
+    pairs[r, np.arange(r.size) - np.repeat(np.cumsum(per) - per, per)] = (n - c) * E + exps[r, c]
+    return monomial_keys(pairs, n * E + E)
+
+
+def _row_keys(exps: np.ndarray) -> np.ndarray | None:
+    """:func:`monomial_keys`, else :func:`wide_keys` (None if both overflow)."""
+    keys = monomial_keys(exps)
+    return wide_keys(exps) if keys is None else keys
 
 
 def unique_rows(exps: np.ndarray):
@@ -46,7 +69,7 @@ def unique_rows(exps: np.ndarray):
         at = {r: i for i, r in enumerate(uniq)}
         return (np.array(uniq, dtype=exps.dtype).reshape(len(uniq), exps.shape[1]),
                 np.array([at[r] for r in rows], dtype=np.int64))
-    keys = monomial_keys(exps)
+    keys = _row_keys(exps)
     if keys is None:
         uniq, inv = np.unique(exps, axis=0, return_inverse=True)
         return uniq, inv.ravel()
@@ -58,7 +81,7 @@ def sum_rows(exps: np.ndarray, coef: np.ndarray):
     """Combine like monomials: unique exponent rows and the summed coefficient rows."""
     if exps.shape[0] == 0:
         return exps, coef
-    keys = monomial_keys(exps)
+    keys = _row_keys(exps)
     if keys is not None:                       # fast path: one sort of int64 keys
         order = np.argsort(keys, kind="stable")
         sk = keys[order]

@@ -30,9 +30,10 @@ import scipy.sparse as sp
 from ..errors import InputError
 from ..limits import check_bytes, get_limits
 from ..poly import MAX_COEFFICIENT
-from .conic import affine_cones, check_data, coupled_psd_sizes, cvxpy_block_vars
+from .conic import affine_cones, check_data, cvxpy_block_vars
 from .csc import csc, vstack
 from .gram import svec_pairs, svec_to_matrix
+from .kkt import factor_entries
 from .objective import is_cvxpy
 from .solution import Solution
 
@@ -45,8 +46,8 @@ _CLARABEL_STATUS = {
 }
 # The memory model of a solve (bytes; see solver_bytes), calibrated on the peak RSS of dense
 # SOS programs with Clarabel 0.11, SCS 3 and cvxpy 1.9 (measured 38-46 bytes per entry of a
-# single dense group, 23 with coupled multiplier blocks; 160-210 per nonzero of an LP).
-DENSE_BYTES = 56                 # per entry of a D x D dense group (conic.coupled_psd_sizes)
+# single dense group D x D, 23 with coupled multiplier blocks; 160-210 per nonzero of an LP).
+DENSE_BYTES = 56                 # per entry of a D x D dense group: 2 x 56 per factor entry (kkt)
 SPARSE_BYTES = 400               # per nonzero, row and column of the sparse KKT part
 BASE_BYTES = 16 * 2**20          # the solver's fixed cost
 CVXPY_BASE_BYTES = 96 * 2**20    # importing cvxpy and canonicalising
@@ -177,15 +178,17 @@ def solver_bytes(data, solver: str, backend: str) -> float:
     """A conservative estimate of the working memory (bytes) of solving ``data``.
 
     An interior-point solver (Clarabel, and every cvxpy solver but SCS) factors a KKT matrix
-    in which each PSD cone of svec size s = b(b+1)/2 is a dense s x s block, and blocks that
-    share equality rows fill in together: with D_c the size of each coupled group
-    (:func:`~.conic.coupled_psd_sizes`), nnz the nonzeros of A (plus one per svec entry for
-    the cone rows, plus P), N the rows and columns of the KKT matrix,
+    in which each PSD cone of svec size s is a dense s x s block; F, the entries of its
+    factor (:func:`~.kkt.factor_entries`: each block dense, then its rows eliminated in
+    minimum-degree order), follows the sparsity of the program: one dense group of D columns
+    and rows gives D^2 / 2, a chain of small clique blocks a sum of small terms. With nnz the
+    nonzeros of A (plus one per svec entry for the cone rows, plus P), N the rows and columns
+    of the KKT matrix,
 
-        bytes = BASE + SPARSE (nnz + N) + DENSE sum_c D_c^2
+        bytes = BASE + SPARSE (nnz + N) + 2 DENSE F
                 [+ CVXPY_BASE + CVXPY_ENTRY (nnz(A) + sum_k b_k^2) through cvxpy].
 
-    SCS (first order, through cvxpy) never forms the dense blocks: its DENSE term is replaced
+    SCS (first order, through cvxpy) never forms the dense blocks: its factor term is replaced
     by SCS_CONE sum_k b_k^2 (eigendecompositions of the b x b blocks).
     """
     b = np.array([size for _, size in data.psd], dtype=float)
@@ -197,7 +200,7 @@ def solver_bytes(data, solver: str, backend: str) -> float:
     if solver == "SCS":
         total += SCS_CONE_BYTES * (b**2).sum()
     else:
-        total += DENSE_BYTES * (coupled_psd_sizes(data) ** 2).sum()
+        total += 2 * DENSE_BYTES * factor_entries(data)
     if backend == "cvxpy":
         total += CVXPY_BASE_BYTES + CVXPY_ENTRY_BYTES * (nnz_a + (b**2).sum())
     return float(total)
@@ -205,12 +208,13 @@ def solver_bytes(data, solver: str, backend: str) -> float:
 
 def coarse_bytes(data) -> float:
     """An upper bound of :func:`solver_bytes` for Clarabel through the direct back end, from
-    sizes alone: one dense group of every variable and equality row (D = n + rows), each svec
-    entry counted as a variable (so the bound needs no pass over the PSD blocks)."""
+    sizes alone: one dense group of every variable and row (D = n + rows, F <= D (D + 1) / 2),
+    each svec entry counted as a variable (so the bound needs no pass over the PSD blocks)."""
     rows = data.A_eq.shape[0] + data.A_ge.shape[0] + 3 * data.n_soc
     nnz = data.A_eq.nnz + data.A_ge.nnz + (data.soc.nnz if data.soc is not None else 0) \
         + (data.P.nnz if data.P is not None else 0) + data.n
-    dense = float(data.n + data.A_eq.shape[0]) ** 2
+    D = float(data.n + rows)
+    dense = D * (D + 1)
     return BASE_BYTES + SPARSE_BYTES * (nnz + 2 * data.n + rows) + DENSE_BYTES * dense
 
 

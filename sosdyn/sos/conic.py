@@ -300,41 +300,6 @@ def affine_cones(data: ConicData, enabled: bool = True) -> AffineCones:
     return AffineCones(keep_rows, keep_cols, rows)
 
 
-def coupled_psd_sizes(data: ConicData) -> np.ndarray:
-    """Size D of each group of PSD blocks coupled through shared equality rows.
-
-    Blocks that appear in a common equality row (a Gram block and the multipliers of the
-    same constraint) are grouped; D = (sum of their svec sizes) + (equality rows they touch).
-    A solver's KKT factor over one group is at most dense of order D.
-    """
-    nb, m = len(data.psd), data.A_eq.shape[0]
-    if not nb:
-        return np.zeros(0)
-    owner = np.full(data.n, nb, dtype=np.int64)
-    svec = np.zeros(nb)
-    for k, (pos, _) in enumerate(data.psd):
-        owner[pos] = k
-        svec[k] = pos.size
-    A = data.A_eq.tocsc()
-    blk = np.repeat(owner, np.diff(A.indptr))           # block of every nonzero's column
-    hit = blk < nb
-    rows, blk = A.indices[hit], blk[hit]
-    label = np.arange(nb + 1)
-    while True:                   # label propagation: every block takes the least label it meets
-        row_label = np.full(m, nb)
-        np.minimum.at(row_label, rows, label[blk])
-        new = label.copy()
-        np.minimum.at(new, blk, row_label[rows])
-        new = new[new]
-        if np.array_equal(new, label):
-            break
-        label = new
-    touched = row_label < nb
-    size = np.bincount(label[:nb], weights=svec, minlength=nb + 1)
-    size += np.bincount(row_label[touched], minlength=nb + 1)
-    return size[:nb][np.bincount(label[:nb], minlength=nb + 1)[:nb] > 0]
-
-
 def cvxpy_block_vars(program) -> list:
     """One cvxpy Variable per declared block (created once, reused by every solve)."""
     import cvxpy as cp              # lazily (3 s to import): see the module docstring

@@ -23,14 +23,15 @@ import numpy as np
 from ..errors import InputError, PolynomialError, UnverifiedSolutionError
 from ..poly import PolyMatrix, Polynomial, allocate, monomials_up_to, variable_names
 from . import conic
-from .backends import solve_program
 from .cones import auxiliary_count, check_cone, cone_rows, face_rows
 from .constraints import (Basis, Block, EqualityMultiplier, FamilySOSConstraint, LinearRows, Multiplier,
                           PsdBlock, SOSConstraint, as_sos_polynomial, user_basis,
                           affine_items, affine_rows, gram_polynomial, matrix_form)
 from .gram import SQRT2, svec_pairs, svec_size
 from .objective import QuadraticForm, is_cvxpy
+from .remedies import solve_with_remedies
 from .sets import as_set, putinar_terms
+from .sparse_constraint import SparseSOSConstraint, local_basis
 from .sparsity import clique_vars, constraint_cliques, sparse_bases
 
 
@@ -167,16 +168,18 @@ class SOSProgram:
 
     # ------------------------------------------------------------------ constraints
     def _register(self, name, kind, poly, bases, cone="psd", multipliers=(), source=None, **handles):
-        """An SOSConstraint over ``bases``: the first the main block, the others "clique" multipliers of 1."""
-        psd = self._block(name, svec_size(bases[0].shape[0]), bases[0].shape[0]).psd
+        """An SOSConstraint over one block of ``bases`` (:func:`.sparsity.sparse_bases`), else a
+        SparseSOSConstraint: the first block the main one, the others "clique" multipliers of 1."""
+        vars, mults = poly.vars, list(multipliers)
+        main = local_basis(vars, *bases[0], spread=True)
+        psd = self._block(name, svec_size(len(main)), len(main)).psd
         self._in_cone(psd, cone)
-        vars, rest, mults = poly.vars, poly, list(multipliers)
-        for k, exps in enumerate(bases[1:], start=1):
-            sigma, block = self._gram(Basis(vars, exps), f"{name}.block{k}", "clique", cone)
-            mults.append(Multiplier(Polynomial.constant(1.0).with_vars(vars), sigma, Basis(vars, exps), block))
-            rest = rest - sigma
-        con = SOSConstraint(self, name, kind, rest.with_vars(vars), Basis(vars, bases[0]), psd, multipliers=mults,
-                            source=poly if source is None else source, **handles)
+        for k, (cols, exps) in enumerate(bases[1:], start=1):
+            basis = local_basis(vars, cols, exps)
+            sigma, block = self._gram(basis, f"{name}.block{k}", "clique", cone)
+            mults.append(Multiplier(Polynomial.constant(1.0), sigma, basis, block))
+        kind_of = SparseSOSConstraint if len(bases) > 1 or bases[0][0].size != len(vars) else SOSConstraint
+        con = kind_of(self, name, kind, poly, main, psd, multipliers=mults, source=source, **handles)
         self.sos_constraints.append(con)
         return con
 
@@ -239,7 +242,7 @@ class SOSProgram:
         check_cone(cone)
         name = self._name("sosmat", name)
         q, exps = matrix_form(P)
-        return self._register(name, "sos_matrix", q, [exps], cone=cone)
+        return self._register(name, "sos_matrix", q, [(np.arange(q.nvars), exps)], cone=cone)
 
     @_timed
     def add_nonneg_on(self, expr, ineqs=(), eqs=(), degree=None, name=None, cone="psd",
@@ -371,21 +374,19 @@ class SOSProgram:
 
     def solve(self, solver: str = "CLARABEL", backend: str = "auto", scale: bool = True,
               verbose: bool = False, raise_on_failure: bool = False, rigorous: bool = False,
-              **settings):
+              retry: bool = True, **settings):
         """Solve and return a :class:`~sosdyn.sos.solution.Solution`.
 
-        ``backend``: "direct" hands the conic data straight to Clarabel (no canonicalisation;
-        the fast re-solve path); "cvxpy" goes through cvxpy (any cvxpy solver, and needed for
-        cvxpy constraints/objectives); "auto" picks direct when it can.
-        ``raise_on_failure``: raise SolverError/InfeasibleError/UnverifiedSolutionError
-        instead of returning a Solution that is not verified.
-        ``rigorous``: the objective (and every value) is read at a point where the whole
-        certificate holds exactly: ``sol.objective`` is the proven bound, ``sol.bound``
-        compares it with the solver's value (see :mod:`sosdyn.sos.rigorous`).
+        ``backend``: "direct" hands the conic data straight to Clarabel (no canonicalisation: the fast
+        re-solve path); "cvxpy" goes through cvxpy (any cvxpy solver; needed for cvxpy constraints and
+        objectives); "auto" picks direct when it can. ``raise_on_failure``: raise SolverError /
+        InfeasibleError / UnverifiedSolutionError instead of returning an unverified Solution.
+        ``rigorous``: every number is read where the whole certificate holds exactly (``sol.bound``
+        compares the proven bound with the solver's; :mod:`.rigorous`). ``retry``: re-solve with other
+        settings after a numerical failure; after "unbounded", check the constraints alone (:mod:`.remedies`).
         """
-        build = self.build_seconds - self.build_reported
-        sol = solve_program(self, solver=solver, backend=backend, scale=scale, verbose=verbose,
-                            build=build, **settings)
+        sol = solve_with_remedies(self, solver, backend, scale, verbose, self.build_seconds - self.build_reported,
+                                  settings, retry)
         self.build_reported = self.build_seconds
         sol.rigorous = rigorous
         sol.verify()                        # now, while the program is the one that was solved

@@ -21,6 +21,8 @@ Functions on arrays; :func:`sparse_bases` is what ``SOSProgram.add_sos(..., spar
 """
 from __future__ import annotations
 
+import heapq
+
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -41,35 +43,59 @@ def check_sparsity(sparsity):
     return sparsity
 
 
+def term_variables(support: np.ndarray) -> list:
+    """The variable indices of each term of ``support`` with a variable (one index array per term)."""
+    r, c = np.nonzero(support)
+    return np.split(c, np.flatnonzero(np.diff(r)) + 1) if r.size else []
+
+
 def interaction_graph(n: int, support: np.ndarray, groups=()) -> list:
     """Adjacency sets of the variable-interaction graph: i ~ j when a term of ``support``
     (exponent rows over n variables) or a variable group (index lists) holds both."""
     adj = [set() for _ in range(n)]
-    members = [np.flatnonzero(row) for row in unique_rows((support > 0).astype(np.int64))[0]]
-    for idx in members + [np.asarray(g, dtype=np.int64) for g in groups]:
+    for idx in term_variables(support) + [np.asarray(g, dtype=np.int64) for g in groups]:
+        idx = idx.tolist()
         for i in idx:
-            adj[i].update(int(j) for j in idx if j != i)
+            adj[i].update(j for j in idx if j != i)
     return adj
+
+
+def min_degree_elimination(adj: list):
+    """Greedy minimum-degree elimination of the graph ``adj`` (adjacency sets; not changed):
+    yields (v, its neighbours when eliminated) in turn. Eliminating v adds fill edges between
+    those neighbours. A heap keyed by (degree, vertex) picks v, stale entries skipped."""
+    nbrs = [set(a) for a in adj]
+    heap = [(len(a), v) for v, a in enumerate(nbrs)]
+    heapq.heapify(heap)
+    alive = np.ones(len(adj), dtype=bool)
+    while heap:
+        deg, v = heapq.heappop(heap)
+        if not alive[v] or deg != len(nbrs[v]):
+            continue
+        for u in nbrs[v]:
+            nbrs[u] |= nbrs[v] - {u}
+            nbrs[u].discard(v)
+            heapq.heappush(heap, (len(nbrs[u]), u))
+        alive[v] = False
+        yield v, nbrs[v]
 
 
 def chordal_cliques(adj: list) -> list:
     """Maximal cliques (sorted index arrays) of a chordal extension of the graph ``adj``.
 
-    Greedy minimum-degree elimination: eliminating v adds fill edges between its remaining
-    neighbours, so {v} + those neighbours is a clique of the extension; the maximal ones
-    among them are all its maximal cliques (every clique of a chordal graph appears so).
+    Greedy minimum-degree elimination (:func:`min_degree_elimination`): {v} + v's neighbours
+    when eliminated is a clique of the extension; the maximal ones among them are all its
+    maximal cliques (every clique of a chordal graph appears so). A candidate is compared
+    only with the kept cliques that hold its vertex of least index, so the work grows with
+    the edges of the extension, not with the square of the vertex count.
     """
-    nbrs = [set(a) for a in adj]
-    alive = set(range(len(adj)))
     cliques: list = []
-    while alive:
-        v = min(alive, key=lambda u: (len(nbrs[u]), u))
-        clique = frozenset(nbrs[v] | {v})
-        for u in nbrs[v]:
-            nbrs[u] |= nbrs[v] - {u}
-            nbrs[u].discard(v)
-        alive.discard(v)
-        if not any(clique <= c for c in cliques):
+    holding: dict = {}                      # vertex -> indices of kept cliques holding it
+    for v, nb in min_degree_elimination(adj):
+        clique = frozenset(nb | {v})
+        if not any(clique <= cliques[k] for k in holding.get(min(clique), ())):
+            for u in clique:
+                holding.setdefault(u, []).append(len(cliques))
             cliques.append(clique)
     return [np.array(sorted(c), dtype=np.int64) for c in cliques]
 
@@ -91,26 +117,48 @@ def clique_vars(cliques, names, allv: tuple) -> tuple:
     return tuple(allv[i] for i in next(C for C in cliques if idx <= set(C.tolist())))
 
 
+def clique_faces(support: np.ndarray, cliques: list) -> list:
+    """Per clique C, the terms of ``support`` whose variables all lie in C, on C's columns.
+
+    A term is looked up from the clique holding its variable of least index only through the
+    cliques of that variable (an index from variable to cliques), so the work is linear in
+    the terms and the clique sizes, never terms x variables x cliques.
+    """
+    holding: dict = {}
+    for k, C in enumerate(cliques):
+        for v in C.tolist():
+            holding.setdefault(v, []).append(k)
+    rows: list = [[] for _ in cliques]
+    nz_r, nz_c = np.nonzero(support)
+    starts = np.concatenate(([0], np.cumsum(np.bincount(nz_r, minlength=support.shape[0]))))
+    sets = [frozenset(C.tolist()) for C in cliques]
+    for t in range(support.shape[0]):
+        cols = nz_c[starts[t]:starts[t + 1]].tolist()
+        for k in (holding.get(cols[0], ()) if cols else range(len(cliques))):
+            if all(c in sets[k] for c in cols):
+                rows[k].append(t)
+    return [support[np.asarray(r, dtype=np.int64)][:, C] for r, C in zip(rows, cliques)]
+
+
 def clique_bases(support: np.ndarray, cliques: list) -> list:
-    """Per clique C, the half-degree monomials a with supp(a) in C and 2a in N(support).
+    """Per clique C, the half-degree monomials a with supp(a) in C and 2a in N(support), as
+    exponent rows over C's variables only (the columns C of ``support``).
 
     The test runs on the face of N(support) with zero exponents outside C (module docstring).
     """
-    n = support.shape[1]
     deg = support.sum(axis=1)
     lo, hi = int(np.ceil(deg.min() / 2)), int(deg.max() // 2)
-    out = []
-    for C in cliques:
-        outside = np.setdiff1d(np.arange(n), C)
-        face = support[(support[:, outside] == 0).all(axis=1)][:, C]
-        basis = np.zeros((0, n), dtype=np.int64)
-        if face.shape[0]:
-            cand = monomials_up_to(C.size, hi, lo, max_per_var=face.max(axis=0) // 2)
-            cand = cand[(2 * cand >= face.min(axis=0)).all(axis=1)]
-            cand = cand[in_hull(2 * cand, face)] if cand.shape[0] else cand
-            basis = np.zeros((cand.shape[0], n), dtype=np.int64)
-            basis[:, C] = cand
-        out.append(basis)
+    out, memo = [], {}            # a chain repeats its faces (in clique coordinates): each is solved once
+    for C, face in zip(cliques, clique_faces(support, cliques)):
+        key = (face.shape, face.tobytes())
+        if key not in memo:
+            basis = np.zeros((0, C.size), dtype=np.int64)
+            if face.shape[0]:
+                cand = monomials_up_to(C.size, hi, lo, max_per_var=face.max(axis=0) // 2)
+                cand = cand[(2 * cand >= face.min(axis=0)).all(axis=1)]
+                basis = cand[in_hull(2 * cand, face)] if cand.shape[0] else cand
+            memo[key] = basis
+        out.append(memo[key])
     return out
 
 
@@ -137,12 +185,14 @@ def term_blocks(support: np.ndarray, basis: np.ndarray) -> list:
 
 
 def sparse_bases(support: np.ndarray, sparsity, dense_basis=None, cliques=None) -> list:
-    """The Gram blocks' bases (exponent arrays over the support's variables) for ``sparsity``.
+    """The Gram blocks' bases for ``sparsity``: (variable indices into the support's columns,
+    exponent rows over those variables) per block; one block over every variable if dense.
 
     ``dense_basis``: the basis "term" splits (default the Newton basis of ``support``);
     ``cliques``: the variable cliques of "correlative" (default those of ``support``'s
-    interaction graph). The total coefficient-matching memory of the blocks is checked
-    against the limits.
+    interaction graph). Term sparsity inside a clique uses the clique's face of the support
+    (its terms in the clique's variables). The total coefficient-matching memory of the blocks
+    is checked against the limits.
     """
     n = support.shape[1]
     if check_sparsity(sparsity) in ("correlative", "correlative+term"):
@@ -151,16 +201,18 @@ def sparse_bases(support: np.ndarray, sparsity, dense_basis=None, cliques=None) 
                              "sparsity='correlative', or sparsity='term' with your basis")
         if cliques is None:
             cliques = chordal_cliques(interaction_graph(n, support))
-        bases = clique_bases(support, cliques)
+        faces = clique_faces(support, cliques) if sparsity == "correlative+term" else [None] * len(cliques)
+        blocks = list(zip(cliques, clique_bases(support, cliques), faces))
     else:
-        bases = [newton_basis(support) if dense_basis is None else dense_basis]
+        basis = newton_basis(support) if dense_basis is None else dense_basis
+        blocks = [(np.arange(n, dtype=np.int64), basis, support)]
     if sparsity is None:
-        return bases
+        return [(C, b) for C, b, _ in blocks]
     if sparsity in ("term", "correlative+term"):
-        bases = [b[k] for b in bases for k in term_blocks(support, b)]
-    bases = [b for b in bases if b.shape[0]]
-    check_bytes(sum(gram_matching_bytes(b.shape[0], n) for b in bases),
-                f"coefficient matching over {len(bases)} Gram blocks of sizes "
-                f"{sorted((b.shape[0] for b in bases), reverse=True)[:5]}... in {n} variables",
+        blocks = [(C, b[k], face) for C, b, face in blocks for k in term_blocks(face, b)]
+    blocks = [(C, b) for C, b, _ in blocks if b.shape[0]]
+    check_bytes(sum(gram_matching_bytes(b.shape[0], C.size) for C, b in blocks),
+                f"coefficient matching over {len(blocks)} Gram blocks of sizes "
+                f"{sorted((b.shape[0] for _, b in blocks), reverse=True)[:5]}... in {n} variables",
                 "lower the degree, or use sparsity='correlative+term'")
-    return bases or [np.zeros((0, n), dtype=np.int64)]
+    return blocks or [(np.arange(n, dtype=np.int64), np.zeros((0, n), dtype=np.int64))]

@@ -75,11 +75,14 @@ class GramStructure:
     """Monomials of p and of z z^T in their union U (rows of neither are repeated).
 
     ``p_at[r]``: the row of U of p's monomial r; ``pair_at[i * N + j]``: the row of U of
-    z_i z_j (N = basis size); ``in_gram[u]``: some z_i z_j is the monomial u."""
+    z_i z_j (N = basis size); ``in_gram[u]``: some z_i z_j is the monomial u. Over several
+    blocks (:func:`check_blocks_values`) ``pair_at`` runs over every block's N_k^2 products in
+    turn and ``first_block[u]`` is the first block producing u (-1: none)."""
 
     p_at: np.ndarray
     pair_at: np.ndarray
     in_gram: np.ndarray
+    first_block: np.ndarray | None = None
 
 
 def gram_structure(p_exps, basis_exps) -> GramStructure:
@@ -161,6 +164,37 @@ def check_gram_values(name, kind, p_coef, structure: GramStructure, Q, eig_tol=1
                                        f"{rel_tol:.0e} x {scale:.3g}") if r)
     return CertificateCheck(name, kind, Q.shape[0], min_eig, res, res / scale, bool(strict),
                             bool(cone_ok and res_ok), cone, dd, reason)
+
+
+def check_blocks_values(name, kind, p_coef, structure: GramStructure, Qs, cones, eig_tol=1e-7,
+                        rel_tol=1e-6) -> CertificateCheck:
+    """:func:`check_gram_values` for p = sum_k z_k^T Q_k z_k over several Gram blocks.
+
+    e = p - sum_k z_k^T Q_k z_k on the union U; with e_k the part of e on the monomials whose
+    first producing block is k, p = sum_k z_k^T (Q_k + E_k) z_k, ||E_k||_2 <= sqrt(2) ||e_k||_2,
+    so ``strict`` needs e = 0 off every block's monomials and lambda_min(Q_k) >= sqrt(2) ||e_k||_2
+    for each k. ``min_eig`` is the least over the blocks; each block is also checked alone
+    (:func:`check_block`) when it is not the constraint's first."""
+    parts = [_cone_check(Q, cone, eig_tol) for Q, cone in zip(Qs, cones)]
+    size = structure.in_gram.size
+    e = np.bincount(structure.p_at, weights=p_coef, minlength=size) - np.bincount(
+        structure.pair_at, weights=np.concatenate([Q.ravel() for Q in Qs] + [np.zeros(0)]), minlength=size)
+    scale = max(1.0, float(np.abs(p_coef).max(initial=0.0)))
+    res = float(np.abs(e).max(initial=0.0))
+    representable = not np.any(e[~structure.in_gram] != 0.0)
+    owner = structure.first_block[structure.in_gram]
+    e_k = np.sqrt(np.bincount(owner, weights=e[structure.in_gram] ** 2, minlength=len(Qs)))
+    strict = representable and all(p[0] >= np.sqrt(2.0) * ek for p, ek in zip(parts, e_k))
+    cone_ok = all(p[2] for p in parts)
+    reason = "; ".join(p[3] for p in parts if p[3])
+    res_ok = res <= rel_tol * scale
+    if not res_ok:
+        reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
+                                       f"{rel_tol:.0e} x {scale:.3g}") if r)
+    worst = min(range(len(Qs)), key=lambda k: parts[k][0], default=None)
+    return CertificateCheck(name, kind, sum(Q.shape[0] for Q in Qs), parts[worst][0] if Qs else 0.0, res,
+                            res / scale, bool(strict), bool(cone_ok and res_ok), cones[0] if cones else "psd",
+                            parts[worst][1] if Qs else math.nan, reason)
 
 
 def check_block(name, kind, Q, cone="psd", eig_tol=1e-7) -> CertificateCheck:
@@ -260,6 +294,9 @@ def verify_certificate(program, ids, x, eig_tol=1e-7, rel_tol=1e-6) -> Verificat
     checks, owned = [], set()
     for con in program.sos_constraints:
         owned.add(id(con.psd))
+        if hasattr(con, "identity_values"):          # several Gram blocks (sparse_constraint)
+            checks.append(check_blocks_values(con.name, con.kind, *con.identity_values(at), eig_tol, rel_tol))
+            continue
         Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
         p = con.poly.with_vars(con.basis.vars)
         coef = p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids)               # p at x

@@ -1,22 +1,9 @@
-"""The conic form: coupled PSD groups and the conditioning rule of the data (sosdyn.sos.conic)."""
+"""The conic form: the conditioning rule of the data (sosdyn.sos.conic)."""
 import pytest
 
 import sosdyn as sd
-from sosdyn.sos.conic import coupled_psd_sizes
 
 x, y = sd.variables("x y")
-
-
-def test_blocks_sharing_equality_rows_are_estimated_as_one_dense_group():
-    prog = sd.SOSProgram()
-    g = prog.new_var()
-    prog.add_nonneg_on(x**4 + y**4 - g, ineqs=[1 - x**2 - y**2], degree=4)   # Gram 6 + multiplier 3
-    prog.add_sos(x**2 + y**2 + 1 - g)                                        # Gram 3, own rows
-    prog.new_psd(2)                                                           # no rows at all
-    prog.maximize(g)
-    D = sorted(coupled_psd_sizes(prog.compile()))
-    # 21 + 6 svec entries and the 15 monomials of degree <= 4; 6 + the 6 of degree <= 2; 3
-    assert D == [3, 12, 42]
 
 
 # ---------------------------------------------------------------- conditioning of the data

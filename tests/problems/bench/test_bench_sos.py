@@ -42,11 +42,14 @@ def test_bench_sos_quick(tmp_path, times_ok):
             assert d["ratios"]["total"] > 0 and d["status"] == p["direct"]["status"].replace("_inaccurate", "")
     assert res["summary"]["drake"]["met"] in ((True, False) if drake else (None,))
     assert [(r["problem"], r["n"], r["variant"]) for r in res["sparse"]] == [
-        (f, 4, v) for f in sparse_problems.FUNCTIONS for v in sparse_problems.VARIANTS]
+        (f, 4, v) for f in sparse_problems.ROW_PROBLEMS for v in sparse_problems.VARIANTS]
     assert all(r["bound_ok"] for r in res["sparse"] if r["variant"] == "dense")
+    scaling = {(r["problem"], r["n"]): r for r in res["sparse_scaling"]}
+    assert scaling[("chained Wood", 100)]["bound"] == pytest.approx(1.0, abs=1e-4)     # known minimum 1
+    assert scaling[("Broyden tridiagonal", 100)]["bound"] == pytest.approx(0.0, abs=1e-4)
     split = res["build_split"]
     assert split["problem"] in {"Motzkin M", "quartic form"}           # the one-polynomial problems here
     assert split["stages"]["sosdyn"]["total"]["min"] > 0
     md = (tmp_path / "sos.md").read_text()
-    assert "## Targets" in md and "SumOfSquares" in md and "## Sparsity" in md
+    assert "## Targets" in md and "SumOfSquares" in md and "## Sparsity" in md and "## Sparse scaling" in md
     assert ("## Side by side with Drake" in md) and ("at least as fast as Drake" in md)

@@ -40,7 +40,7 @@ def test_sparse_row_refused_and_time_limited():
 def test_sparse_rows_skip_or_run_the_sparse_api():
     rows = sparse_problems.run_rows(ns=(4,), budget_s=60.0)
     assert [(r["problem"], r["variant"]) for r in rows] == [
-        (p, v) for p in sparse_problems.FUNCTIONS for v in sparse_problems.VARIANTS]
+        (p, v) for p in sparse_problems.ROW_PROBLEMS for v in sparse_problems.VARIANTS]
     sparse = [r for r in rows if r["variant"] != "dense"]
     if sparse_problems.sparsity_supported():
         assert all(r.get("bound_ok") for r in rows), rows

@@ -115,8 +115,10 @@ def solve_with_fallback(prog, solver, affine_psd=False):
        raised if not usable.
 
     A retry that is used is stated in ``sol.info["fallback"]`` (and so in the learner's history_).
+    The library's own retries (``SOSProgram.solve(retry=...)``, :mod:`sosdyn.sos.remedies`) are
+    off here: this is the learner's retry policy, and its fits stay what they were.
     """
-    direct = {"affine_psd": True} if affine_psd and solver.upper() == "CLARABEL" else {}
+    direct = {"retry": False, **({"affine_psd": True} if affine_psd and solver.upper() == "CLARABEL" else {})}
     sol = prog.solve(solver=solver, **direct)
     if sol.usable or sol.status in ("infeasible", "unbounded") or solver == FALLBACK_SOLVER:
         return sol.raise_for_status()
@@ -126,6 +128,6 @@ def solve_with_fallback(prog, solver, affine_psd=False):
         if tight.usable:
             tight.info["fallback"] = f"{solver} with tighter tolerances after {first}"
             return tight
-    retry = prog.solve(solver=FALLBACK_SOLVER, **FALLBACK_SETTINGS)
+    retry = prog.solve(solver=FALLBACK_SOLVER, retry=False, **FALLBACK_SETTINGS)
     retry.info["fallback"] = f"{FALLBACK_SOLVER} after {first}"
     return retry.raise_for_status()

@@ -1,0 +1,93 @@
+"""Retries after numerical failures and the right diagnosis of "unbounded" (sosdyn.sos.remedies).
+
+Known answers: Broyden tridiagonal and chained singular are sums of squares vanishing at a real
+point, so max g with f - g SOS is 0 (a returned bound must be <= 0 up to the check's slack);
+the Motzkin polynomial is nonnegative but not SOS; x + y on {1 - x^2 >= 0} has min -inf.
+"""
+import pytest
+
+import sosdyn as sd
+from sosdyn.sos import BasicSet, minimize_on
+
+
+def chain(n):
+    return sd.variables(" ".join(f"x{i}" for i in range(n)))
+
+
+def broyden(n):
+    xs = [0] + list(chain(n)) + [0]
+    return sum(((3 - 2 * xs[i]) * xs[i] - xs[i - 1] - 2 * xs[i + 1] + 1) ** 2 for i in range(1, n + 1))
+
+
+def chained_singular(n):
+    xs = chain(n)
+    return sum((a + 10 * b) ** 2 + 5 * (c - d) ** 2 + (b - 2 * c) ** 4 + 10 * (a - 10 * d) ** 4
+               for a, b, c, d in (xs[i:i + 4] for i in range(0, n - 3, 2)))
+
+
+def lower_bound(p, **solve):
+    prog = sd.SOSProgram()
+    g = prog.new_var()
+    prog.add_sos(p - g, sparsity="correlative")
+    prog.maximize(g)
+    return prog.solve(**solve), g
+
+
+def test_a_numerical_error_is_retried_with_the_row_scaling_flipped():
+    # Broyden n = 6, correlative: Clarabel stops with NumericalError on the scaled rows (measured)
+    sol, g = lower_bound(broyden(6))
+    steps = [(a["remedy"], a["status"], a["passed"]) for a in sol.info["attempts"]]
+    assert steps == [("as asked", "solver_error", False), ("row scaling flipped", "optimal", True)]
+    assert sol.verify().passed and -1e-5 <= sol.value(g) <= 1e-6
+    assert sol.timings["retries"] > 0
+    refused, _ = lower_bound(broyden(6), retry=False)
+    assert refused.status == "solver_error" and len(refused.info["attempts"]) == 1
+
+
+def test_an_answer_failing_the_check_is_retried_until_one_passes():
+    # chained singular n = 16: optimal_inaccurate with a clique block of eigenvalue -2.9e-6 (the
+    # check allows -2.8e-6), scaled or not; a 10x static regularisation gives a passing answer
+    sol, g = lower_bound(chained_singular(16))
+    steps = [(a["remedy"], a["passed"]) for a in sol.info["attempts"]]
+    assert steps[0] == ("as asked", False) and steps[-1][1] and len(steps) >= 2
+    assert "min eigenvalue" in sol.info["attempts"][0]["reason"]
+    assert sol.verify().passed and -1e-3 <= sol.value(g) <= 1e-6
+    with pytest.raises(sd.UnverifiedSolutionError):
+        lower_bound(chained_singular(16), retry=False)[0].value(g)
+
+
+def test_remedies_never_override_a_setting_the_user_gave():
+    sol, _ = lower_bound(chained_singular(16), static_regularization_constant=1e-8)
+    for a in sol.info["attempts"]:
+        assert a["settings"]["static_regularization_constant"] == 1e-8
+
+
+def test_unbounded_over_an_infeasible_sos_constraint_is_infeasible():
+    # maximise t, which no constraint mentions, subject to "Motzkin is SOS" (false): Clarabel
+    # reports dual infeasibility; the constraints alone are infeasible
+    x, y = sd.variables("x y")
+    prog = sd.SOSProgram()
+    t = prog.new_var()
+    prog.add_sos(x**4 * y**2 + x**2 * y**4 - 3 * x**2 * y**2 + 1)
+    prog.maximize(t)
+    sol = prog.solve()
+    assert sol.info["attempts"][0]["status"] == "unbounded"
+    with pytest.raises(sd.InfeasibleError, match="constraints alone are infeasible"):
+        sol.value(t)
+    # a bounded-above objective over feasible constraints is still reported unbounded
+    prog = sd.SOSProgram()
+    t = prog.new_var()
+    prog.add_sos(x**2 + 1)
+    prog.maximize(t)
+    with pytest.raises(sd.UnboundedError):
+        prog.solve().value(t)
+
+
+@pytest.mark.parametrize("kw", [{"degree": 4}, {}, {"sparsity": "correlative"}])
+def test_a_free_variable_of_odd_degree_is_named_as_the_cause(kw):
+    # min x + y on |x| <= 1 with y free is -inf: with degree 4 the dense multiplier basis holds y
+    # and Clarabel stopped with NumericalError ("rescale the data"); now the cause is named
+    x, y = sd.variables("x y")
+    with pytest.raises(sd.InfeasibleError, match="odd degree 1 in y, which no constraint of the set mentions"):
+        minimize_on(x + y, BasicSet([1 - x**2]), **kw)
+    assert minimize_on(x + y**2, BasicSet([1 - x**2]), degree=2).value == pytest.approx(-1.0, abs=1e-6)
