@@ -281,7 +281,9 @@ def solve_program(program, solver, backend, scale, verbose, build=0.0, **setting
             status, x, raw, seconds, info = _cvxpy(program, data, solver, verbose, settings)
     except InputError:
         raise
-    except Exception as exc:   # a solver crash becomes a status, never a bare traceback
+    except BaseException as exc:   # a solver crash (Clarabel's Rust panics too) becomes a status
+        if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
+            raise
         status, x, raw, seconds, info = ("solver_error", np.full(data.n, np.nan),
                                          f"{type(exc).__name__}: {exc}", 0.0, {})
         canon += info.get("compile_seconds") or 0.0

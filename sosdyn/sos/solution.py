@@ -39,6 +39,7 @@ _UNVERIFIED_HINTS = {
           "(a small positive margin in strict inequalities, a lower degree)",
 }
 _DEFAULT_TOLS = (1e-7, 1e-6)      # verify()'s default (eig_tol, rel_tol): the cached report
+_PROVING = False                  # an exact proof (Solution._proven) is under way
 
 
 def infeasible_hint(program) -> str:
@@ -247,10 +248,28 @@ class Solution:
         self._require_unchanged("verify")
         t0 = time.perf_counter()
         report = verify_certificate(self.program, self.data.ids, self.x, eig_tol, rel_tol)
+        if report.needs_exact and self.status in ANSWERED:
+            report = self._proven(report)
         if (eig_tol, rel_tol) == _DEFAULT_TOLS:
             self._report = report
             self.timings["verify"] = time.perf_counter() - t0
         return report
+
+    def _proven(self, report: VerificationReport) -> VerificationReport:
+        """A feasibility certificate whose blocks lack a floating-point margin (p SOS but on the
+        boundary, e.g. with real zeros) passes only if proven exactly (:mod:`.rigorous`)."""
+        global _PROVING
+        if _PROVING:                  # a tightened re-solve inside a proof: no nested proofs
+            return report
+        _PROVING = True
+        try:
+            bound = prove_bound(self.program, self.data, self.x)
+        except UnverifiedSolutionError:
+            return report
+        finally:
+            _PROVING = False
+        self._bound = bound
+        return report.proven_exactly(bound.method)
 
     def _require_unchanged(self, what: str):
         if self.program_version != getattr(self.program, "version", None):

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from weakref import WeakKeyDictionary
 
 import numpy as np
@@ -49,17 +49,21 @@ class CertificateCheck:
     min_eig: float
     residual: float          # max |coefficient| of p - z^T Q z (or max row violation)
     rel_residual: float      # residual / max |coefficient of p| (or per-row scale)
-    strict: bool             # lambda_min(Q) >= sqrt2 ||e||_2 with e representable
+    strict: bool             # margin = lambda_min(Q) - ||E||_F >= 0, e representable
     passed: bool
     cone: str = "psd"
     dd_margin: float = math.nan   # min_i Q_ii - sum_{j != i} |Q_ij| (DSOS blocks)
     reason: str = ""
+    exact_needed: bool = False    # fails only the strict margin: an exact proof may still pass it
 
 
-def _cone_check(Q, cone, eig_tol):
-    """(min eig, dd margin, ok, reason) of a Gram block in its cone ("psd" and "sdsos": Q >= 0)."""
+def _cone_check(Q, cone, eig_tol, scale=None):
+    """(min eig, dd margin, ok, reason) of a Gram block in its cone ("psd" and "sdsos": Q >= 0).
+
+    The tolerance is ``eig_tol`` x ``scale`` (default: max |Q_ij|) -- relative to the numbers
+    of the program, never an absolute floor (-1e-9 x^2 is not SOS)."""
     min_eig = float(np.linalg.eigvalsh(Q).min()) if Q.size else 0.0
-    tol = eig_tol * max(1.0, float(np.abs(Q).max(initial=0.0)))
+    tol = eig_tol * (float(np.abs(Q).max(initial=0.0)) if scale is None else scale)
     if cone == "dsos":
         dd = float((np.diag(Q) - (np.abs(Q).sum(axis=1) - np.abs(np.diag(Q)))).min()) if Q.size else 0.0
         ok = dd >= -tol
@@ -135,71 +139,113 @@ def constraint_gram_structure(con, p_exps) -> GramStructure:
     return out
 
 
-def check_gram(name, kind, p, basis_exps, Q, eig_tol=1e-7, rel_tol=1e-6, cone="psd") -> CertificateCheck:
+def check_gram(name, kind, p, basis_exps, Q, eig_tol=1e-7, rel_tol=1e-6, cone="psd",
+               strict=False) -> CertificateCheck:
     """Check p = z^T Q z and Q in its cone for a numeric polynomial p and basis exponents."""
     if p.ids.size:
         raise PolynomialError(f"check_gram needs a numeric polynomial; {name!r} has decision variables. "
                               "Try: assign the solution's values first, e.g. sol.value(p)")
     return check_gram_values(name, kind, p.coef[:, 0], gram_structure(p.exps, basis_exps), Q,
-                             eig_tol, rel_tol, cone)
+                             eig_tol, rel_tol, cone, strict=strict)
+
+
+def residual_gram_norms(e, structure: GramStructure, sizes) -> np.ndarray:
+    """||E_k||_F per block (orders ``sizes``) of the smallest symmetric E_k with sum_k z_k^T E_k z_k
+    = e (e on the Gram monomial set), e_a put in its first producing block k: E_k,ij = e_a / n_a
+    for the n_a pairs of block k with z_i z_j = x^a, so ||E_k||_F^2 = sum_{a owned by k} e_a^2 / n_a."""
+    block = np.repeat(np.arange(len(sizes)), np.square(sizes).astype(np.int64))
+    first = np.zeros(e.size, dtype=np.int64) if structure.first_block is None else structure.first_block
+    own = block == first[structure.pair_at]
+    n = np.bincount(structure.pair_at[own], minlength=e.size)
+    g = structure.in_gram
+    return np.sqrt(np.bincount(first[g], weights=e[g] ** 2 / n[g], minlength=len(sizes)))
 
 
 def check_gram_values(name, kind, p_coef, structure: GramStructure, Q, eig_tol=1e-7, rel_tol=1e-6,
-                      cone="psd") -> CertificateCheck:
+                      cone="psd", strict=False, scale=None) -> CertificateCheck:
     """:func:`check_gram` for p given by its coefficients ``p_coef`` on the monomials of ``structure``.
 
-    e = p - z^T Q z on the union U of monomials (each z_i z_j adds Q_ij to its monomial);
-    ``strict`` needs e = 0 off the Gram monomial set and lambda_min(Q) >= sqrt(2) ||e||_2."""
-    min_eig, dd, cone_ok, reason = _cone_check(Q, cone, eig_tol)
+    e = p - z^T Q z on the union U of monomials (each z_i z_j adds Q_ij to its monomial). With
+    e on the Gram monomial set, p = z^T (Q + E) z exactly and lambda_min(Q + E) >=
+    lambda_min(Q) - ||E||_F (:func:`residual_gram_norms`): that is the block's ``margin``. It
+    passes when the margin (not only lambda_min(Q)) is >= -eig_tol x scale (scale: max |Q_ij|
+    and |p_a|, or the program's given one) and e is within ``rel_tol`` x scale; ``strict=True``
+    (a feasibility claim "p is SOS") demands margin >= -(floating-point error) instead: a
+    singular certificate then needs ``rigorous=True`` (exact facial reduction)."""
     size = structure.in_gram.size
     e = np.bincount(structure.p_at, weights=p_coef, minlength=size) \
         - np.bincount(structure.pair_at, weights=Q.ravel(), minlength=size)
-    scale = max(1.0, float(np.abs(p_coef).max(initial=0.0)))
+    own = max(float(np.abs(p_coef).max(initial=0.0)), float(np.abs(Q).max(initial=0.0)))
+    scale = own if scale is None else max(scale, own)
+    min_eig, dd, cone_ok, reason = _cone_check(Q, cone, eig_tol, scale)
     res = float(np.abs(e).max(initial=0.0))
     representable = not np.any(e[~structure.in_gram] != 0.0)
-    strict = representable and min_eig >= np.sqrt(2.0) * float(np.linalg.norm(e))
+    margin = (min_eig if cone != "dsos" else dd) - float(residual_gram_norms(e, structure, [Q.shape[0]])[0])
+    floor = fp_error(Q) if strict else eig_tol * scale
+    margin_ok = margin >= -floor
+    if cone_ok and not margin_ok:
+        reason = (f"min eigenvalue {min_eig:.3e} does not survive the residual (margin {margin:.3e} "
+                  f"below -{floor:.1e}{'; a feasibility claim needs margin >= 0' if strict else ''})")
     res_ok = res <= rel_tol * scale
     if not res_ok:
         reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
                                        f"{rel_tol:.0e} x {scale:.3g}") if r)
-    return CertificateCheck(name, kind, Q.shape[0], min_eig, res, res / scale, bool(strict),
-                            bool(cone_ok and res_ok), cone, dd, reason)
+    rel = res / scale if scale > 0 else (0.0 if res == 0 else math.inf)
+    return CertificateCheck(name, kind, Q.shape[0], min_eig, res, rel, bool(representable and margin >= 0),
+                            bool(cone_ok and margin_ok and res_ok), cone, dd, reason,
+                            bool(strict and cone_ok and res_ok and not margin_ok))
 
 
 def check_blocks_values(name, kind, p_coef, structure: GramStructure, Qs, cones, eig_tol=1e-7,
-                        rel_tol=1e-6) -> CertificateCheck:
+                        rel_tol=1e-6, strict=False, scale=None) -> CertificateCheck:
     """:func:`check_gram_values` for p = sum_k z_k^T Q_k z_k over several Gram blocks.
 
     e = p - sum_k z_k^T Q_k z_k on the union U; with e_k the part of e on the monomials whose
-    first producing block is k, p = sum_k z_k^T (Q_k + E_k) z_k, ||E_k||_2 <= sqrt(2) ||e_k||_2,
-    so ``strict`` needs e = 0 off every block's monomials and lambda_min(Q_k) >= sqrt(2) ||e_k||_2
-    for each k. ``min_eig`` is the least over the blocks; each block is also checked alone
-    (:func:`check_block`) when it is not the constraint's first."""
-    parts = [_cone_check(Q, cone, eig_tol) for Q, cone in zip(Qs, cones)]
+    first producing block is k, p = sum_k z_k^T (Q_k + E_k) z_k (E_k the smallest such), so the
+    margin is min_k lambda_min(Q_k) - ||E_k||_F (:func:`residual_gram_norms`), judged as in
+    :func:`check_gram_values`. ``min_eig`` is the least over the blocks."""
+    own = max([float(np.abs(p_coef).max(initial=0.0))] + [float(np.abs(Q).max(initial=0.0)) for Q in Qs])
+    scale = own if scale is None else max(scale, own)
+    parts = [_cone_check(Q, cone, eig_tol, scale) for Q, cone in zip(Qs, cones)]
     size = structure.in_gram.size
     e = np.bincount(structure.p_at, weights=p_coef, minlength=size) - np.bincount(
         structure.pair_at, weights=np.concatenate([Q.ravel() for Q in Qs] + [np.zeros(0)]), minlength=size)
-    scale = max(1.0, float(np.abs(p_coef).max(initial=0.0)))
     res = float(np.abs(e).max(initial=0.0))
     representable = not np.any(e[~structure.in_gram] != 0.0)
-    owner = structure.first_block[structure.in_gram]
-    e_k = np.sqrt(np.bincount(owner, weights=e[structure.in_gram] ** 2, minlength=len(Qs)))
-    strict = representable and all(p[0] >= np.sqrt(2.0) * ek for p, ek in zip(parts, e_k))
+    norms = residual_gram_norms(e, structure, [Q.shape[0] for Q in Qs])
+    margins = [(p[0] if cone != "dsos" else p[1]) - nk for p, cone, nk in zip(parts, cones, norms)]
+    floors = [fp_error(Q) if strict else eig_tol * scale for Q in Qs]
     cone_ok = all(p[2] for p in parts)
+    margin_ok = all(m >= -f for m, f in zip(margins, floors))
     reason = "; ".join(p[3] for p in parts if p[3])
+    if cone_ok and not margin_ok:
+        k = int(np.argmin([m + f for m, f in zip(margins, floors)]))
+        reason = (f"block {k}: min eigenvalue {parts[k][0]:.3e} does not survive the residual (margin "
+                  f"{margins[k]:.3e} below -{floors[k]:.1e}{'; a feasibility claim needs margin >= 0' if strict else ''})")
     res_ok = res <= rel_tol * scale
     if not res_ok:
         reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
                                        f"{rel_tol:.0e} x {scale:.3g}") if r)
     worst = min(range(len(Qs)), key=lambda k: parts[k][0], default=None)
+    rel = res / scale if scale > 0 else (0.0 if res == 0 else math.inf)
     return CertificateCheck(name, kind, sum(Q.shape[0] for Q in Qs), parts[worst][0] if Qs else 0.0, res,
-                            res / scale, bool(strict), bool(cone_ok and res_ok), cones[0] if cones else "psd",
-                            parts[worst][1] if Qs else math.nan, reason)
+                            rel, bool(representable and min(margins, default=0.0) >= 0),
+                            bool(cone_ok and margin_ok and res_ok), cones[0] if cones else "psd",
+                            parts[worst][1] if Qs else math.nan, reason,
+                            bool(strict and cone_ok and res_ok and not margin_ok))
 
 
-def check_block(name, kind, Q, cone="psd", eig_tol=1e-7) -> CertificateCheck:
-    """Check a block that must only lie in its cone (multipliers, new_sos, new_psd)."""
-    min_eig, dd, ok, reason = _cone_check(Q, cone, eig_tol)
+def fp_error(A) -> float:
+    """A bound on the floating-point error of eigvalsh(A)'s smallest eigenvalue and of the
+    sums forming A's identity: 8 n eps ||A||_F (n = order of A)."""
+    return 8.0 * max(1, A.shape[0]) * np.finfo(float).eps * float(np.linalg.norm(A))
+
+
+def check_block(name, kind, Q, cone="psd", eig_tol=1e-7, scale=None) -> CertificateCheck:
+    """Check a block that must only lie in its cone (multipliers, new_sos, new_psd); tolerance
+    eig_tol x ``scale`` (default max |Q_ij|; :func:`verify_certificate` gives the program's)."""
+    min_eig, dd, ok, reason = _cone_check(Q, cone, eig_tol,
+                                          None if scale is None else max(scale, float(np.abs(Q).max(initial=0.0))))
     return CertificateCheck(name, kind, Q.shape[0], min_eig, 0.0, 0.0, bool(min_eig > 0), bool(ok),
                             cone, dd, reason)
 
@@ -228,6 +274,18 @@ class VerificationReport:
     checks: list
     linear_residual: float
     passed: bool
+
+    def proven_exactly(self, method: str) -> "VerificationReport":
+        """This report once the blocks that failed only their strict margin (``exact_needed``)
+        are proven PSD in exact arithmetic (:func:`~.rigorous.prove_bound`)."""
+        checks = [replace(c, passed=True, reason=f"proven exactly ({method})") if c.exact_needed else c
+                  for c in self.checks]
+        return VerificationReport(checks, self.linear_residual, all(c.passed for c in checks))
+
+    @property
+    def needs_exact(self) -> bool:
+        """Every failing block failed only its strict margin."""
+        return bool(self.failures) and all(c.exact_needed for c in self.failures)
 
     @property
     def failures(self) -> list:
@@ -279,6 +337,12 @@ def check_cvxpy(program, ids, x, tol) -> list:
     return out
 
 
+def program_scale(program, at) -> float:
+    """max |Q_ij| over every Gram block of ``program`` at the decision values ``at(ids)``."""
+    return max((float(np.abs(at(b.ids)).max(initial=0.0)) for b in program.blocks if b.psd is not None),
+               default=0.0)
+
+
 def verify_certificate(program, ids, x, eig_tol=1e-7, rel_tol=1e-6) -> VerificationReport:
     """Check every block of ``program``'s certificate at the values x of decision ``ids``.
 
@@ -292,20 +356,24 @@ def verify_certificate(program, ids, x, eig_tol=1e-7, rel_tol=1e-6) -> Verificat
         return VerificationReport([bad], math.inf, False)
     at = lambda block_ids: x[positions(ids, block_ids)]  # noqa: E731
     checks, owned = [], set()
+    strict = program.objective is None       # a feasibility claim: margins must survive (docstring)
+    scale = program_scale(program, at)
     for con in program.sos_constraints:
         owned.add(id(con.psd))
         if hasattr(con, "identity_values"):          # several Gram blocks (sparse_constraint)
-            checks.append(check_blocks_values(con.name, con.kind, *con.identity_values(at), eig_tol, rel_tol))
+            checks.append(check_blocks_values(con.name, con.kind, *con.identity_values(at), eig_tol, rel_tol,
+                                              strict=strict, scale=None if strict else scale))
             continue
         Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
         p = con.poly.with_vars(con.basis.vars)
         coef = p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids)               # p at x
         checks.append(check_gram_values(con.name, con.kind, coef, constraint_gram_structure(con, p.exps),
-                                        Q, eig_tol, rel_tol, con.psd.cone))
+                                        Q, eig_tol, rel_tol, con.psd.cone, strict=strict,
+                                        scale=None if strict else scale))
     for b in program.blocks:
         if b.psd is not None and id(b.psd) not in owned:
             Q = svec_to_matrix(at(b.psd.ids), b.psd.size)
-            checks.append(check_block(b.name, b.psd.role, Q, b.psd.cone, eig_tol))
+            checks.append(check_block(b.name, b.psd.role, Q, b.psd.cone, eig_tol, scale))
     linear = [check_linear(rows, ids, x, 10 * rel_tol) for rows in program.linear if rows.role == "user"]
     linear += check_cvxpy(program, ids, x, 10 * rel_tol)
     checks += linear
