@@ -5,16 +5,22 @@
 with the certificate of :meth:`SOSProgram.add_nonneg_on` (Putinar multipliers up to
 ``degree``, optionally the preorder's products; :mod:`.sets`) or, for K = R^n, f - gamma SOS.
 Raising ``degree`` gives a nondecreasing sequence of bounds converging to f* when K is
-compact with an Archimedean description (Lasserre 2001). The bound is the verified value:
-:func:`minimize_on` raises (InfeasibleError, UnverifiedSolutionError, ...) rather than return
-a number the independent check does not confirm.
+compact with an Archimedean description (Lasserre 2001). The bound is the verified value,
+lowered to the safe side (:mod:`.posterior`: the solver's gamma minus what its residual and
+negative eigenvalues can cost where the monomials are large), so it is <= min f in floating
+point; when no such correction exists (a singular certificate on an unbounded set, sparse
+blocks) the bound proven exactly (``Solution.rigorous_bound``) is returned, or
+UnverifiedSolutionError raised. ``rigorous=True`` always proves it exactly. :func:`minimize_on` raises
+(InfeasibleError, UnverifiedSolutionError, ...) rather than return a number the independent
+check does not confirm.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..errors import InputError
+from ..errors import InputError, UnverifiedSolutionError
 from .constraints import SOSConstraint, as_sos_polynomial
+from .posterior import safe_lower_bound
 from .program import SOSProgram
 from .sets import BasicSet, as_set
 from .solution import Solution
@@ -24,14 +30,16 @@ from .solution import Solution
 class LowerBound:
     """A verified lower bound ``value`` <= min f on the set, with its program and certificate.
 
-    ``value`` is ``solution.objective``: the independently checked gamma, or with
-    ``rigorous=True`` the bound proven in exact arithmetic.
+    ``value`` is the independently checked gamma lowered by the posterior correction
+    (:func:`~.posterior.safe_lower_bound`), or with ``rigorous=True`` the bound proven in exact
+    arithmetic; ``solver_value`` the solver's gamma.
     """
 
     value: float
     solution: Solution
     constraint: SOSConstraint
     program: SOSProgram
+    solver_value: float = float("nan")
 
 
 def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, sparsity=None, cone="psd",
@@ -51,4 +59,11 @@ def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, spars
         con = prog.add_sos(f - gamma, sparsity=sparsity, cone=cone)
     prog.maximize(gamma)
     sol = prog.solve(raise_on_failure=True, **solve)
-    return LowerBound(float(sol.objective), sol, con, prog)
+    gamma = float(sol.objective)
+    if sol.rigorous:
+        return LowerBound(gamma, sol, con, prog, sol.rigorous_bound().solver_value)
+    try:
+        value = safe_lower_bound(sol, con, gamma, K if K.ineqs or K.eqs else None)
+    except UnverifiedSolutionError:         # no floating-point correction: the exact proof, or raise
+        value = sol.rigorous_bound().proven
+    return LowerBound(value, sol, con, prog, gamma)

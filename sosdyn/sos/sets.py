@@ -19,6 +19,7 @@ from __future__ import annotations
 from itertools import combinations
 
 import numpy as np
+from scipy.optimize import linprog
 
 from ..errors import InputError, PolynomialError
 from ..poly import Polynomial, variables
@@ -77,6 +78,49 @@ class BasicSet:
     def __repr__(self) -> str:
         parts = [f"{g!r} >= 0" for g in self.ineqs] + [f"{h!r} = 0" for h in self.eqs]
         return "BasicSet{" + ", ".join(parts) + "}"
+
+
+def variable_bounds(K: BasicSet, vars) -> np.ndarray | None:
+    """R with |x_i| <= R_i on K for each of ``vars``, or None when some x_i is not bounded by
+    what is read here: separable quadratics c + l.x - sum_i a_i x_i^2 >= 0 (a_i > 0: boxes,
+    balls, ellipses; (x_i - m_i)^2 <= (c + sum l_i^2 / 4 a_i) / a_i) and the polytope of the
+    linear inequalities (an LP per variable and side)."""
+    R = np.full(len(vars), np.inf)
+    at = {v: i for i, v in enumerate(vars)}
+    lin = []
+    for g in K.ineqs:
+        if any(v not in at for v in g.vars) or g.degree > 2:
+            continue
+        cols = [at[v] for v in g.vars]
+        E, c = g.exps, g.coef[:, 0]
+        if g.degree == 1:
+            row = np.zeros(len(vars) + 1)
+            for e, a in zip(E, c):
+                row[-1 if not e.any() else cols[int(np.argmax(e))]] += a
+            lin.append(row)
+            continue
+        if (E.sum(axis=1) == 2).any() and (E[E.sum(axis=1) == 2].max(axis=1) < 2).any():
+            continue                                          # a cross term x_i x_j
+        quad, line, c0 = {}, {}, float(c[~E.any(axis=1)].sum())
+        for e, a in zip(E, c):
+            if e.sum() == 2:
+                quad[int(np.argmax(e))] = a
+            elif e.sum() == 1:
+                line[int(np.argmax(e))] = a
+        if not quad or any(a >= 0 for a in quad.values()) or set(line) - set(quad):
+            continue
+        rhs = c0 + sum(line.get(k, 0.0) ** 2 / (-4 * a) for k, a in quad.items())
+        for k, a in quad.items():
+            m = line.get(k, 0.0) / (-2 * a)
+            R[cols[k]] = min(R[cols[k]], abs(m) + np.sqrt(max(rhs, 0.0) / -a))
+    if lin and not np.isfinite(R).all():
+        A = -np.array(lin)
+        for i in np.flatnonzero(~np.isfinite(R)):
+            side = [linprog(sgn * np.eye(len(vars))[i], A_ub=A[:, :-1], b_ub=-A[:, -1],
+                            bounds=(None, None), method="highs") for sgn in (1, -1)]
+            if all(r.status == 0 for r in side):
+                R[i] = max(abs(side[0].fun), abs(side[1].fun))
+    return R if np.isfinite(R).all() else None
 
 
 def as_set(ineqs=(), eqs=()) -> BasicSet:

@@ -1,0 +1,144 @@
+"""A lower bound that is a bound in floating point: the posterior correction of gamma.
+
+A verified solution of "maximize gamma s.t. f - gamma = sigma_0 + sum_i sigma_i g_i" holds the
+identity only up to a residual, and sigma_0 = z^T Q z only up to Q's tiny negative
+eigenvalues. Both are multiplied by the size of the monomials where f is small: at
+x = -180, |z(x)|^2 = 1 + x^2 + x^4 ~ 1e9, so lambda_min(Q) = -4e-6 moves the bound by ~4e3.
+:func:`safe_lower_bound` lowers gamma by delta until the identity is exact with a PSD matrix
+(Loefberg 2009, "Pre- and post-processing sum-of-squares programs in practice"):
+
+1. each multiplier sigma_i = z_i^T Q_i z_i is replaced by sigma_i + mu_i |z_i|^2 with
+   mu_i = max(0, -lambda_min(Q_i)) + its eigenvalue error, so Q_i + mu_i I >= 0; the
+   change, - sum_i mu_i |z_i|^2 g_i, joins the residual
+   e = f - gamma - sum_i sigma_i g_i - z^T Q z (all at the solver's numbers);
+2. e (every monomial of it a product z_j z_k) is absorbed into Q: E_jk = e_a / n_a for the
+   n_a pairs with z_j z_k = x^a, so f - gamma = z^T (Q + E) z + sum_i sigma_i' g_i + rho,
+   rho the rounding error of the sums, |rho_a| <= r (a bound from the magnitudes summed);
+3. with A = Q + E and z_0 = 1, delta >= 0 is the smallest with lambda_min(A + delta e_0 e_0^T)
+   >= tau, tau = sum_a r + the eigenvalue error of A (Schur complement on the other rows).
+
+Then for every x in K: f(x) - (gamma - delta) = z^T (A + delta e_0 e_0^T) z + sum sigma_i' g_i
++ rho(x) >= tau |z|^2 - sum_a |rho_a| |x^a| >= 0, because every x^a = z_j z_k has |x^a| <=
+(z_j^2 + z_k^2) / 2 <= |z|^2 -- on R^n too, with no bound on x. So gamma - delta (rounded
+down) is <= min_K f. On a set K with |x_i| <= R_i (:func:`~.sets.variable_bounds`: boxes, balls, polytopes)
+a second delta also holds: f - gamma >= (lambda_min(A) - tau) |z|^2 - sum_{a off z z^T} |e_a|
+|x^a| on K, so delta_K = max(0, tau - lambda_min(A)) sup_K |z|^2 + sum |e_a| R^a suffices
+(sup_K |z|^2 <= sum_j R^{2 z_j}); the smaller of the two is used. When neither exists (A's
+negative direction avoids the constant, or e has a monomial outside z z^T, on an unbounded
+set), no number is returned: UnverifiedSolutionError.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import UnverifiedSolutionError
+from ..poly import Polynomial
+from .conic import positions
+from .gram import svec_to_matrix
+from .sets import variable_bounds
+from .verification import gram_structure
+
+EPS = np.finfo(float).eps
+_HINT = ("rigorous=True (an exact proof, re-solving with a margin), rescale the variables so the "
+         "minimiser is near the unit box, or a set K that bounds the variables")
+
+
+def eig_error(A) -> float:
+    """A bound on the error of eigvalsh(A)'s eigenvalues: 8 n eps ||A||_F."""
+    return 8.0 * max(1, A.shape[0]) * EPS * float(np.linalg.norm(A))
+
+
+def constant_shift(A, k0: int, tau: float) -> float:
+    """Smallest delta >= 0 with lambda_min(A + delta e_k0 e_k0^T) >= tau (checked), or inf.
+
+    With A' = A without row/column k0 and b = A[others, k0]: PSD iff A' - tau I > 0 and
+    a_00 + delta - tau >= b^T (A' - tau I)^{-1} b (Schur complement)."""
+    rest = np.delete(np.arange(A.shape[0]), k0)
+    Ar = A[np.ix_(rest, rest)] - tau * np.eye(rest.size)
+    if rest.size and np.linalg.eigvalsh(Ar)[0] <= eig_error(A):
+        return np.inf
+    b = A[rest, k0]
+    need = tau - A[k0, k0] + (float(b @ np.linalg.solve(Ar, b)) if rest.size else 0.0)
+    delta = max(0.0, need)
+    for _ in range(64):                    # the solve's own rounding: confirm, grow if needed
+        B = A.copy()
+        B[k0, k0] += delta
+        if np.linalg.eigvalsh(B)[0] >= tau:
+            return delta
+        delta = 2.0 * delta + tau + EPS * abs(A[k0, k0])
+    return np.inf
+
+
+def multiplier_shift(con, at):
+    """(- sum_i mu_i |z_i|^2 g_i, sum of |coefficients| summed) for the multipliers of ``con``
+    with lambda_min(Q_i) below their eigenvalue error (step 1 of the module docstring)."""
+    vars = con.basis.vars
+    adj, mag = Polynomial.constant(0.0).with_vars(vars), 0.0
+    for m in con.multipliers:
+        Q = svec_to_matrix(at(m.psd.ids), m.psd.size)
+        if not Q.size:
+            continue
+        mu = max(0.0, -float(np.linalg.eigvalsh(Q)[0])) + eig_error(Q)
+        if mu > 0:
+            square = Polynomial(m.basis.vars, 2 * m.basis.exps, np.ones(len(m.basis)))
+            term = (mu * square * m.constraint).with_vars(vars)
+            adj, mag = adj - term, mag + float(np.abs(term.coef).sum())
+    return adj, mag
+
+
+def compact_shift(A, tau, basis_exps, off_exps, off_coef, R) -> float:
+    """delta_K of the module docstring for |x_i| <= R_i (inf without R)."""
+    if R is None:
+        return np.inf
+    lam = float(np.linalg.eigvalsh(A)[0]) if A.size else 0.0
+    sup_z = float(np.prod(R ** (2 * basis_exps), axis=1).sum())
+    off = float((np.abs(off_coef) * np.prod(R ** off_exps, axis=1)).sum()) if off_coef.size else 0.0
+    return (max(0.0, tau - lam) * sup_z + off) * (1 + 1e-12)
+
+
+def safe_lower_bound(solution, con, gamma: float, K=None) -> float:
+    """gamma - delta <= min f on the set ``K`` of ``con`` (f - gamma the source of ``con``, gamma
+    the verified solver value; K None for R^n); module docstring. Raises
+    UnverifiedSolutionError when no safe correction exists."""
+    ids, x = solution.data.ids, solution.x
+    at = lambda block_ids: x[positions(ids, block_ids)]  # noqa: E731
+    vars = con.basis.vars
+    p = con.poly.with_vars(vars)
+    coef = p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids)
+    mag = float(np.abs(p.coef[:, 0]).sum() + (np.abs(p.coef[:, 1:]) @ np.abs(at(p.ids))).sum())
+    adj, adj_mag = multiplier_shift(con, at)
+    r = Polynomial(vars, p.exps, coef) + adj
+    if not r.exps.shape[0]:
+        r = Polynomial(vars, np.zeros((1, len(vars)), dtype=np.int64), [0.0])
+    Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
+    st = gram_structure(r.exps, con.basis.exps)
+    size = st.in_gram.size
+    e = np.bincount(st.p_at, weights=r.coef[:, 0], minlength=size) \
+        - np.bincount(st.pair_at, weights=Q.ravel(), minlength=size)
+    zero = np.flatnonzero(~con.basis.exps.any(axis=1))
+    n = np.bincount(st.pair_at, minlength=size)
+    A = Q + (np.where(st.in_gram, e, 0.0) / np.maximum(n, 1))[st.pair_at].reshape(Q.shape)
+    terms = p.coef.shape[1] + Q.size + 8
+    tau = terms * EPS * (mag + adj_mag + float(np.abs(Q).sum())) + eig_error(A)
+    off = ~st.in_gram & (e != 0.0)
+    delta = np.inf if off.any() or not zero.size else constant_shift(A, int(zero[0]), tau)
+    if K is not None:
+        R = variable_bounds(K, vars)
+        U = _union_exps(r.exps, con.basis.exps, st)
+        delta = min(delta, compact_shift(A, tau, con.basis.exps, U[off], e[off], R))
+    if not np.isfinite(delta):
+        raise UnverifiedSolutionError(
+            f"the bound of {con.name!r} cannot be made safe: its Gram matrix has a negative "
+            "direction that lowering gamma does not reach, or its residual a monomial no Gram "
+            "product produces, and the set bounds no variable box", "unverified", _HINT)
+    low = gamma - delta
+    return float(np.nextafter(low - 4 * EPS * (abs(gamma) + delta), -np.inf))
+
+
+def _union_exps(p_exps, basis_exps, st) -> np.ndarray:
+    """The exponent rows of the union U of ``st`` (p's monomials and the Gram products)."""
+    B = basis_exps
+    pairs = (B[:, None, :] + B[None, :, :]).reshape(-1, B.shape[1])
+    U = np.zeros((st.in_gram.size, B.shape[1]), dtype=np.int64)
+    U[st.p_at], U[st.pair_at] = p_exps, pairs
+    return U
