@@ -65,7 +65,11 @@ class Moments:
 
     def moment(self, alpha) -> float:
         """y_alpha for an exponent tuple in ``vars`` order; InputError if it is not in M."""
-        alpha = np.asarray(alpha, dtype=np.int64).reshape(1, -1)
+        a = np.asarray(alpha)
+        if a.ndim != 1 or a.size != len(self.vars) or not np.issubdtype(a.dtype, np.integer) or (a < 0).any():
+            raise InputError(f"moment() takes one exponent per variable of {self.vars} (non-negative "
+                             f"integers), got {alpha!r}. Try: a tuple of length {len(self.vars)}")
+        alpha = a.astype(np.int64).reshape(1, -1)
         hit = np.flatnonzero((self.exps == alpha).all(axis=1))
         if not hit.size:
             raise InputError(f"the moment of {_monomial(self.vars, alpha[0])} is not an entry of this "
@@ -214,17 +218,21 @@ def extract_atoms(vars, basis: np.ndarray, M: np.ndarray, rank_tol: float = 1e-6
     return Atoms(tuple(vars), points, w, r, residual)
 
 
-def check_atoms(atoms: Atoms, residual: Polynomial, ineqs=(), eqs=(), tol: float = 1e-6) -> None:
+def check_atoms(atoms: Atoms, residual: Polynomial, ineqs=(), eqs=(), tol: float = 1e-6,
+                bound_error=None) -> None:
     """Check that every atom attains the bound: residual(x_j) = 0, g(x_j) >= 0, h(x_j) = 0.
 
     ``residual`` is the certified polynomial at the solution (p - gamma: zero exactly where p
-    attains the bound gamma); each test is to ``tol`` times (1 + the polynomial's largest
-    coefficient). NoAtomsError names the first point and polynomial that fail.
+    attains the bound gamma); the constraints are tested to ``tol`` times (1 + the polynomial's
+    largest coefficient), the residual to the bound's own error at each point,
+    ``bound_error(points)`` (default: the same as the constraints) -- a local minimiser higher
+    than that is no minimiser. NoAtomsError names the first point and polynomial that fail.
     """
     def scale(p):
         return tol * (1.0 + np.abs(p.coef[:, 0]).max(initial=0.0))
 
-    tests = [(residual, "attains the bound (p - bound = 0)", lambda v, s: np.abs(v) <= s)]
+    attain = scale(residual) if bound_error is None else bound_error(atoms.points)
+    tests = [(residual, "attains the bound (p - bound = 0)", lambda v, s: np.abs(v) <= attain)]
     tests += [(g, f"satisfies {g!r} >= 0", lambda v, s: v >= -s) for g in ineqs]
     tests += [(h, f"satisfies {h!r} = 0", lambda v, s: np.abs(v) <= s) for h in eqs]
     for p, what, ok in tests:

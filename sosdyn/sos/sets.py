@@ -25,6 +25,27 @@ from ..errors import InputError, PolynomialError
 from ..poly import Polynomial, variables
 
 
+def _set_variables(vars, what) -> list:
+    """Variables of a box/ball: a string of names or a sequence of single variables."""
+    xs = variables(vars) if isinstance(vars, str) else list(vars) if isinstance(vars, (list, tuple)) else None
+    if not xs or not all(isinstance(v, Polynomial) and v.is_numeric and v.degree == 1 and len(v.vars) == 1
+                         and v.coef.shape[0] == 1 and v.coef[0, 0] == 1.0 for v in xs):
+        raise InputError(f"BasicSet.{what} takes variables (a string of names or a list of variables), "
+                         f"got {vars!r}. Try: BasicSet.{what}('x y', ...) or BasicSet.{what}([x, y], ...)")
+    return xs
+
+
+def _numbers(value, n: int, what) -> np.ndarray:
+    """``value`` (a number or n numbers) as n finite floats (InputError otherwise)."""
+    try:
+        a = np.broadcast_to(np.asarray(value, dtype=float), (n,))
+    except (TypeError, ValueError):
+        raise InputError(f"{what} must be a number or {n} numbers, got {value!r}") from None
+    if not np.isfinite(a).all():
+        raise InputError(f"{what} must be finite, got {value!r}")
+    return a
+
+
 def _as_poly(g, what) -> Polynomial:
     if isinstance(g, (int, float)):
         g = Polynomial.constant(float(g))
@@ -40,6 +61,9 @@ class BasicSet:
     """
 
     def __init__(self, ineqs=(), eqs=()):
+        for given, what in ((ineqs, "ineqs"), (eqs, "eqs")):
+            if isinstance(given, (Polynomial, str, int, float)) or not hasattr(given, "__iter__"):
+                raise InputError(f"BasicSet {what} is a list of polynomials, got {given!r}. Try: {what}=[g]")
         self.ineqs = tuple(_as_poly(g, f"inequality {k}") for k, g in enumerate(ineqs))
         self.eqs = tuple(_as_poly(h, f"equality {k}") for k, h in enumerate(eqs))
         names: tuple = ()
@@ -50,15 +74,22 @@ class BasicSet:
     @classmethod
     def box(cls, vars, lower, upper) -> BasicSet:
         """The box lower_i <= x_i <= upper_i as (x_i - lower_i)(upper_i - x_i) >= 0 per variable."""
-        xs = variables(vars) if isinstance(vars, str) else list(vars)
-        lo, hi = np.broadcast_to(lower, len(xs)), np.broadcast_to(upper, len(xs))
+        xs = _set_variables(vars, "box")
+        lo, hi = _numbers(lower, len(xs), "lower"), _numbers(upper, len(xs), "upper")
+        if (lo > hi).any():
+            k = int(np.argmax(lo > hi))
+            raise InputError(f"BasicSet.box: lower {float(lo[k])!r} > upper {float(hi[k])!r} for {xs[k]!r}: the box is "
+                             "empty. Try: BasicSet.box(vars, lower, upper) with lower <= upper")
         return cls(ineqs=[(x - float(a)) * (float(b) - x) for x, a, b in zip(xs, lo, hi)])
 
     @classmethod
     def ball(cls, vars, radius=1.0, center=None) -> BasicSet:
         """The ball ||x - center|| <= radius as radius^2 - ||x - center||^2 >= 0."""
-        xs = variables(vars) if isinstance(vars, str) else list(vars)
-        c = np.zeros(len(xs)) if center is None else np.broadcast_to(center, len(xs))
+        xs = _set_variables(vars, "ball")
+        r = _numbers(radius, 1, "radius")[0]
+        if r < 0:
+            raise InputError(f"BasicSet.ball: radius {float(r)!r} < 0: the ball is empty. Try: radius >= 0")
+        c = np.zeros(len(xs)) if center is None else _numbers(center, len(xs), "center")
         return cls(ineqs=[float(radius) ** 2 - sum((x - float(ci)) ** 2 for x, ci in zip(xs, c))])
 
     def __and__(self, other: BasicSet) -> BasicSet:
@@ -130,8 +161,6 @@ def as_set(ineqs=(), eqs=()) -> BasicSet:
             raise InputError("pass the equalities inside the BasicSet, not next to it. "
                              "Try: BasicSet(ineqs=[...], eqs=[...])")
         return ineqs
-    if isinstance(ineqs, Polynomial):
-        raise InputError("ineqs is a list of polynomials. Try: [g] instead of g")
     return BasicSet(ineqs, eqs)
 
 

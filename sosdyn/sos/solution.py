@@ -214,17 +214,28 @@ class Solution:
     def minimizers(self, con, rank_tol: float = 1e-6, tol: float = 1e-6) -> Atoms:
         """Points where the bound of ``con`` is attained, with weights (flat extension; :mod:`.moments`).
 
-        Each point is checked: ``con.source`` (e.g. p - gamma, at the solution) vanishes there and
-        every constraint of ``add_nonneg_on`` holds (g_i >= 0, h_j = 0), to ``tol`` relative to
-        the largest coefficient. Raises NoAtomsError when the moments are not flat or a point fails.
+        Each point is checked: every constraint of ``add_nonneg_on`` holds (g_i >= 0, h_j = 0) to
+        ``tol`` relative to the largest coefficient, and ``con.source`` (p - gamma at the solution)
+        vanishes there to within the bound's own error at that point, (|lambda_min(Q)| + N r)
+        |z(x)|^2 + 1e-9 (1 + max |p_a|) (r the block's coefficient residual, N its size): a
+        local minimiser above the bound by more is refused. Raises NoAtomsError when the moments
+        are not flat or a point fails.
         """
         shift = max([1] + [(m.constraint.degree + 1) // 2 for m in con.multipliers])
         atoms = self.moments(con, tol).atoms(rank_tol, tol, shift)
         residual = self.value(con.source)
         residual = residual if isinstance(residual, Polynomial) else Polynomial.constant(residual)
         check_atoms(atoms, residual, [m.constraint for m in con.multipliers],
-                    [m.constraint for m in con.eq_multipliers], tol)
+                    [m.constraint for m in con.eq_multipliers], tol, self._bound_error_at(con, residual))
         return atoms
+
+    def _bound_error_at(self, con, residual):
+        """points -> the error of the bound of ``con`` there (see ``minimizers``)."""
+        c = next(c for c in self.verify().checks if c.name == con.name)
+        err = abs(c.min_eig) + c.basis_size * c.residual
+        square = Polynomial(con.basis.vars, 2 * con.basis.exps, np.ones(len(con.basis)))
+        floor = 1e-9 * (1.0 + float(np.abs(residual.coef[:, 0]).max(initial=0.0)))
+        return lambda points: err * square(points, con.basis.vars) + floor
 
     def sos_decomposition(self, con, digits: int = 6) -> SOSDecomposition:
         """z^T Q z as sum_k d_k (q_k(x))^2 from the verified Gram matrix Q of ``con`` (a constraint
