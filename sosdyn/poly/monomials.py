@@ -71,10 +71,43 @@ def unique_rows(exps: np.ndarray):
                 np.array([at[r] for r in rows], dtype=np.int64))
     keys = _row_keys(exps)
     if keys is None:
-        uniq, inv = np.unique(exps, axis=0, return_inverse=True)
-        return uniq, inv.ravel()
+        return _unique_wide_rows(exps)
     _, first, inv = np.unique(keys, return_index=True, return_inverse=True)
     return exps[first], inv.ravel()
+
+
+_HASH_WEIGHTS = np.random.default_rng(20261126).integers(1, 2**62, size=4096) | 1
+
+
+def _row_hashes(exps: np.ndarray) -> np.ndarray:
+    """exps @ odd random int64 weights, wrapping: equal rows, equal hashes (the converse is
+    checked by the callers)."""
+    n = exps.shape[1]
+    w = _HASH_WEIGHTS[np.arange(n) % _HASH_WEIGHTS.size] * (1 + np.arange(n) // _HASH_WEIGHTS.size)
+    with np.errstate(over="ignore"):
+        return exps.astype(np.int64) @ w
+
+
+def _unique_wide_rows(exps: np.ndarray):
+    """:func:`unique_rows` for rows too wide for one int64 key (hundreds of variables): rows
+    grouped by a hash (exps @ odd random weights, wrapping int64), each group's rows compared
+    in full (a collision falls back to numpy's row sort), the distinct rows then put in
+    lexicographic order -- O(rows x columns) instead of numpy's sort of wide rows."""
+    h = _row_hashes(exps)
+    order = np.argsort(h, kind="stable")
+    same = h[order][1:] == h[order][:-1]
+    if same.any() and (exps[order[1:][same]] != exps[order[:-1][same]]).any():
+        uniq, inv = np.unique(exps, axis=0, return_inverse=True)      # a hash collision
+        return uniq, inv.ravel()
+    group = np.concatenate(([0], np.cumsum(~same)))
+    first = order[np.flatnonzero(np.concatenate(([True], ~same)))]
+    lex = np.lexsort(exps[first].T[::-1]) if exps.shape[0] * exps.shape[1] <= 2**24 else \
+        np.lexsort([exps[first, c] for c in range(exps.shape[1] - 1, -1, -1)])   # column by column
+    rank = np.empty_like(lex)
+    rank[lex] = np.arange(lex.size)
+    inv = np.empty(exps.shape[0], dtype=np.int64)
+    inv[order] = rank[group]
+    return exps[first[lex]], inv
 
 
 def sum_rows(exps: np.ndarray, coef: np.ndarray):
@@ -172,9 +205,16 @@ def match_rows(table: np.ndarray, queries: np.ndarray) -> np.ndarray:
     base = int(max(table.max(initial=0), queries.max(initial=0))) + 1
     tk = monomial_keys(table, base)
     qk = monomial_keys(queries, base)
-    if tk is None:
-        lookup = {tuple(r): i for i, r in enumerate(table)}
-        return np.array([lookup.get(tuple(r), -1) for r in queries], dtype=np.int64)
+    if tk is None:                            # wide rows: hashes, each hit compared in full
+        tk, qk = _row_hashes(table), _row_hashes(queries)
+        order = np.argsort(tk)
+        if (tk[order][1:] == tk[order][:-1]).any():          # a collision among the table's rows
+            lookup = {tuple(r): i for i, r in enumerate(table.tolist())}
+            return np.array([lookup.get(tuple(r), -1) for r in queries.tolist()], dtype=np.int64)
+        pos = np.clip(np.searchsorted(tk[order], qk), 0, len(tk) - 1)
+        hit = order[pos]
+        found = (tk[hit] == qk) & (table[hit] == queries).all(axis=1)
+        return np.where(found, hit, -1)
     order = np.argsort(tk)
     pos = np.searchsorted(tk[order], qk)
     pos = np.clip(pos, 0, len(tk) - 1)

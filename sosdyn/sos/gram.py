@@ -84,7 +84,9 @@ def gram_matching(basis: np.ndarray):
 
 def _gram_matching(basis: np.ndarray):
     i, j = svec_pairs(basis.shape[0])
-    exps, rows = unique_rows(basis[i] + basis[j])
+    pairs = basis[i]
+    pairs += basis[j]                  # in place: two (pairs x variables) arrays at most
+    exps, rows = unique_rows(pairs)
     out = (exps, rows, np.where(i == j, 1.0, SQRT2))
     for a in out:
         a.flags.writeable = False
