@@ -60,12 +60,13 @@ def constant_shift(A, k0: int, tau: float) -> float:
     b = A[rest, k0]
     need = tau - A[k0, k0] + (float(b @ np.linalg.solve(Ar, b)) if rest.size else 0.0)
     delta = max(0.0, need)
+    step = tau + 1e-12 * (delta + abs(A[k0, k0]))
     for _ in range(64):                    # the solve's own rounding: confirm, grow if needed
         B = A.copy()
         B[k0, k0] += delta
         if np.linalg.eigvalsh(B)[0] >= tau:
             return delta
-        delta = 2.0 * delta + tau + EPS * abs(A[k0, k0])
+        delta, step = delta + step, 2.0 * step
     return np.inf
 
 
