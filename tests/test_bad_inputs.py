@@ -11,6 +11,7 @@ from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.fit.warp import LIP_FACTOR, check_maps
 from sosdyn.lfd.runtime.export import export
 from sosdyn.poly import PolyMatrix
+from sosdyn.sos.moments import Moments
 
 
 def _demos(goals=((0.0, 0.0), (0.0, 0.0)), T=50, nan=False, dims=None):
@@ -55,6 +56,16 @@ def _prog_without_objective_value():
     return prog.solve().objective
 
 
+def _limited(call, max_bytes=2**16):
+    with sd.limits(max_bytes=max_bytes):
+        return call()
+
+
+def _minimizers(p):
+    lb = sd.minimize_on(p)
+    return lb.solution.minimizers(lb.constraint)
+
+
 def _tampered(fitted, tmp_path, edit):
     path = tmp_path / "m.json"
     fitted.save(path)
@@ -94,6 +105,24 @@ CATALOGUE = [
      sd.InfeasibleError, "infeasible"),
     ("multiplier degree below the constraint's", lambda: sd.SOSProgram().add_nonneg_on(x, ineqs=[1 - x**4], degree=2),
      sd.PolynomialError, "below the degree"),
+    ("empty box (lower above upper)", lambda: sd.BasicSet.box([x], 1, -1), sd.InputError, "empty"),
+    ("ball of negative radius", lambda: sd.BasicSet.ball([x], -1), sd.InputError, "empty"),
+    ("non-finite ball radius", lambda: sd.BasicSet.ball("x", float("nan")), sd.InputError, "finite"),
+    ("box over something that is not a variable", lambda: sd.BasicSet.box([x**2], 0, 1), sd.InputError,
+     "takes variables"),
+    ("box bounds of the wrong length", lambda: sd.BasicSet.box("x y", [0, 0, 0], 1), sd.InputError, "2 numbers"),
+    ("ball center of the wrong length", lambda: sd.BasicSet.ball("x y", 1, center=[1, 2, 3]), sd.InputError,
+     "center"),
+    ("one polynomial as a set's ineqs", lambda: sd.BasicSet(x), sd.InputError, "list of polynomials"),
+    ("moment of an exponent tuple of the wrong length",
+     lambda: Moments(("x", "y"), np.zeros((1, 2), int), np.eye(1), np.zeros((1, 2), int), np.ones(1)).moment((1,)),
+     sd.InputError, "one exponent per variable"),
+    ("Gram basis over the memory limit", lambda: _limited(lambda: sd.SOSProgram().add_sos(
+        sum(v**2 for v in sd.variables(" ".join(f"v{i}" for i in range(60)))))), sd.ResourceLimitError, "max_bytes"),
+    ("SOS matrix family over the memory limit", lambda: _limited(lambda: sd.SOSProgram().add_sos_matrix_family(
+        [PolyMatrix([[x**2 + 1, x * y], [x * y, y**2 + 1]])] * 40, np.ones(40)), 2**10), sd.ResourceLimitError, "family"),
+    ("minimiser that does not attain the bound", lambda: _minimizers((x**2 - 1) ** 2 + 1e-6 * x), sd.NoAtomsError,
+     "attains the bound"),
     # demonstrations
     ("NaN in a demonstration", lambda: sd.CDSP().fit(_demos(nan=True)), sd.DemonstrationError, "NaN"),
     ("demonstrations that do not share a goal", lambda: sd.CDSP().fit(_demos(goals=((0, 0), (4, 4)))),

@@ -113,3 +113,30 @@ def test_constant_shift_is_the_schur_complement():
     assert delta == pytest.approx(3.0, rel=1e-12)         # 1 + 3 - 4 / 1 = 0
     assert np.linalg.eigvalsh(A + np.diag([delta, 0.0]))[0] >= 0
     assert constant_shift(np.array([[1.0, 0.0], [0.0, -1e-9]]), 0, 0.0) == np.inf
+
+
+def test_family_size_estimate_bounds_the_tensor_it_allocates():
+    from sosdyn.poly import PolyMatrix
+    from sosdyn.sos.sizes import family_bytes
+    x, y = sd.variables("x y")
+    prog = sd.SOSProgram()
+    c, d = prog.new_poly([x, y], 2), prog.new_poly([x, y], 2)
+    terms = [PolyMatrix([[x**2 + c, x * y], [x * y, y**2 + 1]]), PolyMatrix([[x**4 + 1, d], [d, y**2 + x]])]
+    con = prog.add_sos_matrix_family(terms, np.ones(2))
+    assert family_bytes(terms) >= con._tensor.nbytes
+    assert family_bytes(terms) <= 2 * con._tensor.nbytes
+    with sd.limits(max_bytes=int(family_bytes(terms)) - 1), pytest.raises(sd.ResourceLimitError, match="family"):
+        prog.add_sos_matrix_family(terms, np.ones(2))
+
+
+def test_many_variables_build_without_overflow():
+    # 200 variables: exponent rows too wide for one int64 key (3^200): the hash path; was an
+    # OverflowError from float(base)**n at ~650 variables
+    vs = sd.variables(" ".join(f"v{i}" for i in range(200)))
+    p = sum(v**2 for v in vs)
+    assert len(p.exps) == 200 and p({v: 1.0 for v in p.vars})[0] == 200.0
+    prog = sd.SOSProgram()
+    con = prog.add_sos(p)
+    assert len(con.basis) == 200
+    with sd.limits(max_bytes=2**20), pytest.raises(sd.ResourceLimitError, match="Gram basis of 200"):
+        sd.SOSProgram().add_sos(p)
