@@ -32,6 +32,8 @@ def _set_variables(vars, what) -> list:
                          and v.coef.shape[0] == 1 and v.coef[0, 0] == 1.0 for v in xs):
         raise InputError(f"BasicSet.{what} takes variables (a string of names or a list of variables), "
                          f"got {vars!r}. Try: BasicSet.{what}('x y', ...) or BasicSet.{what}([x, y], ...)")
+    if len({v.vars[0] for v in xs}) < len(xs):
+        raise InputError(f"BasicSet.{what}: a variable is repeated in {vars!r}. Try: each variable once")
     return xs
 
 
@@ -94,6 +96,9 @@ class BasicSet:
 
     def __and__(self, other: BasicSet) -> BasicSet:
         """The intersection: both sets' constraints."""
+        if not isinstance(other, BasicSet):
+            raise InputError(f"& intersects two BasicSets, got {type(other).__name__}. "
+                             "Try: K & BasicSet(ineqs=[g])")
         return BasicSet(self.ineqs + other.ineqs, self.eqs + other.eqs)
 
     def contains(self, points, tol: float = 1e-9) -> np.ndarray:
@@ -167,6 +172,8 @@ def as_set(ineqs=(), eqs=()) -> BasicSet:
 def preorder(ineqs, products) -> list:
     """(index tuple S, g_S) for every S of size 1..order: order 1 for products=False,
     all sizes for products=True, at most ``products`` for an int."""
+    if not (products is None or isinstance(products, (bool, int, np.integer))):
+        raise InputError(f"products must be True, False or an integer order >= 1, got {products!r}")
     order = 1 if products is False or products is None else (len(ineqs) if products is True else int(products))
     if order < 1:
         raise InputError(f"products must be True, False or an order >= 1, got {products!r}")
@@ -183,19 +190,35 @@ def preorder(ineqs, products) -> list:
 def degree_bounds(degree, count: int, default: int) -> list:
     """The degree bound of each of ``count`` constraints: ``degree`` an int, None (``default``),
     a list of ``count`` ints, or a dict {index: int} (others ``default``)."""
-    if degree is None or isinstance(degree, (int, np.integer)):
+    if isinstance(degree, (bool, np.bool_, float, str)):
+        raise InputError(f"degree must be an int, a list of ints or a dict {{index: int}}, got {degree!r}. "
+                         "Try: degree=4")
+    if degree is None or _is_int(degree):
         return [int(default if degree is None else degree)] * count
     if isinstance(degree, dict):
         bad = [k for k in degree if not (isinstance(k, int) and 0 <= k < count)]
         if bad:
             raise InputError(f"degree dict keys {bad} are not constraint indices 0..{count - 1} "
                              "(inequalities first, then equalities)")
-        return [int(degree.get(k, default)) for k in range(count)]
+        return [_checked_degree(degree.get(k, default)) for k in range(count)]
+    if not isinstance(degree, (list, tuple, np.ndarray)):
+        raise InputError(f"degree must be an int, a list of ints or a dict {{index: int}}, got {degree!r}. "
+                         "Try: degree=4")
     degree = list(degree)
     if len(degree) != count:
         raise InputError(f"degree list has {len(degree)} entries for {count} constraints. Try: one "
                          "degree per inequality then per equality, or a dict {index: degree}")
-    return [int(d) for d in degree]
+    return [_checked_degree(d) for d in degree]
+
+
+def _is_int(d) -> bool:
+    return isinstance(d, (int, np.integer)) and not isinstance(d, (bool, np.bool_))
+
+
+def _checked_degree(d) -> int:
+    if not _is_int(d):
+        raise InputError(f"a degree must be an int, got {d!r}. Try: degree=4")
+    return int(d)
 
 
 def putinar_terms(K: BasicSet, degree, products, default: int) -> list:
