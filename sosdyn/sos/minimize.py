@@ -18,9 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..errors import InputError, UnverifiedSolutionError
+from ..errors import InputError
 from .constraints import SOSConstraint, as_sos_polynomial
-from .posterior import safe_lower_bound
 from .program import SOSProgram
 from .sets import BasicSet, as_set
 from .solution import Solution
@@ -30,9 +29,9 @@ from .solution import Solution
 class LowerBound:
     """A verified lower bound ``value`` <= min f on the set, with its program and certificate.
 
-    ``value`` is the independently checked gamma lowered by the posterior correction
-    (:func:`~.posterior.safe_lower_bound`), or with ``rigorous=True`` the bound proven in exact
-    arithmetic; ``solver_value`` the solver's gamma.
+    ``value`` is ``solution.objective``: the independently checked gamma lowered by the
+    posterior correction (:func:`~.posterior.safe_objective`), or with ``rigorous=True`` the
+    bound proven in exact arithmetic; ``solver_value`` the solver's gamma.
     """
 
     value: float
@@ -59,11 +58,4 @@ def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, spars
         con = prog.add_sos(f - gamma, sparsity=sparsity, cone=cone)
     prog.maximize(gamma)
     sol = prog.solve(raise_on_failure=True, **solve)
-    gamma = float(sol.objective)
-    if sol.rigorous:
-        return LowerBound(gamma, sol, con, prog, sol.rigorous_bound().solver_value)
-    try:
-        value = safe_lower_bound(sol, con, gamma, K if K.ineqs or K.eqs else None)
-    except UnverifiedSolutionError:         # no floating-point correction: the exact proof, or raise
-        value = sol.rigorous_bound().proven
-    return LowerBound(value, sol, con, prog, gamma)
+    return LowerBound(float(sol.objective), sol, con, prog, sol.solver_objective)

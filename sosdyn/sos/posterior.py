@@ -23,7 +23,13 @@ Then for every x in K: f(x) - (gamma - delta) = z^T (A + delta e_0 e_0^T) z + su
 down) is <= min_K f. On a set K with |x_i| <= R_i (:func:`~.sets.variable_bounds`: boxes, balls, polytopes)
 a second delta also holds: f - gamma >= (lambda_min(A) - tau) |z|^2 - sum_{a off z z^T} |e_a|
 |x^a| on K, so delta_K = max(0, tau - lambda_min(A)) sup_K |z|^2 + sum |e_a| R^a suffices
-(sup_K |z|^2 <= sum_j R^{2 z_j}); the smaller of the two is used. When neither exists (A's
+(sup_K |z|^2 <= sum_j R^{2 z_j}); the smaller of the two is used. K is read from the
+constraint itself (the constraints of its multipliers, :func:`constraint_set`).
+
+:func:`safe_objective` applies this to any program of the form "maximize c t s.t. t enters
+one SOS constraint only as -a t in its constant term" (:func:`bound_pattern`), which is what
+``Solution.objective`` returns for it -- ``minimize_on`` and hand-written bound programs
+alike. When neither exists (A's
 negative direction avoids the constant, or e has a monomial outside z z^T, on an unbounded
 set), no number is returned: UnverifiedSolutionError.
 """
@@ -35,7 +41,8 @@ from ..errors import UnverifiedSolutionError
 from ..poly import Polynomial
 from .conic import positions
 from .gram import svec_to_matrix
-from .sets import variable_bounds
+from .objective import affine_rows
+from .sets import BasicSet, variable_bounds
 from .verification import gram_structure
 
 EPS = np.finfo(float).eps
@@ -97,10 +104,11 @@ def compact_shift(A, tau, basis_exps, off_exps, off_coef, R) -> float:
     return (max(0.0, tau - lam) * sup_z + off) * (1 + 1e-12)
 
 
-def safe_lower_bound(solution, con, gamma: float, K=None) -> float:
-    """gamma - delta <= min f on the set ``K`` of ``con`` (f - gamma the source of ``con``, gamma
-    the verified solver value; K None for R^n); module docstring. Raises
-    UnverifiedSolutionError when no safe correction exists."""
+def safe_shift(solution, con) -> float:
+    """delta >= 0 such that raising the constant term of ``con``'s polynomial by delta makes its
+    certificate hold exactly with a PSD Gram matrix (module docstring), on the set of ``con``'s
+    multipliers (:func:`constraint_set`). Raises UnverifiedSolutionError when no safe shift
+    exists."""
     ids, x = solution.data.ids, solution.x
     at = lambda block_ids: x[positions(ids, block_ids)]  # noqa: E731
     vars = con.basis.vars
@@ -123,7 +131,8 @@ def safe_lower_bound(solution, con, gamma: float, K=None) -> float:
     tau = terms * EPS * (mag + adj_mag + float(np.abs(Q).sum())) + eig_error(A)
     off = ~st.in_gram & (e != 0.0)
     delta = np.inf if off.any() or not zero.size else constant_shift(A, int(zero[0]), tau)
-    if K is not None:
+    K = constraint_set(con)
+    if K.ineqs or K.eqs:
         R = variable_bounds(K, vars)
         U = _union_exps(r.exps, con.basis.exps, st)
         delta = min(delta, compact_shift(A, tau, con.basis.exps, U[off], e[off], R))
@@ -132,8 +141,55 @@ def safe_lower_bound(solution, con, gamma: float, K=None) -> float:
             f"the bound of {con.name!r} cannot be made safe: its Gram matrix has a negative "
             "direction that lowering gamma does not reach, or its residual a monomial no Gram "
             "product produces, and the set bounds no variable box", "unverified", _HINT)
-    low = gamma - delta
-    return float(np.nextafter(low - 4 * EPS * (abs(gamma) + delta), -np.inf))
+    return float(delta)
+
+
+def constraint_set(con) -> BasicSet:
+    """The set K on which ``con`` shows its polynomial nonnegative: the constraints of its
+    multipliers (g_i >= 0, products included; sparse clique blocks are multipliers of 1, not
+    constraints) and of its free multipliers (h_j = 0). R^n for add_sos."""
+    return BasicSet(ineqs=[m.constraint for m in con.multipliers if m.psd.role != "clique"],
+                    eqs=[m.constraint for m in con.eq_multipliers])
+
+
+def bound_pattern(program):
+    """(con, t, c, a) when ``program`` maximises c t + c0 (c > 0) for one decision t that enters
+    the program only as -a t (a > 0) in the constant term of one SOS constraint ``con``
+    (f - gamma SOS, f - gamma >= 0 on K): its optimum is a lower bound; else None."""
+    sense, expr = program.objective or (None, None)
+    if sense != "max" or not isinstance(expr, Polynomial) or program.cvxpy_constraints:
+        return None
+    _, C, expr_ids = affine_rows([expr])
+    nz = np.flatnonzero(C[0])
+    if nz.size != 1 or C[0, nz[0]] <= 0:
+        return None
+    t = int(expr_ids[nz[0]])
+    if any(t in set(rows.ids.tolist()) for rows in program.linear if rows.role == "user"):
+        return None
+    hits = []
+    for con in program.sos_constraints:
+        col = np.flatnonzero(con.poly.ids == t)
+        if not col.size:
+            continue
+        coefs = con.poly.coef[:, 1 + col[0]]
+        rows = np.flatnonzero(coefs)
+        if rows.size != 1 or con.poly.exps[rows[0]].any() or coefs[rows[0]] >= 0:
+            return None
+        hits.append((con, -float(coefs[rows[0]])))
+    if len(hits) != 1:
+        return None
+    return hits[0][0], t, float(C[0, nz[0]]), hits[0][1]
+
+
+def safe_objective(solution, value: float) -> float:
+    """The objective ``value`` of a lower-bound program (:func:`bound_pattern`) lowered to the
+    safe side: c (t - delta / a), rounded down; other programs' ``value`` unchanged."""
+    found = bound_pattern(solution.program)
+    if found is None:
+        return value
+    con, _, c, a = found
+    low = value - c * safe_shift(solution, con) / a
+    return float(np.nextafter(low - 4 * EPS * (abs(value) + abs(low)), -np.inf))
 
 
 def _union_exps(p_exps, basis_exps, st) -> np.ndarray:

@@ -23,6 +23,7 @@ from .decomposition import SOSDecomposition, sos_decomposition
 from .gram import svec_to_matrix
 from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
+from .posterior import safe_objective
 from .rigorous import ANSWERED, Bound, prove_bound
 from .verification import VerificationReport, verify_certificate
 
@@ -89,6 +90,7 @@ class Solution:
         self._report = None
         self._bound = None
         self._bound_error = None
+        self._safe = None
 
     # ------------------------------------------------------------------ status
     @property
@@ -179,13 +181,30 @@ class Solution:
 
     @property
     def objective(self) -> float:
-        """Objective value in the user's sense (maximise -> the maximum); proven if rigorous."""
+        """Objective value in the user's sense (maximise -> the maximum); proven if rigorous.
+
+        A lower-bound program (maximize gamma, gamma only in the constant term of one SOS
+        constraint: ``posterior.bound_pattern``) returns gamma lowered to the safe side
+        (:mod:`.posterior`), or the exactly proven bound when no floating-point correction
+        exists; ``solver_objective`` is the solver's number."""
         self.raise_for_status()
         sense, expr = self.program.objective or ("min", None)
         if is_cvxpy(expr):
             return float(self.info.get("objective"))
         if self.rigorous and self.rigorous_bound().proven is not None:
             return self.rigorous_bound().proven
+        if self._safe is None:
+            try:
+                self._safe = safe_objective(self, objective_value(self.data, self.x))
+            except UnverifiedSolutionError:      # no floating-point correction: the exact proof
+                self._safe = self.rigorous_bound().proven
+        return self._safe
+
+    @property
+    def solver_objective(self) -> float:
+        """The objective as the solver returned it (verified, not corrected; rigorous: the
+        solver's value next to the proven one)."""
+        self.raise_for_status()
         return objective_value(self.data, self.x)
 
     # ------------------------------------------------------------------ dual side

@@ -8,8 +8,14 @@ Q >= 0 (smallest eigenvalue) or, for DSOS blocks, diagonal dominance Q_ii >= sum
 numbers (:func:`check_block`; an SDSOS block is checked for Q >= 0 like a PSD one: that is
 what the certificate needs, and the solver's split into 2x2 blocks is never trusted); and every linear equality and inequality (:func:`check_linear`)
 and cvxpy constraint. With e = p - z^T Q z and every monomial of e in the Gram monomial set,
-p = z^T (Q + E) z with ||E||_2 <= sqrt(2) ||e||_2, so lambda_min(Q) >= sqrt(2) ||e||_2 proves
-p SOS (up to floating point) -- ``strict``.
+p = z^T (Q + E) z for the smallest such E, so the block's margin lambda_min(Q) - ||E||_F
+bounds lambda_min(Q + E) from below: a residual is judged by what it does to the Gram
+identity, not by its size next to p's coefficients. Tolerances are relative to the program's
+numbers (max |Q_ij|, |p_a|), never an absolute floor. A feasibility program (no objective:
+the claim "p is SOS") needs margin >= -(floating-point error); failing only that, it passes
+if the certificate is proven exactly (``Solution.verify``, :mod:`.rigorous`). A program with
+an objective sits on the boundary of the cone: margin >= -eig_tol x scale, and the bound it
+returns is corrected to the safe side (:mod:`.posterior`). docs/sos-semantics.md.
 
 The monomial structure of z^T Q z against p (:class:`GramStructure`: where each product
 z_i z_j and each monomial of p lands in their union) depends only on the basis and on p's

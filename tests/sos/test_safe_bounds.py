@@ -140,3 +140,28 @@ def test_many_variables_build_without_overflow():
     assert len(con.basis) == 200
     with sd.limits(max_bytes=2**20), pytest.raises(sd.ResourceLimitError, match="Gram basis of 200"):
         sd.SOSProgram().add_sos(p)
+
+
+def test_variable_bounds_of_boxes_balls_and_polytopes():
+    from sosdyn.sos.sets import variable_bounds
+    x, y = sd.variables("x y")
+    box = sd.BasicSet.box("x y", [-3, 0], [1, 2])
+    np.testing.assert_allclose(variable_bounds(box, ("x", "y")), [3, 2])
+    ball = sd.BasicSet.ball("x y", 2, center=[1, 0])                 # |x| <= 1 + 2, |y| <= 2
+    np.testing.assert_allclose(variable_bounds(ball, ("x", "y")), [3, 2])
+    simplex = sd.BasicSet(ineqs=[x, y, 1 - x - y])
+    np.testing.assert_allclose(variable_bounds(simplex, ("x", "y")), [1, 1], atol=1e-12)
+    assert variable_bounds(sd.BasicSet(ineqs=[x, y]), ("x", "y")) is None          # a quadrant
+    assert variable_bounds(sd.BasicSet(ineqs=[1 - x * y]), ("x", "y")) is None     # not read
+
+
+def test_hand_written_bound_program_objective_is_a_bound():
+    # maximize g s.t. p - g SOS, written out: Solution.objective is corrected like minimize_on
+    c = WIDE["x^2 + 24x^3 + 0.1x^4"]
+    prog = sd.SOSProgram()
+    g = prog.new_var(name="g")
+    prog.add_sos(poly(c) - g)
+    prog.maximize(g)
+    sol = prog.solve()
+    true_min = exact_minimum(c)
+    assert sol.solver_objective > true_min >= sol.objective >= true_min * (1 + 1e-4)
