@@ -108,6 +108,7 @@ CATALOGUE = [
     ("empty box (lower above upper)", lambda: sd.BasicSet.box([x], 1, -1), sd.InputError, "empty"),
     ("ball of negative radius", lambda: sd.BasicSet.ball([x], -1), sd.InputError, "empty"),
     ("non-finite ball radius", lambda: sd.BasicSet.ball("x", float("nan")), sd.InputError, "finite"),
+    ("ball radius whose square overflows", lambda: sd.BasicSet.ball("x", 1e200), sd.InputError, "squared"),
     ("box over something that is not a variable", lambda: sd.BasicSet.box([x**2], 0, 1), sd.InputError,
      "takes variables"),
     ("box bounds of the wrong length", lambda: sd.BasicSet.box("x y", [0, 0, 0], 1), sd.InputError, "2 numbers"),

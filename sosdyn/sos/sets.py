@@ -22,7 +22,7 @@ import numpy as np
 from scipy.optimize import linprog
 
 from ..errors import InputError, PolynomialError
-from ..poly import Polynomial, variables
+from ..poly import MAX_COEFFICIENT, Polynomial, variables
 
 
 def _set_variables(vars, what) -> list:
@@ -92,7 +92,10 @@ class BasicSet:
         if r < 0:
             raise InputError(f"BasicSet.ball: radius {float(r)!r} < 0: the ball is empty. Try: radius >= 0")
         c = np.zeros(len(xs)) if center is None else _numbers(center, len(xs), "center")
-        return cls(ineqs=[float(radius) ** 2 - sum((x - float(ci)) ** 2 for x, ci in zip(xs, c))])
+        if not r <= MAX_COEFFICIENT ** 0.5:
+            raise InputError(f"BasicSet.ball: radius {float(r)!r} squared is above {MAX_COEFFICIENT:.0e}, the "
+                             "largest coefficient a polynomial takes. Try: rescale the variables")
+        return cls(ineqs=[float(r) ** 2 - sum((x - float(ci)) ** 2 for x, ci in zip(xs, c))])
 
     def __and__(self, other: BasicSet) -> BasicSet:
         """The intersection: both sets' constraints."""
