@@ -46,8 +46,7 @@ from .sets import BasicSet, variable_bounds
 from .verification import gram_structure
 
 EPS = np.finfo(float).eps
-_HINT = ("rigorous=True (an exact proof, re-solving with a margin), rescale the variables so the "
-         "minimiser is near the unit box, or a set K that bounds the variables")
+_HINT = "rescale the variables so the minimiser is near the unit box, or a set K that bounds the variables"
 
 
 def eig_error(A) -> float:

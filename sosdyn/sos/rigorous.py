@@ -43,6 +43,7 @@ from .objective import QuadraticForm, affine_rows, is_cvxpy
 ANSWERED = ("optimal", "optimal_inaccurate")    # solver statuses that carry an answer
 FACE_TOL = 1e-7          # a Gram diagonal below this (relative) is taken as 0
 TIGHTENINGS = (1e-12, 3e-12, 1e-11, 3e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6)  # Q >= eps I (relative)
+QUICK_TIGHTENINGS = (1e-11, 1e-9)   # the automatic attempt of a plain solve (Solution.verify / objective)
 SHIFT_MAX = 1e-7         # largest relative shift tried before tightening
 
 
@@ -265,7 +266,7 @@ def _faces(program, ids, x) -> dict:
             else np.zeros(0, dtype=np.int64) for k, d in diags.items()}
 
 
-def prove_bound(program, data, x) -> Bound:
+def prove_bound(program, data, x, tightenings=TIGHTENINGS) -> Bound:
     """The objective of ``program`` proven exactly near the verified solver point x (module doc).
 
     ``data`` is the conic data x belongs to. Raises UnverifiedSolutionError naming what could
@@ -282,7 +283,7 @@ def prove_bound(program, data, x) -> Bound:
         reasons.append(f"{method}: {reason}")
     # eps relative to each block's largest diagonal, at least the solvers' absolute scale 1
     scales = {k: max(float(d.max()), 1.0) for k, d in _diagonals(program, data.ids, x).items()}
-    for rel in TIGHTENINGS:
+    for rel in tightenings:
         tight = program.tightened(kept, {k: rel * v for k, v in scales.items()})
         sol = tight.solve(tol_feas=1e-10, tol_gap_abs=1e-10, tol_gap_rel=1e-10)
         if sol.status not in ANSWERED or not np.isfinite(sol.x).all():

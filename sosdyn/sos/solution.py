@@ -24,7 +24,7 @@ from .gram import svec_to_matrix
 from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
 from .posterior import safe_objective
-from .rigorous import ANSWERED, Bound, prove_bound
+from .rigorous import ANSWERED, QUICK_TIGHTENINGS, Bound, prove_bound
 from .verification import VerificationReport, verify_certificate
 
 _HINTS = {
@@ -196,8 +196,15 @@ class Solution:
         if self._safe is None:
             try:
                 self._safe = safe_objective(self, objective_value(self.data, self.x))
-            except UnverifiedSolutionError:      # no floating-point correction: the exact proof
-                self._safe = self.rigorous_bound().proven
+            except UnverifiedSolutionError as exc:   # no floating-point correction: an exact proof
+                try:
+                    bound = self._quick_proof()
+                except UnverifiedSolutionError:
+                    bound = None
+                if bound is None or bound.proven is None:
+                    raise UnverifiedSolutionError(f"{exc.detail} (nor by a quick exact proof)", "unverified",
+                                                  f"rigorous=True (the full exact search); or {exc.hint}") from exc
+                self._safe = bound.proven
         return self._safe
 
     @property
@@ -288,18 +295,25 @@ class Solution:
     def _proven(self, report: VerificationReport) -> VerificationReport:
         """A feasibility certificate whose blocks lack a floating-point margin (p SOS but on the
         boundary, e.g. with real zeros) passes only if proven exactly (:mod:`.rigorous`)."""
-        global _PROVING
-        if _PROVING:                  # a tightened re-solve inside a proof: no nested proofs
-            return report
-        _PROVING = True
         try:
-            bound = prove_bound(self.program, self.data, self.x)
+            bound = self._quick_proof()
         except UnverifiedSolutionError:
             return report
+        return report if bound is None else report.proven_exactly(bound.method)
+
+    def _quick_proof(self) -> Bound | None:
+        """The exact proof (:func:`~.rigorous.prove_bound`) with a short tightening schedule, kept
+        as the rigorous bound when it succeeds; None inside another proof (no nested proofs).
+        ``rigorous=True`` tries the full schedule."""
+        global _PROVING
+        if self._bound is not None or _PROVING:
+            return self._bound
+        _PROVING = True
+        try:
+            self._bound = prove_bound(self.program, self.data, self.x, QUICK_TIGHTENINGS)
         finally:
             _PROVING = False
-        self._bound = bound
-        return report.proven_exactly(bound.method)
+        return self._bound
 
     def _require_unchanged(self, what: str):
         if self.program_version != getattr(self.program, "version", None):

@@ -165,3 +165,17 @@ def test_hand_written_bound_program_objective_is_a_bound():
     sol = prog.solve()
     true_min = exact_minimum(c)
     assert sol.solver_objective > true_min >= sol.objective >= true_min * (1 + 1e-4)
+
+
+def test_bound_without_a_safe_correction_is_an_exact_proof_or_refused():
+    # (x^2 + y^2) Motzkin: min 0 at the origin and (+-1, +-1); its Gram matrix is singular in a
+    # direction without the constant monomial on unbounded R^2: no floating-point correction.
+    # The quick exact proof decides (today's Clarabel: no proof, a typed refusal naming rigorous=True)
+    x, y = sd.variables("x y")
+    p = (x**2 + y**2) * (x**4 * y**2 + x**2 * y**4 + 1 - 3 * x**2 * y**2)
+    try:
+        lb = sd.minimize_on(p)
+    except sd.UnverifiedSolutionError as exc:
+        assert "cannot be made safe" in str(exc) and "rigorous=True" in str(exc)
+    else:
+        assert lb.value <= 0.0 and lb.solution.rigorous_bound().proven == lb.value
