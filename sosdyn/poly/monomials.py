@@ -82,8 +82,8 @@ _HASH_WEIGHTS = np.random.default_rng(20261126).integers(1, 2**62, size=4096) | 
 def _row_hashes(exps: np.ndarray) -> np.ndarray:
     """exps @ odd random int64 weights, wrapping: equal rows, equal hashes (the converse is
     checked by the callers)."""
-    n = exps.shape[1]
-    w = _HASH_WEIGHTS[np.arange(n) % _HASH_WEIGHTS.size] * (1 + np.arange(n) // _HASH_WEIGHTS.size)
+    k = np.arange(exps.shape[1])
+    w = _HASH_WEIGHTS[k % _HASH_WEIGHTS.size] * (1 + k // _HASH_WEIGHTS.size)
     with np.errstate(over="ignore"):
         return exps.astype(np.int64) @ w
 

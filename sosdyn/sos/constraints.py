@@ -24,6 +24,7 @@ from ..errors import InputError, PolynomialError
 from ..poly import PolyMatrix, Polynomial, check_terms_size, match_rows, to_sympy, unique_rows
 from .gram import SQRT2, gram_matching, svec_pairs
 from .newton import newton_basis
+from .sizes import check_family_size
 
 NO_SOLUTION_HINT = "pass the solution: sol.gram_matrix(con)"
 @dataclass
@@ -251,6 +252,7 @@ class FamilySOSConstraint(SOSConstraint):
     def __init__(self, program, name, term_polys, basis, psd, weights):
         U, _ = unique_rows(np.vstack([q.exps for q in term_polys]))
         self._ids = np.unique(np.concatenate([q.ids for q in term_polys] + [np.zeros(0, dtype=np.int64)]))
+        check_family_size(len(term_polys), U.shape[0], self._ids.size, name)
         self._tensor = np.zeros((len(term_polys), U.shape[0], 1 + self._ids.size))
         for t, q in enumerate(term_polys):
             q = q.with_ids(self._ids)
@@ -262,13 +264,11 @@ class FamilySOSConstraint(SOSConstraint):
     def _check_weights(self, weights, name):
         w = np.asarray(weights, dtype=float)
         if w.shape != (self._tensor.shape[0],) or not np.isfinite(w).all():
-            raise InputError(f"family {name!r}: expected {self._tensor.shape[0]} finite weights, "
-                             f"got shape {w.shape}")
+            raise InputError(f"family {name!r}: expected {self._tensor.shape[0]} finite weights, got shape {w.shape}")
         return w
 
     def _weighted(self) -> Polynomial:
-        return Polynomial(self._vars, self._U, np.tensordot(self.weights, self._tensor, axes=1),
-                          self._ids, canonical=True)
+        return Polynomial(self._vars, self._U, np.tensordot(self.weights, self._tensor, axes=1), self._ids, canonical=True)
 
     def set_weights(self, weights) -> "FamilySOSConstraint":
         """New numbers, same structure: re-match without any polynomial algebra."""

@@ -23,7 +23,6 @@ import numpy as np
 from ..errors import InputError, PolynomialError, UnverifiedSolutionError
 from ..poly import PolyMatrix, Polynomial, allocate, monomials_up_to, variable_names
 from . import conic
-from .sizes import check_family_size
 from .cones import auxiliary_count, check_cone, cone_rows, face_rows
 from .constraints import (Basis, Block, EqualityMultiplier, FamilySOSConstraint, LinearRows, Multiplier,
                           PsdBlock, SOSConstraint, as_sos_polynomial, user_basis,
@@ -211,8 +210,9 @@ class SOSProgram:
     def add_sos_matrix_family(self, terms, weights, name=None, cone="psd") -> "FamilySOSConstraint":
         """sum_t weights[t] * terms[t] is an SOS matrix; the weights can change between solves.
 
-        The compile-once path for parametrised problems (cvxpy's Parameters): each term is
-        expanded and matched once; ``con.set_weights(w)`` re-solves with new numbers at the cost of one dense contraction. The Gram basis covers every term's support.
+        This is the compile-once path for parametrised problems (cvxpy's Parameters): each
+        term is expanded and matched once; ``con.set_weights(w)`` re-solves with new numbers
+        at the cost of one dense contraction. The Gram basis covers every term's support.
         ``cone``: the cone of the Gram matrix, as in :meth:`add_sos`.
         """
         check_cone(cone)
@@ -220,7 +220,6 @@ class SOSProgram:
         if not terms or len({t.shape for t in terms}) != 1:
             raise PolynomialError("add_sos_matrix_family needs a non-empty list of equal-shape matrices")
         name = self._name("family", name)
-        check_family_size(terms, name)
         q0, exps = matrix_form(terms[0], basis_from=terms)
         taken = tuple(sorted({v for t in terms for v in t.vars}))
         qs = [q0] + [self._cached_form(t, taken) for t in terms[1:]]

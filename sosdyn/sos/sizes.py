@@ -4,24 +4,14 @@ from __future__ import annotations
 from ..limits import check_bytes
 
 
-def family_bytes(terms) -> float:
-    """Bytes of :meth:`SOSProgram.add_sos_matrix_family`'s dense term tensor, an upper bound:
-    8 x (terms) x (monomials of sum_t y^T T_t y) x (1 + decision ids), the monomials counted
-    as sum over entries (i <= j) of the union over t of T_t[i, j]'s monomials (by name)."""
-    r = terms[0].shape[0]
-    monos, ids = 0, set()
-    for i in range(r):
-        for j in range(i, r):
-            seen = set()
-            for t in terms:
-                e = t.entries[i, j]
-                ids.update(int(k) for k in e.ids)
-                seen.update(tuple((v, int(a)) for v, a in zip(e.vars, row) if a) for row in e.exps.tolist())
-            monos += len(seen)
-    return 8.0 * len(terms) * monos * (1 + len(ids))
+def family_bytes(n_terms: int, n_monomials: int, n_ids: int) -> float:
+    """Bytes of the dense term tensor of :class:`~.constraints.FamilySOSConstraint`: one float per
+    (term, monomial of sum_t y^T T_t y, constant or decision id)."""
+    return 8.0 * n_terms * n_monomials * (1 + n_ids)
 
 
-def check_family_size(terms, name) -> None:
+def check_family_size(n_terms: int, n_monomials: int, n_ids: int, name) -> None:
     """ResourceLimitError before the family's tensor is allocated if it exceeds max_bytes."""
-    check_bytes(family_bytes(terms), f"the SOS matrix family {name!r} ({len(terms)} terms)",
+    check_bytes(family_bytes(n_terms, n_monomials, n_ids),
+                f"the SOS matrix family {name!r} ({n_terms} terms, {n_monomials} monomials, {n_ids} decisions)",
                 "fewer terms, a lower degree or fewer states")
