@@ -225,13 +225,13 @@ def check_atoms(atoms: Atoms, residual: Polynomial, ineqs=(), eqs=(), tol: float
     ``residual`` is the certified polynomial at the solution (p - gamma: zero exactly where p
     attains the bound gamma); the constraints are tested to ``tol`` times (1 + the polynomial's
     largest coefficient), the residual to the bound's own error at each point,
-    ``bound_error(points)`` (default: the same as the constraints) -- a local minimiser higher
+    ``bound_error(points, vars)`` (default: the same as the constraints) -- a local minimiser higher
     than that is no minimiser. NoAtomsError names the first point and polynomial that fail.
     """
     def scale(p):
         return tol * (1.0 + np.abs(p.coef[:, 0]).max(initial=0.0))
 
-    attain = scale(residual) if bound_error is None else bound_error(atoms.points)
+    attain = scale(residual) if bound_error is None else bound_error(atoms.points, atoms.vars)
     tests = [(residual, "attains the bound (p - bound = 0)", lambda v, s: np.abs(v) <= attain)]
     tests += [(g, f"satisfies {g!r} >= 0", lambda v, s: v >= -s) for g in ineqs]
     tests += [(h, f"satisfies {h!r} = 0", lambda v, s: np.abs(v) <= s) for h in eqs]

@@ -257,11 +257,14 @@ class Solution:
 
     def _bound_error_at(self, con, residual):
         """points -> the error of the bound of ``con`` there (see ``minimizers``)."""
-        c = next(c for c in self.verify().checks if c.name == con.name)
+        c = next((c for c in self.verify().checks if c.name == con.name), None)
+        if c is None:
+            raise InputError(f"{con.name!r} is not a constraint of program {self.program.name!r}. "
+                             "Try: the handle returned by this program's add_sos/add_nonneg_on")
         err = abs(c.min_eig) + c.basis_size * c.residual
         square = Polynomial(con.basis.vars, 2 * con.basis.exps, np.ones(len(con.basis)))
         floor = 1e-9 * (1.0 + float(np.abs(residual.coef[:, 0]).max(initial=0.0)))
-        return lambda points: err * square(points, con.basis.vars) + floor
+        return lambda points, vars: err * square(points, vars) + floor
 
     def sos_decomposition(self, con, digits: int = 6) -> SOSDecomposition:
         """z^T Q z as sum_k d_k (q_k(x))^2 from the verified Gram matrix Q of ``con`` (a constraint
