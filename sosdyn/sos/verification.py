@@ -10,12 +10,13 @@ what the certificate needs, and the solver's split into 2x2 blocks is never trus
 and cvxpy constraint. With e = p - z^T Q z and every monomial of e in the Gram monomial set,
 p = z^T (Q + E) z for the smallest such E, so the block's margin lambda_min(Q) - ||E||_F
 bounds lambda_min(Q + E) from below: a residual is judged by what it does to the Gram
-identity, not by its size next to p's coefficients. Tolerances are relative to the program's
-numbers (max |Q_ij|, |p_a|), never an absolute floor. A feasibility program (no objective:
+identity, not by its size next to p's coefficients. Tolerances are relative (max |Q_ij|,
+|p_a|), with the absolute floor 1 only as large as the program's own numbers
+(:func:`tolerance_scale`). A feasibility program (no objective:
 the claim "p is SOS") needs margin >= -(floating-point error); failing only that, it passes
 if the certificate is proven exactly (``Solution.verify``, :mod:`.rigorous`). A program with
-an objective sits on the boundary of the cone: margin >= -eig_tol x scale, and the bound it
-returns is corrected to the safe side (:mod:`.posterior`). docs/sos-semantics.md.
+an objective sits on the boundary of the cone: its blocks pass on the relative tolerances
+alone, and the bound it returns is corrected to the safe side (:mod:`.posterior`). docs/sos-semantics.md.
 
 The monomial structure of z^T Q z against p (:class:`GramStructure`: where each product
 z_i z_j and each monomial of p lands in their union) depends only on the basis and on p's
@@ -63,13 +64,18 @@ class CertificateCheck:
     exact_needed: bool = False    # fails only the strict margin: an exact proof may still pass it
 
 
-def _cone_check(Q, cone, eig_tol, scale=None):
-    """(min eig, dd margin, ok, reason) of a Gram block in its cone ("psd" and "sdsos": Q >= 0).
+def tolerance_scale(largest: float, program_scale=None) -> float:
+    """The number a relative tolerance multiplies: max(largest, u), u = min(1, the program's
+    largest Gram entry) -- 1 for programs of ordinary size (so their tolerances are as they
+    were), the program's own size for tiny ones (-1e-9 x^2 is judged on the scale 1e-9)."""
+    return max(largest, 1.0 if program_scale is None else min(1.0, program_scale))
 
-    The tolerance is ``eig_tol`` x ``scale`` (default: max |Q_ij|) -- relative to the numbers
-    of the program, never an absolute floor (-1e-9 x^2 is not SOS)."""
+
+def _cone_check(Q, cone, eig_tol, scale):
+    """(min eig, dd margin, ok, reason) of a Gram block in its cone ("psd" and "sdsos": Q >= 0),
+    to eig_tol x ``scale`` (:func:`tolerance_scale`)."""
     min_eig = float(np.linalg.eigvalsh(Q).min()) if Q.size else 0.0
-    tol = eig_tol * (float(np.abs(Q).max(initial=0.0)) if scale is None else scale)
+    tol = eig_tol * scale
     if cone == "dsos":
         dd = float((np.diag(Q) - (np.abs(Q).sum(axis=1) - np.abs(np.diag(Q)))).min()) if Q.size else 0.0
         ok = dd >= -tol
@@ -174,24 +180,25 @@ def check_gram_values(name, kind, p_coef, structure: GramStructure, Q, eig_tol=1
     e = p - z^T Q z on the union U of monomials (each z_i z_j adds Q_ij to its monomial). With
     e on the Gram monomial set, p = z^T (Q + E) z exactly and lambda_min(Q + E) >=
     lambda_min(Q) - ||E||_F (:func:`residual_gram_norms`): that is the block's ``margin``. It
-    passes when the margin (not only lambda_min(Q)) is >= -eig_tol x scale (scale: max |Q_ij|
-    and |p_a|, or the program's given one) and e is within ``rel_tol`` x scale; ``strict=True``
-    (a feasibility claim "p is SOS") demands margin >= -(floating-point error) instead: a
-    singular certificate then needs ``rigorous=True`` (exact facial reduction)."""
+    passes when lambda_min(Q) >= -eig_tol x max |Q_ij| and e is within ``rel_tol`` x max |p_a|
+    (each through :func:`tolerance_scale`, with the program's ``scale``); ``strict=True`` (a
+    feasibility claim "p is SOS") also demands margin >= -(floating-point error): a singular
+    certificate then needs an exact proof. Without ``strict`` (a program with an objective) the
+    margin is reported only: the bound is made safe after the check (:mod:`.posterior`)."""
     size = structure.in_gram.size
     e = np.bincount(structure.p_at, weights=p_coef, minlength=size) \
         - np.bincount(structure.pair_at, weights=Q.ravel(), minlength=size)
-    own = max(float(np.abs(p_coef).max(initial=0.0)), float(np.abs(Q).max(initial=0.0)))
-    scale = own if scale is None else max(scale, own)
-    min_eig, dd, cone_ok, reason = _cone_check(Q, cone, eig_tol, scale)
+    q_scale = tolerance_scale(float(np.abs(Q).max(initial=0.0)), scale)
+    scale = tolerance_scale(float(np.abs(p_coef).max(initial=0.0)), scale)
+    min_eig, dd, cone_ok, reason = _cone_check(Q, cone, eig_tol, q_scale)
     res = float(np.abs(e).max(initial=0.0))
     representable = not np.any(e[~structure.in_gram] != 0.0)
     margin = (min_eig if cone != "dsos" else dd) - float(residual_gram_norms(e, structure, [Q.shape[0]])[0])
-    floor = fp_error(Q) if strict else eig_tol * scale
-    margin_ok = margin >= -floor
+    floor = fp_error(Q)
+    margin_ok = margin >= -floor or not strict
     if cone_ok and not margin_ok:
         reason = (f"min eigenvalue {min_eig:.3e} does not survive the residual (margin {margin:.3e} "
-                  f"below -{floor:.1e}{'; a feasibility claim needs margin >= 0' if strict else ''})")
+                  f"below -{floor:.1e}; a feasibility claim needs margin >= 0)")
     res_ok = res <= rel_tol * scale
     if not res_ok:
         reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
@@ -210,9 +217,9 @@ def check_blocks_values(name, kind, p_coef, structure: GramStructure, Qs, cones,
     first producing block is k, p = sum_k z_k^T (Q_k + E_k) z_k (E_k the smallest such), so the
     margin is min_k lambda_min(Q_k) - ||E_k||_F (:func:`residual_gram_norms`), judged as in
     :func:`check_gram_values`. ``min_eig`` is the least over the blocks."""
-    own = max([float(np.abs(p_coef).max(initial=0.0))] + [float(np.abs(Q).max(initial=0.0)) for Q in Qs])
-    scale = own if scale is None else max(scale, own)
-    parts = [_cone_check(Q, cone, eig_tol, scale) for Q, cone in zip(Qs, cones)]
+    q_scales = [tolerance_scale(float(np.abs(Q).max(initial=0.0)), scale) for Q in Qs]
+    scale = tolerance_scale(float(np.abs(p_coef).max(initial=0.0)), scale)
+    parts = [_cone_check(Q, cone, eig_tol, qs) for Q, cone, qs in zip(Qs, cones, q_scales)]
     size = structure.in_gram.size
     e = np.bincount(structure.p_at, weights=p_coef, minlength=size) - np.bincount(
         structure.pair_at, weights=np.concatenate([Q.ravel() for Q in Qs] + [np.zeros(0)]), minlength=size)
@@ -220,14 +227,14 @@ def check_blocks_values(name, kind, p_coef, structure: GramStructure, Qs, cones,
     representable = not np.any(e[~structure.in_gram] != 0.0)
     norms = residual_gram_norms(e, structure, [Q.shape[0] for Q in Qs])
     margins = [(p[0] if cone != "dsos" else p[1]) - nk for p, cone, nk in zip(parts, cones, norms)]
-    floors = [fp_error(Q) if strict else eig_tol * scale for Q in Qs]
+    floors = [fp_error(Q) for Q in Qs]
     cone_ok = all(p[2] for p in parts)
-    margin_ok = all(m >= -f for m, f in zip(margins, floors))
+    margin_ok = all(m >= -f for m, f in zip(margins, floors)) or not strict
     reason = "; ".join(p[3] for p in parts if p[3])
     if cone_ok and not margin_ok:
         k = int(np.argmin([m + f for m, f in zip(margins, floors)]))
         reason = (f"block {k}: min eigenvalue {parts[k][0]:.3e} does not survive the residual (margin "
-                  f"{margins[k]:.3e} below -{floors[k]:.1e}{'; a feasibility claim needs margin >= 0' if strict else ''})")
+                  f"{margins[k]:.3e} below -{floors[k]:.1e}; a feasibility claim needs margin >= 0)")
     res_ok = res <= rel_tol * scale
     if not res_ok:
         reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
@@ -249,9 +256,8 @@ def fp_error(A) -> float:
 
 def check_block(name, kind, Q, cone="psd", eig_tol=1e-7, scale=None) -> CertificateCheck:
     """Check a block that must only lie in its cone (multipliers, new_sos, new_psd); tolerance
-    eig_tol x ``scale`` (default max |Q_ij|; :func:`verify_certificate` gives the program's)."""
-    min_eig, dd, ok, reason = _cone_check(Q, cone, eig_tol,
-                                          None if scale is None else max(scale, float(np.abs(Q).max(initial=0.0))))
+    eig_tol x max |Q_ij| through :func:`tolerance_scale` (``scale``: the program's)."""
+    min_eig, dd, ok, reason = _cone_check(Q, cone, eig_tol, tolerance_scale(float(np.abs(Q).max(initial=0.0)), scale))
     return CertificateCheck(name, kind, Q.shape[0], min_eig, 0.0, 0.0, bool(min_eig > 0), bool(ok),
                             cone, dd, reason)
 
@@ -368,14 +374,14 @@ def verify_certificate(program, ids, x, eig_tol=1e-7, rel_tol=1e-6) -> Verificat
         owned.add(id(con.psd))
         if hasattr(con, "identity_values"):          # several Gram blocks (sparse_constraint)
             checks.append(check_blocks_values(con.name, con.kind, *con.identity_values(at), eig_tol, rel_tol,
-                                              strict=strict, scale=None if strict else scale))
+                                              strict=strict, scale=scale))
             continue
         Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
         p = con.poly.with_vars(con.basis.vars)
         coef = p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids)               # p at x
         checks.append(check_gram_values(con.name, con.kind, coef, constraint_gram_structure(con, p.exps),
                                         Q, eig_tol, rel_tol, con.psd.cone, strict=strict,
-                                        scale=None if strict else scale))
+                                        scale=scale))
     for b in program.blocks:
         if b.psd is not None and id(b.psd) not in owned:
             Q = svec_to_matrix(at(b.psd.ids), b.psd.size)
