@@ -8,11 +8,10 @@ Raising ``degree`` gives a nondecreasing sequence of bounds converging to f* whe
 compact with an Archimedean description (Lasserre 2001). The bound is the verified value,
 lowered to the safe side (:mod:`.posterior`: the solver's gamma minus what its residual and
 negative eigenvalues can cost where the monomials are large), so it is <= min f in floating
-point; when no such correction exists (a singular certificate on an unbounded set, sparse
-blocks) the bound proven exactly (``Solution.rigorous_bound``) is returned, or
-UnverifiedSolutionError raised. ``rigorous=True`` always proves it exactly. :func:`minimize_on` raises
-(InfeasibleError, UnverifiedSolutionError, ...) rather than return a number the independent
-check does not confirm.
+point; when no such correction exists (a singular certificate on an unbounded set) a quick
+exact proof's bound is returned, or UnverifiedSolutionError raised; ``rigorous=True`` always
+proves it exactly. :func:`minimize_on` raises (InfeasibleError, UnverifiedSolutionError, ...)
+rather than return a number the independent check does not confirm.
 """
 from __future__ import annotations
 

@@ -4,7 +4,7 @@ A verified solution of "maximize gamma s.t. f - gamma = sigma_0 + sum_i sigma_i 
 identity only up to a residual, and sigma_0 = z^T Q z only up to Q's tiny negative
 eigenvalues. Both are multiplied by the size of the monomials where f is small: at
 x = -180, |z(x)|^2 = 1 + x^2 + x^4 ~ 1e9, so lambda_min(Q) = -4e-6 moves the bound by ~4e3.
-:func:`safe_lower_bound` lowers gamma by delta until the identity is exact with a PSD matrix
+:func:`safe_shift` lowers gamma by delta until the identity is exact with a PSD matrix
 (Loefberg 2009, "Pre- and post-processing sum-of-squares programs in practice"):
 
 1. each multiplier sigma_i = z_i^T Q_i z_i is replaced by sigma_i + mu_i |z_i|^2 with
@@ -43,15 +43,10 @@ from .conic import positions
 from .gram import svec_to_matrix
 from .objective import affine_rows
 from .sets import BasicSet, variable_bounds
-from .verification import gram_structure
+from .verification import fp_error, gram_structure
 
 EPS = np.finfo(float).eps
 _HINT = "rescale the variables so the minimiser is near the unit box, or a set K that bounds the variables"
-
-
-def eig_error(A) -> float:
-    """A bound on the error of eigvalsh(A)'s eigenvalues: 8 n eps ||A||_F."""
-    return 8.0 * max(1, A.shape[0]) * EPS * float(np.linalg.norm(A))
 
 
 def constant_shift(A, k0: int, tau: float) -> float:
@@ -61,7 +56,7 @@ def constant_shift(A, k0: int, tau: float) -> float:
     a_00 + delta - tau >= b^T (A' - tau I)^{-1} b (Schur complement)."""
     rest = np.delete(np.arange(A.shape[0]), k0)
     Ar = A[np.ix_(rest, rest)] - tau * np.eye(rest.size)
-    if rest.size and np.linalg.eigvalsh(Ar)[0] <= eig_error(A):
+    if rest.size and np.linalg.eigvalsh(Ar)[0] <= fp_error(A):
         return np.inf
     b = A[rest, k0]
     need = tau - A[k0, k0] + (float(b @ np.linalg.solve(Ar, b)) if rest.size else 0.0)
@@ -85,7 +80,7 @@ def multiplier_shift(con, at):
         Q = svec_to_matrix(at(m.psd.ids), m.psd.size)
         if not Q.size:
             continue
-        mu = max(0.0, -float(np.linalg.eigvalsh(Q)[0])) + eig_error(Q)
+        mu = max(0.0, -float(np.linalg.eigvalsh(Q)[0])) + fp_error(Q)
         if mu > 0:
             square = Polynomial(m.basis.vars, 2 * m.basis.exps, np.ones(len(m.basis)))
             term = (mu * square * m.constraint).with_vars(vars)
@@ -127,7 +122,7 @@ def safe_shift(solution, con) -> float:
     n = np.bincount(st.pair_at, minlength=size)
     A = Q + (np.where(st.in_gram, e, 0.0) / np.maximum(n, 1))[st.pair_at].reshape(Q.shape)
     terms = p.coef.shape[1] + Q.size + 8
-    tau = terms * EPS * (mag + adj_mag + float(np.abs(Q).sum())) + eig_error(A)
+    tau = terms * EPS * (mag + adj_mag + float(np.abs(Q).sum())) + fp_error(A)
     off = ~st.in_gram & (e != 0.0)
     delta = np.inf if off.any() or not zero.size else constant_shift(A, int(zero[0]), tau)
     K = constraint_set(con)
