@@ -10,8 +10,8 @@ from .errors import (DemonstrationError, InfeasibleError, InputError, ModelFileE
 from .limits import get_limits, limits, set_limits
 from .poly import PolyMatrix, Polynomial, from_sympy, jacobian, to_sympy, variables
 from .sos import BasicSet, SOSProgram, Solution, minimize_on, sum_squares
-from .lfd import (CDSP, Demonstration, Demonstrations, Trajectory, check_demonstrations, lasa_names,
-                  load_demos, load_lasa, load_model)
+from .lfd import (CDSP, Demonstration, Demonstrations, Trajectory, check_demonstrations, dataset_names,
+                  lasa_names, load_dataset, load_demos, load_lasa, load_model, preprocess)
 
 __version__ = "0.1.0"
 
@@ -22,5 +22,5 @@ __all__ = [
     "Polynomial", "PolyMatrix", "variables", "jacobian", "from_sympy", "to_sympy",
     "SOSProgram", "Solution", "sum_squares", "BasicSet", "minimize_on",
     "CDSP", "Demonstration", "Demonstrations", "Trajectory", "check_demonstrations",
-    "lasa_names", "load_demos", "load_lasa", "load_model",
+    "dataset_names", "lasa_names", "load_dataset", "load_demos", "load_lasa", "load_model", "preprocess",
 ]

