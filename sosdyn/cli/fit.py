@@ -1,11 +1,13 @@
 """``sosdyn fit``: demonstrations in, a certified model file out.
 
-Inputs: files, folders (their ``*.csv`` / ``*.npy``), quoted patterns (``'demos/*.csv'``), or
-``lasa:NAME``; read by :func:`sosdyn.load_demos` (headers ``t,x,y[,z]``, ``t,x1..xn``,
+Inputs: files, folders (their ``*.csv`` / ``*.npy``), quoted patterns (``'demos/*.csv'``),
+``lasa:NAME`` or ``dataset:NAME`` (a shipped real set, :func:`sosdyn.load_dataset`); read by :func:`sosdyn.load_demos` (headers ``t,x,y[,z]``, ``t,x1..xn``,
 optional velocities, or no header with time in column 0; ``--dt`` for files without time).
 ``--units`` is recorded, not applied: it names the units of the positions in the model file
 (``state.units_``), on plot axes and in exported code; the numbers are used as they are.
-Progress: one plain line per convex step on stdout (step, cost, seconds since the start)
+Before the fit the demonstrations are preprocessed (``--smooth``, ``--trim-rest``,
+``--align-ends``; :mod:`.fitdata`) and crossings are reported; after it, a table of how the
+model reproduces each demonstration. Progress: one plain line per convex step on stdout (step, cost, seconds since the start)
 when stdout is not a terminal, a live status line when it is; nothing with ``--quiet``.
 """
 from __future__ import annotations
@@ -15,6 +17,7 @@ import time
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.markup import escape
 
@@ -23,6 +26,7 @@ from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from .base import State, app, err, info, out, positive
+from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
 from .paths import check_folder, check_output, demo_inputs
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
@@ -34,6 +38,11 @@ class SolverMethod(str, enum.Enum):
 
 
 Warp = enum.Enum("Warp", {name: name for name in WARPS}, type=str)
+
+
+class Switch(str, enum.Enum):
+    on = "on"
+    off = "off"
 
 
 def progress_line(row: dict, elapsed: float) -> str:
@@ -125,8 +134,21 @@ def fit(
                               "plots; the numbers are not rescaled.", show_default="none")] = None,
     goal_tol: Annotated[float | None, typer.Option(
         "--goal-tol", min=0.0, help="Largest distance of a demonstration's end point from the mean end point "
-                                    "(data units); demonstrations ending farther apart are refused.",
-        show_default=f"{GOAL_TOL_FRACTION:.0%} of the data's bounding-box diagonal")] = None,
+                                    "(data units) as recorded; demonstrations ending farther apart are refused.",
+        show_default=f"{GOAL_TOL_FRACTION:.0%} of the data's bounding-box diagonal with --align-ends off; "
+                     "else --align-ends' limit")] = None,
+    smooth: Annotated[str, typer.Option(
+        parser=parse_smooth, help="Savitzky-Golay smoothing before differentiation: auto = a window from the "
+                                  "noise and the sampling (off for smooth data such as LASA), off, or an odd "
+                                  "window in samples.")] = "auto",
+    trim_rest: Annotated[Switch, typer.Option(
+        "--trim-rest", help="Drop the resting samples at the start and end of each demonstration "
+                            "(within 5 noise sigmas of the first / last sample).")] = Switch.on,
+    align_ends: Annotated[str, typer.Option(
+        "--align-ends", parser=parse_align,
+        help="Blend each demonstration onto the mean end point over its last half and print the shifts: auto = "
+             "when the ends spread more than 1% of the data's diagonal; on; off; or a number = on, accepting "
+             "shifts up to it (data units; default limit 25% of the diagonal).")] = "auto",
 ) -> None:
     """Learn a certified CDSP model from demonstrations and save it.
 
@@ -135,16 +157,24 @@ def fit(
     import sosdyn as sd
 
     lasa = len(demos) == 1 and demos[0].startswith("lasa:")
+    shipped = len(demos) == 1 and demos[0].startswith(DATASET_PREFIX)
     if lasa and (dt, units, goal_tol) != (None, None, None):
         raise InputError("--dt, --units and --goal-tol apply to files, not to lasa:NAME (time in s, "
                             "positions in mm). Try: drop them.")
-    paths = [] if lasa else demo_inputs(demos)
+    if shipped and units is not None:
+        raise InputError("--units applies to files; a shipped data set names its own units. Try: drop it.")
+    paths = [] if lasa or shipped else demo_inputs(demos)
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
-    read = {"dt": dt, "units": units, "goal_tol": goal_tol, "name": Path(demos[0]).resolve().name if folder else None}
-    data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
-        paths, **{k: v for k, v in read.items() if v is not None})
+    raw_tol = goal_tol if goal_tol is not None or align_ends is False else np.inf
+    read = {"dt": dt, "units": units, "goal_tol": raw_tol, "name": Path(demos[0]).resolve().name if folder else None}
+    if shipped:
+        data = load_dataset_input(demos[0], dt)
+    else:
+        data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
+            paths, **{k: v for k, v in read.items() if v is not None})   # aligning: --align-ends refuses
+    data = sd.check_demonstrations(prepare(data, smooth, trim_rest is Switch.on, align_ends))
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value}
@@ -163,3 +193,4 @@ def fit(
          f"over {report.n_samples} states")
     if model.warp_ is not None:
         info(f"warp: {report.warp['n_maps']} maps, max Lipschitz number {report.warp['max_lipschitz']:.3f} (< 1)")
+    print_score(model, data)

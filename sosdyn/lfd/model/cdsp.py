@@ -58,6 +58,7 @@ from ..fit.params import (
     warp_settings,
 )
 from ..rollout import rollout as integrate
+from ..rollout.quality import reproduction_table
 from ..fit.rounds import corrective_fits, warp_choice
 from ..fit.warp import AUTO_WARPS, check_warp, fit_warp, jacobian, pulled_back
 
@@ -355,6 +356,16 @@ class CDSP:
         goal = self.goal_ if goal is None else self._check_points(goal, "goal")[0]
         return integrate(self.field, x0, duration=duration, dt=self.dt_ if dt is None else dt, goal=goal,
                          perturbations=perturbations, goal_changes=goal_changes, scale=self.scale_)
+
+    def score(self, demos) -> list[dict]:
+        """Per demonstration, its reproduction from its first sample (step ``dt_``): deviation
+        (mean / max, data units), arrival time, final error, at goal (columns and rules:
+        :func:`~sosdyn.lfd.rollout.quality.reproduction_table`)."""
+        self._check_fitted()
+        demos = check_demonstrations(demos, goal_tol=np.inf)
+        if demos.dim != self.dim_:
+            raise InputError(f"the demonstrations have dimension {demos.dim}, the model {self.dim_}.")
+        return reproduction_table(self.predict, demos, self.goal_, self.dt_)
 
     # ------------------------------------------------------------------ evidence
     def verify(self, n_samples=None, seed=None) -> CertificateReport:

@@ -1,0 +1,104 @@
+"""What ``sosdyn fit`` does around the fit: shipped data sets, preprocessing, crossings, and the
+table of how the fitted model reproduces each demonstration.
+
+``dataset:NAME`` reads :func:`sosdyn.load_dataset` (positions only; the loader's notes, e.g.
+hammer's declared time step, are printed). ``--smooth``, ``--trim-rest`` and ``--align-ends``
+are :func:`sosdyn.preprocess`'s options; the fit then warns about crossing demonstrations
+(:mod:`sosdyn.lfd.data.crossing`) and prints :meth:`CDSP.score`, warning when a reproduction
+deviates by more than :data:`DEVIATION_WARN` of the data's extent (bounding-box diagonal).
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import typer
+from rich.markup import escape
+
+from ..lfd.data.crossing import crossing_warning, find_crossings
+from ..lfd.data.datasets import dataset_info, load_dataset
+from ..lfd.data.preprocess import preprocess
+from .base import State, info, out
+
+DATASET_PREFIX = "dataset:"
+DEVIATION_WARN = 0.10
+
+
+def parse_smooth(value: str) -> str | int:
+    """``--smooth``: auto, off, or an odd window >= 5 (samples)."""
+    if value in ("auto", "off"):
+        return value
+    try:
+        window = int(value)
+    except ValueError:
+        raise typer.BadParameter(f"must be auto, off or an odd number of samples >= 5, got {value!r}.") from None
+    if window < 5 or window % 2 == 0:
+        raise typer.BadParameter(f"the window must be odd and >= 5 samples, got {window}.")
+    return window
+
+
+def parse_align(value: str) -> bool | str | float:
+    """``--align-ends``: auto, on, off, or the largest shift accepted (data units; aligns)."""
+    if value in ("auto", "on", "off"):
+        return {"auto": "auto", "on": True, "off": False}[value]
+    try:
+        limit = float(value)
+    except ValueError:
+        raise typer.BadParameter(f"must be auto, on, off or a distance > 0, got {value!r}.") from None
+    if not 0 < limit < float("inf"):
+        raise typer.BadParameter(f"the largest shift must be a finite number > 0, got {value!r}.")
+    return limit
+
+
+def load_dataset_input(spec: str, dt: float | None):
+    """The shipped set ``dataset:NAME``, positions only; the loader's notes printed."""
+    name = spec.removeprefix(DATASET_PREFIX)
+    with warnings.catch_warnings(record=True) as notes:
+        warnings.simplefilter("always")
+        data = load_dataset(name, positions_only=True, dt=dt)
+    for note in notes:
+        info(f"note: {escape(str(note.message))}")
+    if dataset_info(name).pose:
+        info(f"note: {name}: positions only (x, y, z); its orientations are not learned yet.")
+    return data
+
+
+def prepare(data, smooth: str | int, trim_rest: bool, align):
+    """``data`` preprocessed (:func:`sosdyn.preprocess`), what was done and any crossing printed."""
+    max_shift = align if isinstance(align, float) else None
+    result, report = preprocess(data, smooth_window=smooth, trim_rest=trim_rest,
+                                align=True if max_shift is not None else align, max_shift=max_shift)
+    for line in report.lines(data.units):
+        info(f"preprocess: {escape(line)}")
+    message = crossing_warning(find_crossings(result), data.units)
+    if message and not State.quiet:
+        out.print(f"[yellow]warning:[/] {escape(message)}", soft_wrap=True)
+    return result
+
+
+def print_score(model, data) -> None:
+    """The table of :meth:`CDSP.score` and a warning for reproductions far from their demo."""
+    if State.quiet:
+        return
+    rows = model.score(data)
+    pos = np.vstack([d.pos for d in data])
+    extent = float(np.linalg.norm(pos.max(axis=0) - pos.min(axis=0)))
+    u = data.units or "units"
+    out.print(f"reproduction of each demonstration from its start ({u}; at goal = within 1% of the extent "
+              f"{extent:.4g}):", highlight=False, soft_wrap=True)
+    out.print(f"{'demo':>4}  {'mean dev':>10}  {'max dev':>10}  {'arrival s':>9}  {'demo s':>7}  at goal",
+              highlight=False)
+    for r in rows:
+        out.print(f"{r['demo']:>4}  {r['mean_dev']:>10.4g}  {r['max_dev']:>10.4g}  {r['arrival_s']:>9.3g}  "
+                  f"{r['duration_s']:>7.3g}  {'yes' if r['at_goal'] else 'NO'}", highlight=False)
+    far = [r for r in rows if r["max_dev"] > DEVIATION_WARN * extent]
+    if far:
+        worst = max(far, key=lambda r: r["max_dev"])
+        out.print(f"[yellow]warning:[/] {len(far)} of {len(rows)} reproductions deviate from their demonstration "
+                  f"by more than {DEVIATION_WARN:.0%} of the data's extent (worst: demo {worst['demo']}, "
+                  f"{worst['max_dev']:.4g} {escape(u)}). Try: more components (--components), --smooth, or check "
+                  "the demonstrations for crossings.", soft_wrap=True)
+    stalled = [r["demo"] for r in rows if not r["at_goal"]]
+    if stalled:
+        out.print(f"[yellow]warning:[/] reproductions of demos {stalled} are not at the goal after twice the "
+                  "demonstration's duration.", soft_wrap=True)

@@ -1,0 +1,68 @@
+"""How well reproductions follow demonstrations: deviation, arrival, excursion, final error.
+
+Array functions on one reproduction ``path`` (T, n) sampled every ``dt`` seconds:
+
+* deviation of a demonstration from the path: for each demo sample the distance to the
+  nearest path sample; mean and max (data units);
+* arrival time: the first ``k dt`` with ``||path_k - goal|| <= radius`` (inf if never);
+* excursion: ``max_k dist(path_k, box) / diag(box)`` for the box [lo, hi] (0 inside);
+* final error: ``||path_T - goal||``.
+
+:func:`reproduction_table` rolls a field out from every demonstration's first sample for twice
+its duration and returns one row per demonstration (``CDSP.score`` and ``sosdyn fit``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from sosdyn.lfd.rollout.euler import euler_until_rest
+
+GOAL_FRACTION = 0.01      # "at the goal": within 1 % of the data's bounding-box diagonal
+HORIZON = 2.0             # reproductions run for this many times the demonstration's duration
+_CHUNK = 2048
+
+
+def deviation(demo: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """Distance from each row of ``demo`` (T, n) to the nearest row of ``path`` (S, n), (T,)."""
+    out = np.empty(len(demo))
+    for k in range(0, len(demo), _CHUNK):
+        block = demo[k:k + _CHUNK]
+        out[k:k + len(block)] = np.sqrt(((block[:, None] - path[None]) ** 2).sum(-1).min(axis=1))
+    return out
+
+
+def arrival_time(path: np.ndarray, dt: float, goal: np.ndarray, radius: float) -> float:
+    """First ``k dt`` with ``||path_k - goal|| <= radius``; inf if the path never gets there."""
+    inside = np.flatnonzero(np.linalg.norm(path - goal, axis=1) <= radius)
+    return float(inside[0] * dt) if inside.size else float("inf")
+
+
+def excursion(path: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
+    """Farthest distance of the path outside the box [lo, hi], over the box's diagonal."""
+    outside = np.maximum(lo - path, 0.0) + np.maximum(path - hi, 0.0)
+    return float(np.linalg.norm(outside, axis=1).max() / max(np.linalg.norm(hi - lo), np.finfo(float).tiny))
+
+
+def reproduction_table(field: Callable[[np.ndarray], np.ndarray], demos, goal: np.ndarray, dt: float) -> list[dict]:
+    """Per demonstration: explicit Euler (step ``dt``) of ``field`` from its first sample for
+    HORIZON x its duration; ``mean_dev`` / ``max_dev`` (:func:`deviation`, data units),
+    ``arrival_s`` (within GOAL_FRACTION of the diagonal of the goal, s; inf = not within the
+    horizon), ``duration_s`` (the demo's), ``final_error`` and ``at_goal`` (final error within
+    that radius). A diverging rollout raises SolverError (from :func:`euler_until_rest`)."""
+    pos = np.vstack([d.pos for d in demos])
+    radius = GOAL_FRACTION * float(np.linalg.norm(pos.max(axis=0) - pos.min(axis=0)))
+    steps = max(int(np.ceil(HORIZON * max(d.duration for d in demos) / dt)) + 2, 3)
+    paths = euler_until_rest(field, np.array([d.pos[0] for d in demos]), dt=dt, max_steps=steps,
+                             vel_tol=np.finfo(float).tiny, window=1)
+    rows = []
+    for i, (d, full) in enumerate(zip(demos, paths)):
+        path = full[:int(np.ceil(HORIZON * d.duration / dt)) + 1]       # full[0] is the start
+        dev = deviation(d.pos, path)
+        final = float(np.linalg.norm(path[-1] - goal))
+        rows.append({"demo": i, "source": d.source, "mean_dev": float(dev.mean()), "max_dev": float(dev.max()),
+                     "arrival_s": arrival_time(path, dt, goal, radius), "duration_s": d.duration,
+                     "final_error": final, "at_goal": final <= radius})
+    return rows
