@@ -1,0 +1,106 @@
+"""The report of problems.real_data: one figure per set and the HTML page (results.json in, files out)."""
+from __future__ import annotations
+
+import html
+import math
+from pathlib import Path
+
+import numpy as np
+
+from sosdyn.evaluation.realdata import split_first
+from sosdyn.report.figures import save_figure
+from sosdyn.report.figures.style import method_color, new_figure, styled
+
+COLORS = {"CDSP default": "#0072B2", "CDSP plain": "#E69F00"}
+
+
+def _color(method: str, methods) -> str:
+    return COLORS.get(method) or method_color(method, [m for m in methods if m not in COLORS])
+
+
+@styled
+def figure(name: str, demos, paths: dict, out_dir: Path) -> dict:
+    """Training demos (grey), test demos (black, dashed) and each method's reproductions from
+    the test starts: a 3-D view and the x-y and x-z projections for a 3-D set, one panel in 2-D."""
+    train, test = split_first(demos)
+    dim = demos.dim
+    views = [(0, 1, 2), (0, 1), (0, 2)] if dim >= 3 else [(0, 1)]
+    fig = new_figure(4.2 * len(views), 4.0)
+    labels = "xyz"
+    for k, axes in enumerate(views):
+        ax = fig.add_subplot(1, len(views), k + 1, **({"projection": "3d"} if len(axes) == 3 else {}))
+
+        def draw(points, **style):
+            p = np.asarray(points, dtype=float)
+            ax.plot(*(p[:, a] for a in axes), **style)
+
+        for i, d in enumerate(train):
+            draw(d.pos, color="0.7", lw=0.8, label="training demos" if i == 0 else None)
+        for i, d in enumerate(test):
+            draw(d.pos, color="black", lw=0.9, ls="--", label="test demos" if i == 0 else None)
+        for m, reps in paths.items():
+            for i, p in enumerate(reps or []):
+                draw(p, color=_color(m, list(paths)), lw=1.3, label=m if i == 0 else None)
+        goal = train.goal
+        ax.plot(*([goal[a]] for a in axes), marker="*", ms=10, color="black", ls="none")
+        ax.set_xlabel(f"{labels[axes[0]]} ({demos.units})")
+        ax.set_ylabel(f"{labels[axes[1]]} ({demos.units})")
+        if len(axes) == 3:
+            ax.set_zlabel(f"{labels[axes[2]]} ({demos.units})")
+        else:
+            ax.set_aspect("equal", adjustable="datalim")
+    handles, names = fig.axes[-1].get_legend_handles_labels()
+    fig.legend(handles, names, loc="outside lower center", ncols=len(names))
+    fig.suptitle(f"{name}: {len(train)} training, {len(test)} test demos; reproductions from the test starts")
+    return save_figure(fig, Path(out_dir) / "figures" / name.replace("/", "__"), dpi=110)
+
+
+def fmt(value, digits=2) -> str:
+    if value is None:
+        return "—"
+    if isinstance(value, bool):
+        return "yes" if value else "NO"
+    return "∞" if not math.isfinite(value) else f"{value:,.{digits}f}"
+
+
+def write_html(results: dict, out_dir: Path) -> Path:
+    """The page: protocol, one table row per (set, method) with the item-3 targets, figures."""
+    e = html.escape
+    head = ["set", "method", "test DTWD ÷ copy", "excursion ÷ diag", "arrival ÷ duration", "final error ÷ diag",
+            "certified", "fit s", "targets met"]
+    rows, figs = [], []
+    for s, d in results["sets"].items():
+        for m, r in d["methods"].items():
+            if r["error"] or r["failure"]:
+                cells = [e(s), e(m), f"failed: {e(str(r['error'] or r['failure'])[:160])}"] + [""] * 6
+            else:
+                t = r["targets"]
+                cells = [e(s), e(m), fmt(r["ratio"]), fmt(r["excursion"], 3), fmt(r["arrival_ratio"]),
+                         fmt(r["final_error"], 3), "—" if r["certified"] is None else fmt(r["certified"]),
+                         fmt(r["fit_s"], 1), "all" if t["all"] else "missed: " + ", ".join(
+                             k for k, v in t.items() if k != "all" and v is False)]
+            rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+        pre = next(iter(d["methods"].values()))["preprocess"] or []
+        fig = results["figures"][s]
+        figs.append(f"<h3>{e(s)}</h3><p>{d['n_demos']} demonstrations, {d['dim']}-D, units {e(d['units'])}. "
+                    f"Preprocessing (training demos): {e('; '.join(pre))}.</p>"
+                    f"<figure><img src=\"{e(fig['png'])}\" alt=\"{e(s)}\" style=\"max-width:100%\"></figure>")
+    na = "; ".join(f"{e(k)}: {e(v)}" for k, v in results["meta"]["not_applicable"].items())
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>CDSP on real demonstrations</title>
+<style>body{{font-family:sans-serif;max-width:1200px;margin:2em auto}}table{{border-collapse:collapse;font-size:90%}}
+td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}td:first-child,td:nth-child(2){{text-align:left}}</style>
+</head><body><h1>CDSP on real demonstrations (held-out)</h1>
+<p>{e(results['meta']['protocol'])} Full protocol: sosdyn.evaluation.realdata. Positions only (x, y, z) for
+the pose sets; hammer has no time stamps and is read at a declared 0.01 s per sample; robottasks positions
+are in cm (inferred). Not evaluated: {na}.{' Quick settings.' if results['meta']['quick'] else ''}</p>
+<p>Targets (issue 21, item 3): test DTWD ≤ 2× copy; excursion ≤ 0.25 of the training box's diagonal;
+arrival (within 1 % of the diagonal of the goal) by 2× the demo's remaining duration; certified.
+Each column is the worst test demo, except DTWD (mean over test demos).</p>
+<table><tr>{''.join(f'<th>{h}</th>' for h in head)}</tr>{''.join(rows)}</table>
+{''.join(figs)}
+<p>Wall time {results['meta']['wall_s']:.0f} s.</p></body></html>
+"""
+    path = Path(out_dir) / "index.html"
+    path.write_text(page)
+    return path

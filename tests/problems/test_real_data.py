@@ -1,0 +1,36 @@
+"""problems.real_data: the held-out protocol on the shipped real sets (quick run, schema, page, cache)."""
+from __future__ import annotations
+
+import json
+import math
+
+from problems import real_data
+
+
+def test_quick_run_writes_results_page_and_figure(tmp_path):
+    paths = real_data.run(("hammer",), ("CDSP default", "GMR"), quick=True, out_dir=tmp_path)
+    res = json.loads(paths["results"].read_text())
+    hammer = res["sets"]["hammer"]
+    assert hammer["n_demos"] == 10 and hammer["dim"] == 3 and hammer["units"] == "m (inferred)"
+    cdsp, gmr = hammer["methods"]["CDSP default"], hammer["methods"]["GMR"]
+    assert cdsp["n_train"] == 6 and cdsp["n_test"] == 4            # ceil(4 * 10 / 7) = 6
+    assert cdsp["certified"] is True and gmr["certified"] is None
+    for r in (cdsp, gmr):
+        assert not r["error"] and not r["failure"] and len(r["tests"]) == 4
+        assert math.isclose(r["ratio"], r["dtwd_mean"] / r["copy_mean"])
+        assert r["excursion"] == max(t["excursion"] for t in r["tests"]) >= 0
+        assert all(t["dtwd"] > 0 and t["copy"] > 0 for t in r["tests"])
+    assert cdsp["copy_mean"] == gmr["copy_mean"]                    # the reference does not depend on the method
+    assert cdsp["smoothing_window"] == 13                           # hammer is noisy: Savitzky-Golay on
+    page = paths["html"].read_text()
+    assert "figures/hammer.png" in page and (tmp_path / "figures" / "hammer.png").read_bytes()[:4] == b"\x89PNG"
+    again = real_data.run_job("hammer", "GMR", True, tmp_path / "cache", False)
+    assert again["from_cache"] and again["ratio"] == gmr["ratio"]
+
+
+def test_targets_flag_each_miss():
+    entry = {"ratio": 2.5, "excursion": 0.1, "arrival_ratio": 3.0, "certified": True, "error": None, "failure": None}
+    assert real_data.targets(entry) == {"dtwd": False, "excursion": True, "arrival": False, "certified": True,
+                                        "all": False}
+    assert real_data.targets(dict(entry, ratio=1.5, arrival_ratio=1.0))["all"] is True
+    assert real_data.targets(dict(entry, ratio=1.5, arrival_ratio=1.0, certified=None))["all"] is False
