@@ -175,3 +175,25 @@ def test_progress_line_reads_step_cost_elapsed():
         "corrective round 1, step 1 (dynamics): cost 2, 3.0 s"
     assert progress_line({"iteration": 0, "step": "metric", "cost": 2.0, "round": 2, "warp": "none"}, 3.0) == \
         "warp none, corrective round 2, step 1 (metric): cost 2, 3.0 s"
+
+
+def test_fit_a_shipped_set_prints_preprocessing_crossings_and_the_reproduction_table(capsys, tmp_path):
+    code, out, err = run(capsys, "fit", "dataset:hammer", "--components", "2", "--warp", "none",
+                         "--out", tmp_path / "m.json")
+    assert code == 0, err
+    text = " ".join(out.split())
+    assert "sample k is placed at k * 0.01 s (assumed)" in text
+    assert "smoothing: Savitzky-Golay, 13 samples" in text and "ends aligned to the mean end" in text
+    assert "max 0.0215 m (inferred) (demo 7)" in text                # hammer's README: max end spread 0.0211
+    rows = re.findall(r"^\s+(\d+)\s+([\d.e+-]+)\s+([\d.e+-]+)\s+([\d.e+inf-]+)\s+([\d.]+)\s+(yes|NO)$", out,
+                      flags=re.MULTILINE)
+    assert [int(r[0]) for r in rows] == list(range(10))
+    assert all(float(r[1]) <= float(r[2]) for r in rows)
+    assert json.loads((tmp_path / "m.json").read_text())["state"]["units_"] == "m (inferred)"
+
+
+def test_fit_a_shipped_set_refuses_units_and_unknown_names(capsys, tmp_path):
+    code, _, err = run(capsys, "fit", "dataset:hammer", "--units", "mm", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "--units applies to files")
+    code, _, err = run(capsys, "fit", "dataset:hamer", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "Did you mean hammer")
