@@ -59,6 +59,8 @@ SELECTIONS = {"CDSP selected": ("CDSP plain", "CDSP-ICA K10", "CDSP-ICA g0.02"),
 ALL_VARIANTS = tuple(VARIANTS) + tuple(SELECTIONS)
 STANDARD = "standard"           # the protocol's split (dsopt.SPLITS)
 QUICK = {"max_samples": 400, "max_iter": 4, "verify_samples": 2000}
+#: Per-shape columns beyond DTWD (dsopt.reproduction_quality, worst test demo; mean over seeds).
+QUALITY = ("arrival_ratio_test", "excursion_test", "final_error_test")
 
 
 def protocol(split: str = STANDARD) -> str:
@@ -175,8 +177,10 @@ def shape_variant(entries: list[dict]) -> dict:
            "errors": [e["error"] for e in entries if e["error"]]}
     if not ok:
         return dict(out, dtwd_test_mean=None, dtwd_test_std=None, dtwd_test=None, dtwd_train_mean=None,
-                    ratio_to_nearest=None, fit_s=None)
+                    ratio_to_nearest=None, fit_s=None, **dict.fromkeys(QUALITY))
     test_mean, test_std = _mean_std([e["dtwd_test_mean"] for e in ok])
+    out.update({k: (_mean_std([e[k] for e in ok])[0] if all(k in e for e in ok) else None)   # None: cached
+                for k in QUALITY})                                                          # before the column
     return dict(out, dtwd_test_mean=test_mean, dtwd_test_std=test_std,
                 dtwd_test=np.mean([e["dtwd_test"] for e in ok], axis=0).tolist(),
                 dtwd_train_mean=_mean_std([e["dtwd_train_mean"] for e in ok])[0],
@@ -201,7 +205,9 @@ def summarize(per_shape: dict, variants, seds: dict | None) -> dict:
                 dtwd_train_mean=float(np.mean([r["dtwd_train_mean"] for r in ok.values()])),
                 worst_ratio_to_nearest=ok[worst]["ratio_to_nearest"], worst_shape=worst,
                 n_better_than_nearest=sum(r["ratio_to_nearest"] < 1 for r in ok.values()),
-                fit_s_mean=float(np.mean([r["fit_s"] for r in ok.values()])))
+                fit_s_mean=float(np.mean([r["fit_s"] for r in ok.values()])),
+                **{f"worst_{k}": (max(r[k] for r in ok.values()) if all(r[k] is not None for r in ok.values())
+                                  else None) for k in QUALITY})
             if seds:
                 summary["n_better_than_seds"] = sum(
                     r["dtwd_test_mean"] < seds[s] for s, r in ok.items() if s in seds)

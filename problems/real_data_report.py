@@ -12,6 +12,7 @@ from sosdyn.report.figures import save_figure
 from sosdyn.report.figures.style import method_color, new_figure, styled
 
 COLORS = {"CDSP default": "#0072B2", "CDSP plain": "#E69F00"}
+VIEW_PAD = 0.3          # the axes show the data's box widened by this fraction on each side (paths leaving it are cut)
 
 
 def _color(method: str, methods) -> str:
@@ -25,33 +26,39 @@ def figure(name: str, demos, paths: dict, out_dir: Path) -> dict:
     train, test = split_first(demos)
     dim = demos.dim
     views = [(0, 1, 2), (0, 1), (0, 2)] if dim >= 3 else [(0, 1)]
-    fig = new_figure(4.2 * len(views), 4.0)
+    fig = new_figure(4.8 * len(views), 4.2)
     labels = "xyz"
+    pos = np.vstack([d.pos for d in demos])
+    pad = VIEW_PAD * (pos.max(axis=0) - pos.min(axis=0))
+    lo, hi = pos.min(axis=0) - pad, pos.max(axis=0) + pad
     for k, axes in enumerate(views):
         ax = fig.add_subplot(1, len(views), k + 1, **({"projection": "3d"} if len(axes) == 3 else {}))
 
         def draw(points, **style):
-            p = np.asarray(points, dtype=float)
+            p = np.array(points, dtype=float)
+            p[np.any((p < lo) | (p > hi), axis=1)] = np.nan        # 3-D axes do not clip
             ax.plot(*(p[:, a] for a in axes), **style)
 
         for i, d in enumerate(train):
-            draw(d.pos, color="0.7", lw=0.8, label="training demos" if i == 0 else None)
+            draw(d.pos, color="0.75", lw=0.7, label="training demos" if i == 0 else None)
         for i, d in enumerate(test):
             draw(d.pos, color="black", lw=0.9, ls="--", label="test demos" if i == 0 else None)
         for m, reps in paths.items():
             for i, p in enumerate(reps or []):
-                draw(p, color=_color(m, list(paths)), lw=1.3, label=m if i == 0 else None)
+                draw(p, color=_color(m, list(paths)), lw=1.0, alpha=0.85, label=m if i == 0 else None)
         goal = train.goal
         ax.plot(*([goal[a]] for a in axes), marker="*", ms=10, color="black", ls="none")
         ax.set_xlabel(f"{labels[axes[0]]} ({demos.units})")
         ax.set_ylabel(f"{labels[axes[1]]} ({demos.units})")
+        ax.set_xlim(lo[axes[0]], hi[axes[0]])
+        ax.set_ylim(lo[axes[1]], hi[axes[1]])
         if len(axes) == 3:
+            ax.set_zlim(lo[axes[2]], hi[axes[2]])
             ax.set_zlabel(f"{labels[axes[2]]} ({demos.units})")
-        else:
-            ax.set_aspect("equal", adjustable="datalim")
     handles, names = fig.axes[-1].get_legend_handles_labels()
     fig.legend(handles, names, loc="outside lower center", ncols=len(names))
-    fig.suptitle(f"{name}: {len(train)} training, {len(test)} test demos; reproductions from the test starts")
+    fig.suptitle(f"{name}: {len(train)} training, {len(test)} test demos; reproductions from the test starts "
+                 f"(axes: the data's box + {VIEW_PAD:.0%})")
     return save_figure(fig, Path(out_dir) / "figures" / name.replace("/", "__"), dpi=110)
 
 

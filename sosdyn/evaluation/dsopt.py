@@ -37,6 +37,7 @@ from sosdyn.errors import InputError, SolverError
 from sosdyn.evaluation.metrics import curve, dtwd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.rollout import euler_until_rest
+from sosdyn.lfd.rollout.quality import GOAL_FRACTION, arrival_time, excursion
 
 TRAIN_DEMOS = (0, 1, 2, 3)          # 0-based indices of the training demonstrations (1-4)
 TEST_DEMOS = (4, 5, 6)              # and of the test demonstrations (5-7)
@@ -134,15 +135,43 @@ def nearest_demo_score(train, test) -> float:
 # ---------------------------------------------------------------- one shape
 
 
+def _reproduce(field: Callable, curves) -> tuple[list[np.ndarray] | None, str | None]:
+    """Protocol step 2 from the 20th points of ``curves``: (reproductions, None), or (None, the
+    message) when a reproduction diverges (SolverError)."""
+    try:
+        return euler_reproduce(field, start_points(curves)), None
+    except SolverError as exc:
+        return None, str(exc)
+
+
 def reproduction_scores(field: Callable, curves) -> tuple[list[float], int, str | None]:
     """Protocol steps 2-3 on ``curves`` (demonstrations): (DTWD of each reproduction from its
     20th point, reproduction length, None); a diverging reproduction (SolverError) scores inf
     for every curve, length 0, and its message."""
-    try:
-        reps = euler_reproduce(field, start_points(curves))
-    except SolverError as exc:
-        return [np.inf] * len(curves), 0, str(exc)
+    reps, failure = _reproduce(field, curves)
+    if reps is None:
+        return [np.inf] * len(curves), 0, failure
     return [dtwd(r, d.pos).total for r, d in zip(reps, curves)], len(reps[0]), None
+
+
+def reproduction_quality(reps, train, curves, goal, dt: float = DT) -> list[dict]:
+    """Beyond DTWD, per reproduction ``reps[i]`` (sampled every ``dt``) of ``curves[i]`` from its
+    20th point: ``arrival_s`` (first time within 1 % of the training box's diagonal of ``goal``;
+    inf = never), ``duration_s`` (the demo's remaining duration from that point),
+    ``arrival_ratio``, ``excursion`` (farthest point outside the training box / its diagonal)
+    and ``final_error`` (distance from the reproduction's end to the demo's end / diagonal);
+    :mod:`sosdyn.lfd.rollout.quality`."""
+    pos = np.vstack([d.pos for d in train])
+    lo, hi = pos.min(axis=0), pos.max(axis=0)
+    diag = float(np.linalg.norm(hi - lo))
+    rows = []
+    for path, d in zip(reps, curves):
+        remaining = float(d.t[-1] - d.t[START_INDEX])
+        arrival = arrival_time(path, dt, goal, GOAL_FRACTION * diag)
+        rows.append({"arrival_s": arrival, "duration_s": remaining, "arrival_ratio": arrival / remaining,
+                     "excursion": excursion(path, lo, hi),
+                     "final_error": float(np.linalg.norm(path[-1] - d.pos[-1]) / diag)})
+    return rows
 
 
 def select_fit(fit_fns: Mapping[str, Callable], train) -> tuple[str, object, dict[str, float]]:
@@ -171,7 +200,9 @@ def evaluate_shape(fit_fn: Callable, demos, train=TRAIN_DEMOS, test=TEST_DEMOS) 
     ``name``; ``dtwd_test`` (3 values) and ``dtwd_test_mean``; ``dtwd_train`` (4) and
     ``dtwd_train_mean`` (reproductions from the training demos' 20th points, as ds-opt also
     reports); ``nearest_demo`` (:func:`nearest_demo_score`); ``n_points_test`` /
-    ``n_points_train`` (reproduction lengths; ``MAX_STEPS - 1`` = not converged); ``fit_s``
+    ``n_points_train`` (reproduction lengths; ``MAX_STEPS - 1`` = not converged);
+    ``arrival_ratio_test``, ``excursion_test``, ``final_error_test`` (the worst test demo's,
+    :func:`reproduction_quality`); ``fit_s``
     and ``reproduce_s`` (wall time, s). A reproduction that diverges (SolverError) scores inf
     and its message is kept in ``failure``.
     """
@@ -184,11 +215,16 @@ def evaluate_shape(fit_fn: Callable, demos, train=TRAIN_DEMOS, test=TEST_DEMOS) 
         raise InputError("fit_fn must return a field X -> Xdot or a model with .predict(X).")
     result = {"name": getattr(demos, "name", ""), "fit_s": fit_s, "failure": None}
     t0 = time.perf_counter()
+    goal = np.asarray(getattr(model, "goal_", train.goal), dtype=float)
     for part, curves in (("train", train), ("test", test)):
-        scores, n_points, failure = reproduction_scores(field, curves)
+        reps, failure = _reproduce(field, curves)
+        scores = [np.inf] * len(curves) if reps is None else [dtwd(r, d.pos).total for r, d in zip(reps, curves)]
         result.update({f"dtwd_{part}": scores, f"dtwd_{part}_mean": float(np.mean(scores)),
-                       f"n_points_{part}": n_points})
+                       f"n_points_{part}": 0 if reps is None else len(reps[0])})
         result["failure"] = failure or result["failure"]
+    rows = reproduction_quality(reps, train, test, goal) if reps is not None else []
+    for key in ("arrival_ratio", "excursion", "final_error"):     # the worst test demo
+        result[f"{key}_test"] = max((r[key] for r in rows), default=np.inf)
     result["reproduce_s"] = time.perf_counter() - t0
     result["nearest_demo"] = nearest_demo_score(train, test)
     return result
@@ -224,6 +260,7 @@ __all__ = [
     "evaluate_shape",
     "load_seds_published",
     "nearest_demo_score",
+    "reproduction_quality",
     "reproduction_scores",
     "select_fit",
     "split",

@@ -33,7 +33,6 @@ from sosdyn.evaluation import dsopt
 from sosdyn.evaluation.metrics import dtwd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.data.preprocess import REST_NOISE, preprocess, rest_bounds
-from sosdyn.lfd.rollout.quality import GOAL_FRACTION, arrival_time, excursion
 
 TRAIN_FRACTION = 4 / 7
 VEL_TOL_FRACTION = 0.006      # ds-opt's 0.1 mm/s over a LASA shape's diag / duration (~65 mm / 4 s)
@@ -89,17 +88,11 @@ def reproduce(field: Callable, train, test) -> list[np.ndarray]:
 
 
 def test_scores(paths, train, test, goal) -> list[dict]:
-    """Protocol step 4: one row per test demo (DTWD, copy, arrival, excursion, final error)."""
-    lo, hi, diag = box(train)
-    rows = []
-    for path, d in zip(paths, test):
-        remaining = float(d.t[-1] - d.t[dsopt.START_INDEX])
-        arrival = arrival_time(path, dsopt.DT, goal, GOAL_FRACTION * diag)
-        rows.append({"dtwd": dtwd(path, d.pos).total, "copy": min(dtwd(tr.pos, d.pos).total for tr in train),
-                     "arrival_s": arrival, "duration_s": remaining, "arrival_ratio": arrival / remaining,
-                     "excursion": excursion(path, lo, hi),
-                     "final_error": float(np.linalg.norm(path[-1] - d.pos[-1]) / diag), "n_points": len(path)})
-    return rows
+    """Protocol step 4: one row per test demo, DTWD and copy added to
+    :func:`sosdyn.evaluation.dsopt.reproduction_quality`'s arrival, excursion and final error."""
+    rows = dsopt.reproduction_quality(paths, train, test, goal)
+    return [dict(r, dtwd=dtwd(path, d.pos).total, copy=min(dtwd(tr.pos, d.pos).total for tr in train),
+                 n_points=len(path)) for r, path, d in zip(rows, paths, test)]
 
 
 def thin(path: np.ndarray, n: int = PATH_POINTS) -> np.ndarray:

@@ -28,6 +28,7 @@ def _check(res: dict, shapes, variants, seeds: int) -> None:
             for x in (e["dtwd_test_mean"], e["dtwd_train_mean"], e["ratio_to_nearest"], e["fit_s"], *e["dtwd_test"]):
                 assert math.isfinite(x) and x > 0
             assert e["ratio_to_nearest"] == pytest.approx(e["dtwd_test_mean"] / row["nearest_demo"])
+            assert 0 < e["arrival_ratio_test"] < 10 and 0 <= e["excursion_test"] < 1 and 0 <= e["final_error_test"] < 0.1
     for v in variants:
         sm = res["summary"][v]
         assert sm["n_ok"] == sm["n_certified"] == len(shapes) and sm["worst_shape"] in shapes
