@@ -197,3 +197,17 @@ def test_fit_a_shipped_set_refuses_units_and_unknown_names(capsys, tmp_path):
     assert_one_error_line(code, err, "--units applies to files")
     code, _, err = run(capsys, "fit", "dataset:hamer", "--out", tmp_path / "m.json")
     assert_one_error_line(code, err, "Did you mean hammer")
+
+
+def test_fit_names_the_kept_warp_and_an_iteration_cap(capsys):
+    from types import SimpleNamespace
+
+    from sosdyn.cli.fitdata import print_choice
+    rows = [{"step": "dynamics (M = I)"}] + [{"step": s} for _ in range(3) for s in ("ica", "dynamics")]
+    print_choice(SimpleNamespace(warp_scores_={"none": 2.0, "60 maps": 1.5, "30 maps": 1.5}, history_=rows,
+                                 max_iter=3))
+    out = " ".join(capsys.readouterr().out.split())
+    assert "none 2, 60 maps 1.5, 30 maps 1.5; kept 60 maps (lowest)" in out     # ties: the first
+    assert "iteration cap (max_iter = 3)" in out
+    print_choice(SimpleNamespace(warp_scores_={}, history_=rows, max_iter=4))
+    assert capsys.readouterr().out == ""

@@ -26,7 +26,8 @@ from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from .base import State, app, err, info, out, positive
-from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
+from .fitdata import (DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_choice,
+                      print_score)
 from .paths import check_folder, check_output, demo_inputs
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
@@ -193,4 +194,5 @@ def fit(
          f"over {report.n_samples} states")
     if model.warp_ is not None:
         info(f"warp: {report.warp['n_maps']} maps, max Lipschitz number {report.warp['max_lipschitz']:.3f} (< 1)")
+    print_choice(model)
     print_score(model, data)
