@@ -247,8 +247,7 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
         goal_tol = GOAL_TOL_FRACTION * diagonal
     elif isinstance(goal_tol, bool) or not isinstance(goal_tol, (int, float, np.number)) or not goal_tol >= 0:
         raise InputError(f"goal_tol must be a number >= 0 (or None: 5% of the data scale), got {goal_tol!r}.")
-    ends = np.array([d.pos[-1] for d in items])
-    spread = np.linalg.norm(ends - ends.mean(axis=0), axis=1)
+    spread = end_distances(items)[1]
     worst = int(np.argmax(spread))
     if spread[worst] > goal_tol:
         raise DemonstrationError(
@@ -258,6 +257,13 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
             f"{1.1 * spread[worst]:.3g}; sosdyn fit --goal-tol)."
         )
     return demos
+
+
+def end_distances(demos) -> tuple[np.ndarray, np.ndarray]:
+    """(g, d): the mean end point g = mean_i x_i(T_i) and each end's distance d_i = ||x_i(T_i) - g||."""
+    ends = np.array([d.pos[-1] for d in demos])
+    goal = ends.mean(axis=0)
+    return goal, np.linalg.norm(ends - goal, axis=1)
 
 
 def sample_step(demos: Demonstrations) -> float:

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from sosdyn.errors import DemonstrationError, InputError
-from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, end_distances
 
 IRREGULAR_TOL = 0.01      # relative deviation of a time step from the median step that triggers resampling
 REST_NOISE = 5.0          # rest ball radius, in noise sigmas
@@ -150,21 +150,19 @@ def align_ends(demos, max_shift: float | None = None, fraction: float = BLEND_FR
 
     DemonstrationError when an end is farther than ``max_shift`` (default ALIGN_MAX x the
     bounding-box diagonal) from g, naming the value that would accept it."""
-    ends = np.array([d.pos[-1] for d in demos])
-    goal = ends.mean(axis=0)
-    shifts = np.linalg.norm(goal - ends, axis=1)
+    goal, shifts = end_distances(demos)
     limit = ALIGN_MAX * _diagonal(demos) if max_shift is None else float(max_shift)
     worst = int(np.argmax(shifts))
     if shifts[worst] > limit:
-        raise DemonstrationError(
-            f"demo {worst} of {getattr(demos, 'name', '') or 'the set'} ends {shifts[worst]:.4g} "
-            f"{getattr(demos, 'units', '') or 'units'} from the mean end point, more than max_shift = "
-            f"{limit:.4g} ({ALIGN_MAX:.0%} of the data's diagonal by default): its end is too far away to be "
-            f"one task. Try: drop that demo, or max_shift={1.1 * shifts[worst]:.3g} (sosdyn fit "
-            "--align-ends MAX) if they are one task.")
+        where = f"demo {worst} of {getattr(demos, 'name', '') or 'the set'}"
+        units = getattr(demos, "units", "") or "units"
+        raise DemonstrationError(f"{where} ends {shifts[worst]:.4g} {units} from the mean end point, more than "
+                                 f"max_shift = {limit:.4g} ({ALIGN_MAX:.0%} of the data's diagonal by default): "
+                                 f"its end is too far away to be one task. Try: drop that demo, or max_shift="
+                                 f"{1.1 * shifts[worst]:.3g} (sosdyn fit --align-ends MAX) if they are one task.")
     out = []
-    for d, end in zip(demos, ends):
-        dx, dv = blend_shift(d.t, goal - end, fraction)
+    for d in demos:
+        dx, dv = blend_shift(d.t, goal - d.pos[-1], fraction)
         out.append(Demonstration(d.t, d.pos + dx, d.vel + dv, d.source))
     return Demonstrations(out, getattr(demos, "name", ""), getattr(demos, "units", "")), shifts
 
@@ -201,9 +199,8 @@ def preprocess(demos, *, smooth_window: int | str | None = "auto", trim_rest: bo
     window = smoothing_window(kept) if smooth_window == "auto" else (
         None if smooth_window in ("off", None) else int(smooth_window))
     out = Demonstrations([smooth(d, window) if window else d for d in kept], name, units)
-    ends = np.array([d.pos[-1] for d in out])
-    spread = float(np.linalg.norm(ends - ends.mean(axis=0), axis=1).max())
+    goal, spread = end_distances(out)
     shifts = np.zeros(len(out))
-    if align is True or (align == "auto" and spread > ALIGN_MIN * _diagonal(out)):
+    if align is True or (align == "auto" and spread.max() > ALIGN_MIN * _diagonal(out)):
         out, shifts = align_ends(out, max_shift)
-    return out, PreprocessReport(sigma, step, window, changed, trimmed, ends.mean(axis=0), shifts)
+    return out, PreprocessReport(sigma, step, window, changed, trimmed, goal, shifts)
