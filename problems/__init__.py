@@ -18,6 +18,7 @@ EXPERIMENTS = {
     "lasa-all": "lasa_all",
     "lasa-dsopt": "lasa_dsopt",        # CDSP variants on the LPV-DS (ds-opt) LASA protocol
     "real-data": "real_data",          # held-out accuracy on the shipped real demonstration sets
+    "real-data-configs": "real_data_configs",   # CDSP configurations on the real sets' training data
     "warp-figure": "warp_figure",      # the pre-warp on DoubleBendedLine (docs/theory.md's figure)
     "demo3d": "demo3d",
     "demo7d": "demo7d",                # a certified CDSP from 5 noisy 7-D joint-space demonstrations

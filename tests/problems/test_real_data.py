@@ -4,7 +4,10 @@ from __future__ import annotations
 import json
 import math
 
+import pytest
+
 from problems import real_data
+from sosdyn.evaluation import dsopt, realdata
 
 
 def test_quick_run_writes_results_page_and_figure(tmp_path):
@@ -34,3 +37,13 @@ def test_targets_flag_each_miss():
                                         "all": False}
     assert real_data.targets(dict(entry, ratio=1.5, arrival_ratio=1.0))["all"] is True
     assert real_data.targets(dict(entry, ratio=1.5, arrival_ratio=1.0, certified=None))["all"] is False
+
+
+def test_configs_scores_training_and_test_reproductions(tmp_path):
+    from problems import real_data_configs
+    path = real_data_configs.run(("hammer",), ("plain",), out_dir=tmp_path)
+    row = json.loads(path.read_text())["results"]["hammer|plain"]
+    assert row["certified"] and row["train"]["dtwd"] > 0 and math.isfinite(row["train"]["arrival_ratio"])
+    _, recorded, test, _ = realdata.prepare(real_data.load("hammer"))
+    assert row["test"]["copy"] == pytest.approx(dsopt.nearest_demo_score(recorded, test))
+    assert row["train"]["copy"] == 0.0            # from a training start, the nearest training demo is itself
