@@ -362,9 +362,7 @@ class CDSP:
         (mean / max, data units), arrival time, final error, at goal (columns and rules:
         :func:`~sosdyn.lfd.rollout.quality.reproduction_table`)."""
         self._check_fitted()
-        demos = check_demonstrations(demos, goal_tol=np.inf)
-        if demos.dim != self.dim_:
-            raise InputError(f"the demonstrations have dimension {demos.dim}, the model {self.dim_}.")
+        demos = check_demonstrations(demos, goal_tol=np.inf)       # another dimension: predict's InputError
         return reproduction_table(self.predict, demos, self.goal_, self.dt_)
 
     # ------------------------------------------------------------------ evidence

@@ -40,3 +40,12 @@ def test_cdsp_score_rows(leaf):
         assert 0 <= r["mean_dev"] <= r["max_dev"] and r["at_goal"] == (r["final_error"] <= radius)
     with pytest.raises(NotFittedError):
         CDSP().score(leaf)
+
+
+def test_score_refuses_demos_of_another_dimension(leaf):
+    from sosdyn.errors import InputError
+    model = CDSP(n_components=2, warp="none", max_iter=2, max_samples=200).fit(leaf[:2])
+    t = np.linspace(0, 1, 20)
+    other = Demonstrations([Demonstration.from_positions(t, np.column_stack([t, t, t]))])
+    with pytest.raises(InputError, match=r"shape \(m, 2\)"):
+        model.score(other)
