@@ -137,6 +137,20 @@ def test_goal_tol_refuses_with_a_hint_and_accepts_when_raised(capsys, tmp_path, 
     assert code == 0, err and len(captured["demos"]) == 2
 
 
+def test_goal_tol_is_honoured_by_the_fit_itself(capsys, tmp_path):
+    """A real fit (no stand-in): the value the error suggests is accepted end to end."""
+    paths = write_xy(tmp_path / "d", [(8, 2), (-6, 7)], T=60)
+    shifted = np.loadtxt(paths[1], delimiter=",", skiprows=1) + [3.0, 0.0]   # ends ~1.2 off the mean
+    np.savetxt(paths[1], shifted, delimiter=",", header="x,y", comments="")
+    argv = ["fit", *paths, "--dt", 0.1, "--components", 2, "--warp", "none", "--out", tmp_path / "m.json"]
+    code, _, err = run(capsys, *argv)
+    assert_one_error_line(code, err, "from the mean end point", "--goal-tol")
+    suggested = re.search(r"e\.g\. ([\d.]+)", err).group(1)
+    code, out, err = run(capsys, *argv, "--goal-tol", suggested)
+    assert code == 0, err
+    assert "certificate: passed" in out
+
+
 @pytest.mark.parametrize("argv, fragments", [
     (["{tmp}/empty"], ["holds no .csv or .npy file"]),
     (["{tmp}/nothing*.csv"], ["no file matches", "Try:"]),
