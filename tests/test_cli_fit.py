@@ -151,6 +151,34 @@ def test_goal_tol_is_honoured_by_the_fit_itself(capsys, tmp_path):
     assert "certificate: passed" in out
 
 
+def write_ms_reach(path, header="time,x,y,z,qx,qy,qz,qw"):
+    """A robot-logger CSV: epoch milliseconds, a 2 s 3-D reach, orientation columns."""
+    t = np.linspace(0, 2, 41)
+    pos = np.outer(1 - t / 2, [0.3, -0.2, 0.5])
+    quat = np.tile([0, 0, 0, 1], (len(t), 1))
+    np.savetxt(path, np.column_stack([1.7e12 + 1e3 * t, pos, quat]), delimiter=",", header=header,
+               comments="", fmt="%.15g")
+    return path
+
+
+def test_ms_stamps_and_orientation_columns_need_options(capsys, tmp_path, captured):
+    """Time in ms and orientation columns: refused with the CLI options to use (no Python names)."""
+    path = write_ms_reach(tmp_path / "reach.csv")
+    out = ["--out", tmp_path / "m.json"]
+    code, _, err = run(capsys, "fit", path, *out)
+    assert_one_error_line(code, err, "orientation columns ['qx', 'qy', 'qz', 'qw']", "--columns x,y,z")
+    code, _, err = run(capsys, "fit", path, "--columns", "x,y,z", *out)
+    assert_one_error_line(code, err, "lasts 2000 s", "--time-units", need_try=True)
+    assert "time_column=" not in err
+    code, _, err = run(capsys, "fit", path, "--columns", "x,y,z", "--time-units", "ms", *out)
+    assert code == 0, err
+    demos = captured["demos"]
+    assert demos.dim == 3 and demos[0].duration == pytest.approx(2.0)
+    np.testing.assert_allclose(demos[0].vel[20], [-0.15, 0.1, -0.25], atol=1e-9)   # units per second
+    code, _, err = run(capsys, "fit", path, "--time-units", "h", *out)
+    assert code == 2 and "--time-units" in err
+
+
 @pytest.mark.parametrize("argv, fragments", [
     (["{tmp}/empty"], ["holds no .csv or .npy file"]),
     (["{tmp}/nothing*.csv"], ["no file matches", "Try:"]),

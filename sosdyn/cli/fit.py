@@ -2,7 +2,9 @@
 
 Inputs: files, folders (their ``*.csv`` / ``*.npy``), quoted patterns (``'demos/*.csv'``), or
 ``lasa:NAME``; read by :func:`sosdyn.load_demos` (headers ``t,x,y[,z]``, ``t,x1..xn``,
-optional velocities, or no header with time in column 0; ``--dt`` for files without time).
+optional velocities, or no header with time in column 0; ``--dt`` for files without time,
+``--time-units ms`` or a ``t_ms`` column for millisecond stamps, ``--columns`` to name the
+position columns, e.g. joint names; a column with no role is refused, never dropped).
 ``--units`` is recorded, not applied: it names the units of the positions in the model file
 (``state.units_``), on plot axes and in exported code; the numbers are used as they are.
 Progress: one plain line per convex step on stdout (step, cost, seconds since the start)
@@ -22,7 +24,7 @@ from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
-from .base import State, app, err, info, out, positive
+from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .paths import check_folder, check_output, demo_inputs
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
@@ -127,6 +129,8 @@ def fit(
         "--goal-tol", min=0.0, help="Largest distance of a demonstration's end point from the mean end point "
                                     "(data units); demonstrations ending farther apart are refused.",
         show_default=f"{GOAL_TOL_FRACTION:.0%} of the data's bounding-box diagonal")] = None,
+    time_units: TimeUnitsOption = None,
+    columns: ColumnsOption = None,
 ) -> None:
     """Learn a certified CDSP model from demonstrations and save it.
 
@@ -135,16 +139,16 @@ def fit(
     import sosdyn as sd
 
     lasa = len(demos) == 1 and demos[0].startswith("lasa:")
-    if lasa and (dt, units, goal_tol) != (None, None, None):
-        raise InputError("--dt, --units and --goal-tol apply to files, not to lasa:NAME (time in s, "
-                            "positions in mm). Try: drop them.")
+    if lasa and (dt, units, goal_tol, time_units, columns) != (None,) * 5:
+        raise InputError("--dt, --units, --goal-tol, --time-units and --columns apply to files, not to "
+                         "lasa:NAME (time in s, positions in mm). Try: drop them.")
     paths = [] if lasa else demo_inputs(demos)
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
-    read = {"dt": dt, "units": units, "goal_tol": goal_tol, "name": Path(demos[0]).resolve().name if folder else None}
+    read = {"units": units, "goal_tol": goal_tol, "name": Path(demos[0]).resolve().name if folder else None}
     data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
-        paths, **{k: v for k, v in read.items() if v is not None})
+        paths, **{k: v for k, v in read.items() if v is not None}, **read_options(dt, time_units, columns))
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value}
