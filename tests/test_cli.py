@@ -27,7 +27,7 @@ def test_fit_missing_demo_file(capsys, tmp_path):
 
 def test_rollout_bad_start_and_missing_model(capsys, tmp_path):
     code, _, err = run(capsys, "rollout", str(tmp_path / "m.json"), "--from", "1,abc")
-    assert_one_error_line(code, err, "--from expects comma-separated numbers", "'1,abc'")
+    assert_one_error_line(code, err, "--start expects comma-separated numbers", "'1,abc'")
     code, _, err = run(capsys, "rollout", str(tmp_path / "m.json"), "--from", "1,2")
     assert_one_error_line(code, err, "model file not found")
 
@@ -178,10 +178,12 @@ def test_rollout_writes_csv(capsys, monkeypatch, tmp_path):
     calls = {}
 
     class FakeModel:
-        def rollout(self, x0, duration, dt=0.01):
-            calls.update(x0=x0, duration=duration, dt=dt)
+        dim_ = 2
+
+        def rollout(self, x0, duration, dt=0.01, **events):
+            calls.update(x0=x0, duration=duration, dt=dt, **events)
             t = np.arange(0.0, duration + dt / 2, dt)
-            return SimpleNamespace(t=t, pos=np.outer(np.exp(-t), x0))
+            return SimpleNamespace(t=t, pos=np.outer(np.exp(-t), x0), goal_history=np.zeros((len(t), 2)))
 
     model_file = tmp_path / "m.json"
     model_file.write_text("{}")
@@ -193,7 +195,8 @@ def test_rollout_writes_csv(capsys, monkeypatch, tmp_path):
     np.testing.assert_array_equal(calls["x0"], [10.0, -5.0])
     lines = (tmp_path / "traj.csv").read_text().splitlines()
     assert lines[0] == "t,x1,x2" and len(lines) == 1 + 5
-    assert "wrote" not in out and out.startswith("t = 2 s: x = (1.353, -0.6767)")
+    assert "wrote" not in out and out.startswith("t = 2 s: x = (1.353, -0.6767), goal (0, 0)")
+    assert calls["perturbations"] == [] and calls["goal_changes"] == [] and calls["max_speed"] is None
 
 
 def test_lasa_list_prints_one_name_per_line(capsys, monkeypatch):

@@ -66,12 +66,13 @@ def read_options(dt, time_units, columns) -> dict:
     return {k: v for k, v in given.items() if v is not None}
 
 
-def parse_point(text: str) -> np.ndarray:
-    """``"10,-5"`` as the array [10, -5]; InputError unless finite numbers."""
+def parse_point(text: str, option: str = "--start") -> np.ndarray:
+    """``"10,-5"`` as the array [10, -5]; InputError naming ``option`` unless finite numbers."""
     try:
         point = np.array([float(v) for v in text.split(",")])
     except ValueError:
-        raise InputError(f"--from expects comma-separated numbers like 10,-5; got {text!r}.") from None
+        raise InputError(f"{option} expects comma-separated numbers like 10,-5; got {text!r}. "
+                         "Try: one number per dimension, no spaces or brackets.") from None
     if not np.all(np.isfinite(point)):
-        raise InputError(f"--from must be finite; got {text!r}.")
+        raise InputError(f"{option} must be finite; got {text!r}. Try: finite numbers.")
     return point

@@ -14,35 +14,77 @@ from .base import app, info, out, parse_point, positive, status
 from .paths import check_folder, check_output, demo_inputs, existing
 
 
+def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[float, np.ndarray]]:
+    """``["T:V1,V2", ...]`` as [(T, vector)]; InputError naming ``option`` otherwise."""
+    events = []
+    for spec in specs or []:
+        when, sep, vector = spec.partition(":")
+        try:
+            time = float(when) if sep else None
+        except ValueError:
+            time = None
+        if time is None:
+            raise InputError(f"{option} expects TIME:VECTOR like {example}; got {spec!r}. Try: the time "
+                             "in s, a colon, then comma-separated numbers.")
+        events.append((time, parse_point(vector, option)))
+    return events
+
+
+def _dimension(point: np.ndarray, dim: int, option: str) -> np.ndarray:
+    if point.shape != (dim,):
+        raise InputError(f"{option} has {point.size} numbers but the model is {dim}-D. Try: {dim} "
+                         f"comma-separated numbers, e.g. {','.join(['0'] * dim)}.")
+    return point
+
+
 @app.command()
 def rollout(
     model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
-    start: Annotated[str, typer.Option("--from", help="Start state, comma-separated, e.g. 10,-5.",
+    start: Annotated[str, typer.Option("--start", "--from", help="Start state, comma-separated, e.g. 10,-5.",
                                        show_default=False)],
     duration: Annotated[float, typer.Option(callback=positive, help="Seconds to integrate.")] = 10.0,
     dt: Annotated[float | None, typer.Option(callback=positive, help="Time step (s); default: the model's.")] = None,
+    push: Annotated[list[str] | None, typer.Option(
+        "--push", help="A push at time T: the state jumps by DX,DY[,DZ], e.g. 2:5,0; repeat for several.",
+        show_default=False)] = None,
+    goal_change: Annotated[list[str] | None, typer.Option(
+        "--goal-change", help="From time T on the goal is X,Y[,Z], e.g. 3:10,5; repeat for several.",
+        show_default=False)] = None,
+    max_speed: Annotated[float | None, typer.Option(
+        "--max-speed", callback=positive, help="Largest speed (units/s): the velocity is scaled down, same "
+                                               "direction and path.", show_default="none")] = None,
     out_path: Annotated[Path | None, typer.Option("--out", "-o", help="Write t and positions as CSV.")] = None,
 ) -> None:
     """Integrate a saved model from a start state and print the end point.
 
-    With --out also write the trajectory as CSV (columns t,x1..xn: loadable again as a
-    demonstration)."""
+    Pushes and goal changes happen at the given times; with --out also write the trajectory
+    as CSV (columns t,x1..xn: loadable again as a demonstration)."""
     import sosdyn as sd
 
-    x0 = parse_point(start)
+    x0 = parse_point(start, "--start")
+    pushes, goals = _events(push, "--push", "2:5,0"), _events(goal_change, "--goal-change", "3:10,5")
     existing(model_path, "model file")
     if out_path is not None:
         check_output(out_path, [model_path], "model file")
         check_folder(out_path.parent)
     model = sd.load_model(model_path)
-    traj = model.rollout(x0, duration, **({} if dt is None else {"dt": dt}))
+    x0 = _dimension(x0, model.dim_, "--start")
+    for option, events in (("--push", pushes), ("--goal-change", goals)):
+        for when, vector in events:
+            _dimension(vector, model.dim_, option)
+            if not 0 <= when <= duration:
+                raise InputError(f"{option} time {when:g} is outside [0, --duration {duration:g}]. Try: a "
+                                 "time within the rollout, or a longer --duration.")
+    traj = model.rollout(x0, duration, perturbations=pushes, goal_changes=goals, max_speed=max_speed,
+                         **({} if dt is None else {"dt": dt}))
     t, pos = np.asarray(traj.t), np.asarray(traj.pos)
     if out_path is not None:                     # the layout load_demos reads
         np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="",
                    header=",".join(["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]))
         info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
     end = ", ".join(f"{v:.4g}" for v in pos[-1])
-    out.print(f"t = {t[-1]:.3g} s: x = ({end})")
+    goal = ", ".join(f"{v:.4g}" for v in traj.goal_history[-1])
+    out.print(f"t = {t[-1]:.3g} s: x = ({end}), goal ({goal})")
 
 
 
@@ -58,11 +100,15 @@ def export_model(
                                                 "header-only C++17 evaluator.", show_default=False)],
     out_path: Annotated[Path, typer.Option("--out", "-o", help="The file to write (.py or .hpp).",
                                            show_default=False)],
+    max_speed: Annotated[float | None, typer.Option(
+        "--max-speed", callback=positive, help="Largest speed (units/s) of the exported field: the velocity is "
+                                               "scaled down, same direction, path and goal.", show_default="none")] = None,
 ) -> None:
     """Write a standalone evaluator of a saved model (Python + numpy, or C++17).
 
-    No sosdyn is needed to run it: Python `predict(X) -> Xdot` with numpy only, or C++17
-    `bool predict(const double* x, double* xdot)`."""
+    No sosdyn is needed to run it: Python `predict(X, goal=None) -> Xdot` with numpy only, or
+    C++17 `bool predict(const double* x, double* xdot, const double* goal = nullptr)`; the goal
+    can move at run time."""
     import sosdyn as sd
 
     from ..lfd.runtime.export import export as generate
@@ -71,7 +117,7 @@ def export_model(
     existing(model_path, "model file")
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
-    source = generate(sd.load_model(model_path), target.value)
+    source = generate(sd.load_model(model_path), target.value, max_speed)
     replace_atomically(out_path, source.encode("utf-8"))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
 

@@ -44,6 +44,7 @@ from ..fit.contraction import eval_fields, field_exponents, metric_exponents
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
 from ..data.demonstrations import check_demonstrations, sample_step
 from ..runtime.predictor import StatePredictor
+from ..runtime.states import as_state, as_states, check_max_speed, limit_speed
 from ..fit.gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost
 from ..fit.learner import History, Settings, learn, reuse_steps, subsample
 from .fileformat import FORMAT, VERSION, write_model_file
@@ -303,15 +304,6 @@ class CDSP:
         if not hasattr(self, "C_"):
             raise NotFittedError("this CDSP model is not fitted yet; call fit(demos) first")
 
-    def _check_points(self, X, what="X"):
-        X = np.asarray(X, dtype=float)
-        X = X[None, :] if X.ndim == 1 else X
-        if X.ndim != 2 or X.shape[1] != self.dim_:
-            raise InputError(f"{what} must have shape (m, {self.dim_}), got {np.shape(X)}")
-        if not np.isfinite(X).all():
-            raise InputError(f"{what} contains NaN or inf")
-        return X
-
     def _maps(self):
         return self.warp_["centers"], self.warp_["vectors"], self.warp_["sigmas"]
 
@@ -328,7 +320,7 @@ class CDSP:
     def predict(self, X):
         """Velocities (m, n) at the states X (m, n), in the data's units."""
         self._check_fitted()
-        X = self._check_points(X)
+        X = as_states(X, self.dim_)
         with np.errstate(over="ignore", invalid="ignore"):
             V = self.field(X, self.goal_)
         bad = np.flatnonzero(~np.isfinite(V).all(axis=1))
@@ -338,22 +330,27 @@ class CDSP:
                              "within a few orders of magnitude of the demonstrations.")
         return V
 
-    def predictor(self) -> StatePredictor:
-        """A fast one-state evaluator, ``predictor(x) -> xdot`` (see :mod:`.evaluator`)."""
+    def predictor(self, max_speed=None) -> StatePredictor:
+        """A fast one-state evaluator, ``step(x, goal=None) -> xdot`` (:mod:`~sosdyn.lfd.runtime.predictor`):
+        ``goal`` moves the goal at run time; ``max_speed`` (data units / s) scales xdot by
+        min(1, max_speed / |xdot|) (same paths and goal, ``docs/theory.md``)."""
         self._check_fitted()
         return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
-                              None if self.warp_ is None else self._maps())
+                              None if self.warp_ is None else self._maps(), max_speed)
 
-    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=()):
+    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.
 
         ``dt`` None means the model's ``dt_``; duration and dt are checked by the integrator, whose
         absolute tolerance is relative to the data's scale ``scale_`` (the same relative accuracy
-        in any units) and whose work is bounded (``max_rollout_calls``, ``max_rollout_seconds``)."""
+        in any units) and whose work is bounded (``max_rollout_calls``, ``max_rollout_seconds``).
+        ``max_speed``: the field scaled by min(1, max_speed / |xdot|), as ``predictor(max_speed=...)``."""
         self._check_fitted()
-        x0 = self._check_points(x0, "x0")[0]
-        goal = self.goal_ if goal is None else self._check_points(goal, "goal")[0]
-        return integrate(self.field, x0, duration=duration, dt=self.dt_ if dt is None else dt, goal=goal,
+        x0 = as_state(x0, self.dim_, "x0")
+        goal = self.goal_ if goal is None else as_state(goal, self.dim_, "goal")
+        max_speed = check_max_speed(max_speed)
+        field = self.field if max_speed is None else (lambda X, g: limit_speed(self.field(X, g), max_speed))
+        return integrate(field, x0, duration=duration, dt=self.dt_ if dt is None else dt, goal=goal,
                          perturbations=perturbations, goal_changes=goal_changes, scale=self.scale_)
 
     # ------------------------------------------------------------------ evidence
