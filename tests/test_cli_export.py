@@ -169,3 +169,42 @@ def test_rollout_bad_options_are_named(capsys, saved, argv, fragments):
     code, _, err = run(capsys, "rollout", saved[2][0], *argv)
     assert_one_error_line(code, err, *fragments, need_try=True)
     assert "--debug" not in err
+
+
+def test_plot_demos_takes_several_files_a_folder_or_a_pattern(capsys, saved, tmp_path):
+    model_path, csvs = saved[3]
+    for i, words in enumerate((["--demos", *csvs], ["--demos", csvs[0].parent / "d3_*.csv"],
+                               ["--demos", csvs[0], "--demos", csvs[1], csvs[2]])):
+        target = tmp_path / f"p{i}.png"
+        code, out, err = run(capsys, "plot", model_path, *words, "--out", target)
+        assert code == 0, err
+        assert "3 reproductions" in out and target.read_bytes()[:4] == b"\x89PNG"
+    code, _, err = run(capsys, "plot", model_path, csvs[0], "--out", tmp_path / "x.png")
+    assert_one_error_line(code, err, "unexpected arguments", "Try: --demos")
+
+
+def test_3d_plot_draws_wall_projections_and_lists_only_what_it_shows(saved):
+    from sosdyn.report.figures import trajectories_3d
+
+    model = sd.load_model(saved[3][0])
+    run_ = model.rollout(model.goal_ + model.scale_, 5.0).pos
+    demo = run_ + 0.1
+    fig = trajectories_3d([demo], [run_], model.goal_)
+    ax = fig.axes[0]
+    lines = ax.get_lines()
+    assert len(lines) == 2 * 4 + 4                 # each path and its 3 projections; the goal and its 3
+    floors = [ln for ln in lines if np.allclose(ln.get_data_3d()[2], ax.get_zlim()[0])]
+    assert len(floors) == 3                        # demo, reproduction, goal on the x1-x2 floor
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels == ["demonstrations", "reproductions", "goal", "projections on the walls"]
+    labels = [t.get_text() for t in trajectories_3d([], [run_], model.goal_).legends[0].get_texts()]
+    assert "demonstrations" not in labels
+
+
+def test_2d_plot_without_demos_has_no_demonstrations_entry(saved):
+    from sosdyn.report.figures import streamlines
+
+    model = sd.load_model(saved[2][0])
+    fig = streamlines(None, model.predict, [], [model.rollout(model.goal_ + model.scale_, 3.0).pos], model.goal_)
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == [
+        "streamlines of the model", "reproductions", "goal"]

@@ -10,7 +10,7 @@ import typer
 from rich.markup import escape
 
 from ..errors import InputError
-from .base import app, info, out, parse_point, positive, status
+from .base import ColumnsOption, TimeUnitsOption, app, info, out, parse_point, positive, read_options, status
 from .paths import check_folder, check_output, demo_inputs, existing
 
 
@@ -125,33 +125,51 @@ def export_model(
 PLOT_FORMATS = (".png", ".svg")
 
 
+def _model_and_demos(inputs: list[str], demos: list[str] | None) -> tuple[Path, list[str]]:
+    """``sosdyn plot MODEL --demos a.csv b.csv``: the shell words after ``--demos`` that are not
+    the option's own value arrive as extra arguments; they are demonstrations when ``--demos`` is
+    given. The model is the one ``.json`` among the words (else the first)."""
+    jsons = [w for w in inputs if w.lower().endswith(".json")]
+    model = jsons[0] if len(jsons) == 1 else inputs[0]
+    rest = [w for w in inputs if w is not model]
+    if rest and not demos:
+        raise InputError(f"unexpected arguments {rest} after the model {model}. Try: --demos {' '.join(rest)} "
+                         "to draw them as demonstrations.")
+    return Path(model), [*(demos or []), *rest]
+
+
 @app.command()
 def plot(
-    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit`.", show_default=False)],
+    inputs: Annotated[list[str], typer.Argument(
+        help="A model saved by `sosdyn fit` (and, after --demos, more demonstration files).",
+        metavar="MODEL", show_default=False)],
     out_path: Annotated[Path, typer.Option("--out", "-o", help="The figure (.png or .svg).", show_default=False)],
     demos: Annotated[list[str] | None, typer.Option(
-        "--demos", help="Demonstrations to draw (CSV/NPY files, folders, quoted patterns, or lasa:NAME); "
-                        "repeat the option for several. Reproductions start from their first states.", show_default=False)] = None,
+        "--demos", help="Demonstrations to draw: CSV/NPY files (--demos a.csv b.csv), folders, quoted patterns "
+                        "('demos/*.csv'), or lasa:NAME, as `sosdyn fit` takes them. Reproductions start from "
+                        "their first states.", show_default=False)] = None,
     duration: Annotated[float | None, typer.Option(callback=positive, help="Seconds per reproduction; "
                                                    "default: the demonstrations' longest (10 s without).")] = None,
     dt: Annotated[float | None, typer.Option(
         callback=positive, help="Sampling step (s) of demonstration files without a time column.",
         show_default="none: the files' time column")] = None,
+    time_units: TimeUnitsOption = None,
+    columns: ColumnsOption = None,
 ) -> None:
     """Plot a saved model: streamlines, 3-D trajectories or time series.
 
-    Streamlines for n = 2, 3-D trajectories with plane projections for n = 3, each dimension of
-    the reproductions over time for n > 3. Without --demos the reproductions start at the
-    mixture's means."""
+    Streamlines for n = 2, 3-D trajectories with their projections on the box's walls for
+    n = 3, each dimension of the reproductions over time for n > 3. Without --demos the
+    reproductions start at the mixture's means."""
     import matplotlib as mpl
 
     import sosdyn as sd
 
     from ..report.figures import STYLE, streamlines, time_series, trajectories_3d
 
+    model_path, demos = _model_and_demos(inputs, demos)
     if out_path.suffix.lower() not in PLOT_FORMATS:
         raise InputError(f"--out {out_path} must end in .png or .svg. Try: --out {out_path.with_suffix('.png')}.")
-    demos = demos or []
     lasa = len(demos) == 1 and demos[0].startswith("lasa:")
     paths = [] if lasa else demo_inputs(demos)
     existing(model_path, "model file")
@@ -159,7 +177,7 @@ def plot(
     check_folder(out_path.parent)
     model = sd.load_model(model_path)
     data = (sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa
-            else sd.load_demos(paths, **({} if dt is None else {"dt": dt}))) if demos else None
+            else sd.load_demos(paths, **read_options(dt, time_units, columns))) if demos else None
     if data is not None and data.dim != model.dim_:
         raise InputError(f"the demonstrations are {data.dim}-D but the model is {model.dim_}-D. "
                          "Try: the demonstrations the model was fitted to.")
