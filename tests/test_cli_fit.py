@@ -9,10 +9,11 @@ import typing
 
 import numpy as np
 import pytest
+from scipy.linalg import expm
 from cli_support import assert_one_error_line, run
 
 import sosdyn as sd
-from sosdyn.cli.fit import progress_line
+from sosdyn.cli.fit import iteration_cap, progress_line
 from sosdyn.lfd.fit.warp import AUTO_WARPS
 
 DT = 0.02
@@ -49,6 +50,7 @@ class Captured:
         Captured.made["kwargs"] = kwargs
 
     history_: typing.ClassVar[list] = [{"step": "dynamics", "cost": 1.0}]
+    max_iter, tol = 20, 1e-4
     warp_ = None
     verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3, "max_sampled_eig": -1e-3,
                                         "n_samples": 10})()
@@ -63,6 +65,19 @@ class Captured:
 
     def save(self, path):
         path.write_text("{}")
+
+
+@pytest.fixture(scope="module")
+def linear_demos_2d():
+    """xdot = A x with A = [[-1, 4], [0, -1]]: contracting in a learned metric only (not in M = I),
+    so the ICA iterations keep lowering the cost."""
+    A = np.array([[-1.0, 4.0], [0.0, -1.0]])
+    t = np.linspace(0.0, 6.0, 120)
+    demos = []
+    for s in ((-8, 3), (6, 4), (-5, -6)):
+        pos = np.array([expm(A * tk) @ np.asarray(s, float) for tk in t])
+        demos.append(sd.Demonstration(t, pos, pos @ A.T, f"{s}"))
+    return sd.Demonstrations(demos, "linear")
 
 
 @pytest.fixture
@@ -81,7 +96,8 @@ def test_newcomer_csv_folder_fit_plot_export(capsys, tmp_path):
     code, out, err = run(capsys, "fit", folder, "--dt", DT * 3, "--units", "m", "--components", "2",
                          "--out", model)
     assert code == 0, err
-    steps = re.findall(r"^warp (.+?), step (\d+) \((.+)\): cost ([-\d.e+]+), ([\d.]+) s$", out, flags=re.MULTILINE)
+    steps = re.findall(r"^warp (.+?), step (\d+) \((.+)\): cost ([-\d.e+]+) \(([\d.]+) s; ([\d.]+) s since start\)$",
+                       out, flags=re.MULTILINE)
     content = json.loads(model.read_text())
     history = content["state"]["history_"]
     per_warp = {w: [int(s[1]) for s in steps if s[0] == w] for w in ("none", *AUTO_WARPS)}
@@ -207,10 +223,33 @@ def test_help_shows_the_defaults(capsys):
         assert default in text, default
 
 
-def test_progress_line_reads_step_cost_elapsed():
-    assert progress_line({"iteration": 2, "step": "metric", "cost": 12.5}, 1.44) == \
-        "step 3 (metric): cost 12.5, 1.4 s"
-    assert progress_line({"iteration": 0, "step": "dynamics", "cost": 2.0, "round": 1}, 3.0) == \
-        "corrective round 1, step 1 (dynamics): cost 2, 3.0 s"
-    assert progress_line({"iteration": 0, "step": "metric", "cost": 2.0, "round": 2, "warp": "none"}, 3.0) == \
-        "warp none, corrective round 2, step 1 (metric): cost 2, 3.0 s"
+def test_progress_line_reads_step_cost_and_labelled_times():
+    assert progress_line({"iteration": 2, "step": "metric", "cost": 12.5}, 0.214, 1.44) == \
+        "step 3 (metric): cost 12.5 (0.21 s; 1.4 s since start)"
+    assert progress_line({"iteration": 0, "step": "dynamics", "cost": 2.0, "round": 1}, 0.5, 3.0) == \
+        "corrective round 1, step 1 (dynamics): cost 2 (0.50 s; 3.0 s since start)"
+    assert progress_line({"iteration": 0, "step": "metric", "cost": 2.0, "round": 2, "warp": "none"}, 1, 3.0) == \
+        "warp none, corrective round 2, step 1 (metric): cost 2 (1.00 s; 3.0 s since start)"
+
+
+def test_iteration_cap_is_reported_only_when_hit(linear_demos_2d):
+    rows = [{"step": "dynamics (M = I)", "cost": 10.0}]
+    for old, new in ((10.0, 8.0), (8.0, 7.0)):
+        rows += [{"step": "ica", "cost": old}, {"step": "dynamics", "cost": new}]
+    assert iteration_cap(rows, 2, 1e-4) == "stopped at max_iter=2 with relative change 1.25e-01 > tol=0.0001"
+    assert iteration_cap(rows, 3, 1e-4) is None                        # the cap was not reached
+    assert iteration_cap(rows, 2, 0.2) is None                         # the last change met the tolerance
+    capped = sd.CDSP(n_components=2, warp="none", max_iter=1, tol=1e-12).fit(linear_demos_2d)
+    assert iteration_cap(capped.history_, 1, 1e-12).startswith("stopped at max_iter=1 with relative change")
+
+
+def test_fit_says_which_warp_was_kept_and_why(capsys, tmp_path):
+    folder = tmp_path / "demos"
+    write_xy(folder, [(8, 2), (-6, 7), (5, -8)], T=60)
+    code, out, err = run(capsys, "fit", folder, "--dt", DT * 3, "--components", 2, "--out", tmp_path / "m.json")
+    assert code == 0, err
+    scores = sd.CDSP(n_components=2).fit(sd.load_demos(sorted(folder.glob("*.csv")), dt=DT * 3)).warp_scores_
+    kept = min(scores, key=scores.get)
+    assert f"-> kept {kept} (the lowest)" in out
+    for name, score in scores.items():
+        assert f"{name} {score:.4g}" in out

@@ -170,6 +170,17 @@ class CDSP:
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in PARAMS}
 
+    def __repr__(self) -> str:
+        """``CDSP(n_components=6, warp='none')``: the parameters that differ from the defaults;
+        fitted, also ``K``, ``n``, the goal and whether the certificate passed its check."""
+        changed = [f"{k}={v!r}" for k, v in self.get_params().items() if not (v is DEFAULTS[k] or v == DEFAULTS[k])]
+        if hasattr(self, "C_"):
+            warp = "none" if self.warp_ is None else f"{len(self.warp_['sigmas'])} bumps"
+            changed.append(f"fitted: K={self.C_.shape[0]}, n={self.dim_}, goal="
+                           f"{np.array2string(self.goal_, precision=4, separator=', ')}, warp={warp}, "
+                           f"certified={bool(self.verification_.passed)}")
+        return f"CDSP({', '.join(changed)})"
+
     def check_params(self) -> None:
         """Every parameter's type and range, and the solver (InputError saying what to try)."""
         check_params(dict(self.get_params(), progress=self.progress), DEFAULTS)
@@ -386,3 +397,4 @@ class CDSP:
 
 
 DEFAULTS = {name: p.default for name, p in inspect.signature(CDSP).parameters.items()}
+
