@@ -68,38 +68,37 @@ METRIC_PROX = 1e-2              # default proximal weight of the metric step (we
 class CDSP:
     """Learn a partially contracting dynamical system from demonstrations.
 
-    Parameters
-    ----------
-    n_components : int or "bic"  K, Gaussians of the GMM (paper: 6/7/6/6); "bic" picks K in 1..10
-                                 by the Bayesian information criterion of EM fits.
-    metric_degree : int          degree of M(z) (0 = constant metric; even).
-    field_degree : int           degree of the sub-systems f_k (1 = the paper's A_k x + b_k; odd).
-    gamma : float                contraction rate (1/s, in the data's time units).
-    metric : {"learned", "identity"}   "identity" fixes M = I (SEDS-like quadratic Lyapunov).
-    solver : str                 conic solver ("CLARABEL"; "SCS" or another solver installed in cvxpy).
-    solver_method : {"alternating", "ica"}   plain alternation, or the inner convex approximation
-                                 (ignored with metric="identity": one dynamics step).
-    max_iter, tol                alternation / ICA iterations and relative cost tolerance.
-    eps, margin                  M >= eps I; the trained fields satisfy -G_k >= margin I.
-    metric_prox : float >= 0     proximal weight rho of the metric step (maximise t - rho |w - w0|^2,
-                                 unique maximiser); 0 = the paper's plain max-margin step.
-    refine_gmm : bool            also optimise the GMM's position means/covariances (paper's theta_G).
-    max_samples : int or None    subsample the data to at most this many points (EM and fit).
-    random_state : None, int in [0, 2^32), np.random.Generator or RandomState
-                                 seed of EM and of the verification samples; the integer seed
-                                 actually used is ``seed_`` (and is what a saved file records).
-    verify_samples : int         states of the sampled certificate check, in [100, 10^6].
-    allow_uncertified : bool     return a model whose check failed (flagged) instead of raising.
-    progress : callable or None  called with each history row while fitting.
-    corrective_rounds : int      refits on corrective data from the model's own training rollouts
-                                 (:mod:`.corrective`, :func:`~.rounds.corrective_fits`), 0..10; 0 = none.
-    corrective_tau, corrective_min_dist   the corrective labels' time constant (s) and the distance
-                                 (x the data's scale) below which a rollout state gets no label.
-    warp : "auto", "none" or dict   fit in warped coordinates u = phi(z), phi a diffeomorphism of
-                                 Gaussian bumps fixing the goal (:mod:`.warp`); a dict (keys of
-                                 :data:`~.warp.WARP_DEFAULTS`) is one fixed warp; "auto" fits no warp
-                                 and each :data:`~.warp.AUTO_WARPS` candidate and keeps the one whose
-                                 rollouts from the training demos' starts deviate least from them.
+    **Parameters**
+
+    - ``n_components`` (int or "bic"): K, Gaussians of the GMM (paper: 6/7/6/6); "bic" picks K
+      in 1..10 by the Bayesian information criterion of EM fits.
+    - ``metric_degree`` (int): degree of M(z) (0 = constant metric; even).
+    - ``field_degree`` (int): degree of the sub-systems f_k (1 = the paper's A_k x + b_k; odd).
+    - ``gamma`` (float): contraction rate (1/s, in the data's time units).
+    - ``metric`` ("learned" or "identity"): "identity" fixes M = I (SEDS-like quadratic Lyapunov).
+    - ``solver`` (str): conic solver ("CLARABEL"; "SCS" or another solver installed in cvxpy).
+    - ``solver_method`` ("alternating" or "ica"): plain alternation, or the inner convex
+      approximation (ignored with metric="identity": one dynamics step).
+    - ``max_iter``, ``tol``: alternation / ICA iterations and relative cost tolerance.
+    - ``eps``, ``margin``: M >= eps I; the trained fields satisfy -G_k >= margin I.
+    - ``metric_prox`` (float >= 0): proximal weight rho of the metric step (maximise
+      t - rho |w - w0|^2, unique maximiser); 0 = the paper's plain max-margin step.
+    - ``refine_gmm`` (bool): also optimise the GMM's position means/covariances (paper's theta_G).
+    - ``max_samples`` (int or None): subsample the data to at most this many points (EM and fit).
+    - ``random_state`` (None, int in [0, 2^32), np.random.Generator or RandomState): seed of EM
+      and of the verification samples; the integer seed actually used is ``seed_`` (and is what
+      a saved file records).
+    - ``verify_samples`` (int): states of the sampled certificate check, in [100, 10^6].
+    - ``allow_uncertified`` (bool): return a model whose check failed (flagged) instead of raising.
+    - ``progress`` (callable or None): called with each history row while fitting.
+    - ``corrective_rounds`` (int): refits on corrective data from the model's own training
+      rollouts (``sosdyn.lfd.fit.corrective``, ``corrective_fits``), 0..10; 0 = none.
+    - ``corrective_tau``, ``corrective_min_dist``: the corrective labels' time constant (s) and the
+      distance (x the data's scale) below which a rollout state gets no label.
+    - ``warp`` ("auto", "none" or dict): fit in warped coordinates u = phi(z), phi a
+      diffeomorphism of Gaussian bumps fixing the goal (``sosdyn.lfd.fit.warp``); a dict (keys of
+      ``WARP_DEFAULTS``) is one fixed warp; "auto" fits no warp and each ``AUTO_WARPS`` candidate
+      and keeps the one whose rollouts from the training demos' starts deviate least from them.
 
     Warp (z = (x - x*)/s): the core f is fitted on (phi(z_i), J_phi(z_i) zdot_i) and certified in
     u as always; the model is zdot = J_phi(z)^{-1} f(phi(z)). Since du = J_phi dz, the x-system is
