@@ -1,7 +1,6 @@
 """Run-time goal and speed limit: the predictor, the Python export and the C++ export equal the
 model with its goal moved (the goal-shifted field translated), and a speed limit keeps the
 directions, the paths and the goal while bounding |xdot|."""
-import importlib.util
 import shutil
 import subprocess
 
@@ -11,6 +10,9 @@ import pytest
 from sosdyn.errors import InputError
 from sosdyn.lfd.runtime.export import to_cpp, to_python
 from sosdyn.lfd.runtime.states import limit_speed
+
+from export_support import import_source
+from export_support import max_rel_error as rel
 
 MAIN = """#include "model.hpp"
 #include <cstdio>
@@ -43,18 +45,6 @@ def states_and_goals(model, count=200, seed=3):
 def moved(model, X, G):
     """The model with its goal moved to G: model.predict at the translated states."""
     return model.predict(X - G + model.goal_)
-
-
-def rel(a, b):
-    return float(np.max(np.abs(a - b).max(axis=1) / np.abs(b).max(axis=1)))
-
-
-def import_source(source, path):
-    path.write_text(source)
-    spec = importlib.util.spec_from_file_location(f"exported_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_predictor_and_python_export_with_a_moved_goal(model, tmp_path):
