@@ -146,6 +146,7 @@ def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
             made["kwargs"] = kwargs
 
         history_ = [{"step": "dynamics", "cost": 1.0}]
+        max_iter, tol = 20, 1e-4
         warp_ = None
         verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3,
                                             "max_sampled_eig": -1e-3, "n_samples": 10})()
