@@ -193,6 +193,11 @@ def test_ms_stamps_and_orientation_columns_need_options(capsys, tmp_path, captur
     np.testing.assert_allclose(demos[0].vel[20], [-0.15, 0.1, -0.25], atol=1e-9)   # units per second
     code, _, err = run(capsys, "fit", path, "--time-units", "h", *out)
     assert code == 2 and "--time-units" in err
+    no_time = tmp_path / "xy.csv"
+    np.savetxt(no_time, np.outer(np.linspace(1, 0, 20), [1.0, 2.0]), delimiter=",", header="x,y", comments="")
+    code, _, err = run(capsys, "fit", no_time, *out)
+    assert_one_error_line(code, err, "no time column", "t_ms", "--dt STEP (sosdyn fit / plot)")
+    assert "time_column" not in err
 
 
 @pytest.mark.parametrize("argv, fragments", [
