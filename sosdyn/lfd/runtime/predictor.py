@@ -56,7 +56,7 @@ class StatePredictor:
                  exps: np.ndarray, warp=None, max_speed: float | None = None):
         inv, lognorm = mixture.factors()
         K, n, m = C.shape
-        self.dim = n
+        self.dim, self._shape = n, (n,)
         self._goal = np.array(goal, dtype=float)
         self._scale = float(scale)
         self._mixture = mixture
@@ -111,13 +111,12 @@ class StatePredictor:
         return v
 
     def _state(self, value, what: str) -> np.ndarray:
-        """``value`` as a finite float (n,): the fast path for float arrays, else :func:`~.states.as_state`."""
-        arr = value if isinstance(value, np.ndarray) else None
-        if arr is not None and arr.dtype.kind in "fiu" and arr.shape == (self.dim,):
-            arr = arr.astype(float, copy=False)
-            if math.isfinite(arr.sum()):
-                return arr
-        return as_state(value, self.dim, what)     # lists, tuples, anything wrong
+        """``value`` as a finite float (n,): a finite float array of shape (n,) as it is (the
+        control-loop case, no copy), anything else through :func:`~.states.as_state`."""
+        if (type(value) is np.ndarray and value.shape == self._shape and value.dtype.kind == "f"
+                and math.isfinite(value.sum())):
+            return value
+        return as_state(value, self.dim, what)     # lists, tuples, integers, anything wrong
 
 
 def warp_forward(maps, z: list) -> tuple[list, list]:
