@@ -7,7 +7,7 @@ PYTEST  := $(BIN)/python -m pytest
 # Small-matrix workloads: a multi-threaded OpenBLAS spin-waits (10-100x slower on 2 cores).
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: venv run test test-slow bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data warp-figure demo3d demo7d sweep report learner-table docs clean
+.PHONY: venv run test test-slow wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data warp-figure demo3d demo7d sweep report learner-table docs clean
 
 venv: $(STAMP)
 $(STAMP): pyproject.toml
@@ -25,6 +25,10 @@ test: venv
 
 test-slow: venv
 	$(PYTEST) -q -m slow
+
+# Build the wheel, install it into a fresh venv, run `sosdyn --version` and `sosdyn fit lasa:Sshape` (~1 min).
+wheel: venv
+	$(PYTEST) -q -m slow tests/test_wheel.py
 
 bench: venv
 	$(BIN)/python -m pip install -q -e '.[bench]'

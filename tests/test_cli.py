@@ -27,7 +27,7 @@ def test_fit_missing_demo_file(capsys, tmp_path):
 
 def test_rollout_bad_start_and_missing_model(capsys, tmp_path):
     code, _, err = run(capsys, "rollout", str(tmp_path / "m.json"), "--from", "1,abc")
-    assert_one_error_line(code, err, "--from expects comma-separated numbers", "'1,abc'")
+    assert_one_error_line(code, err, "--start expects comma-separated numbers", "'1,abc'")
     code, _, err = run(capsys, "rollout", str(tmp_path / "m.json"), "--from", "1,2")
     assert_one_error_line(code, err, "model file not found")
 
@@ -130,14 +130,6 @@ def test_experiment_missing_dependency_is_not_hidden(repo):
 
 # ------------------------------------------------- option plumbing with stand-in models
 
-class _Demos(list):
-    """Stand-in for Demonstrations: a sized sequence with a name."""
-
-    def __init__(self, paths):
-        super().__init__(paths)
-        self.paths, self.name = paths, "synthetic"
-
-
 def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
     made = {}
 
@@ -146,6 +138,7 @@ def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
             made["kwargs"] = kwargs
 
         history_ = [{"step": "dynamics", "cost": 1.0}]
+        max_iter, tol = 20, 1e-4
         warp_ = None
         verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3,
                                             "max_sampled_eig": -1e-3, "n_samples": 10})()
@@ -157,15 +150,17 @@ def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
         def save(self, path):
             path.write_text("{}")
 
+        def score(self, demos):
+            return []
+
     demo_file = tmp_path / "d1.csv"
-    demo_file.write_text("t,x1,x2\n0,1,1\n1,0,0\n")
+    demo_file.write_text("t,x1,x2\n" + "".join(f"{k},{1 - k / 11},{1 - k / 11}\n" for k in range(12)))
     monkeypatch.setattr(sd, "CDSP", FakeCDSP, raising=False)
-    monkeypatch.setattr(sd, "load_demos", lambda paths: _Demos(paths), raising=False)
     code, out, err = run(capsys, "fit", str(demo_file), "--out", str(tmp_path / "m.json"),
                          "--components", "3", "--solver-method", "ica", "--seed", "7")
     assert code == 0, err
     assert made["kwargs"] == {"n_components": 3, "solver_method": "ica", "random_state": 7}
-    assert made["demos"].paths == [demo_file]
+    assert [d.source for d in made["demos"]] == [demo_file.name]
     assert (tmp_path / "m.json").exists() and "saved" in out
 
 
@@ -178,10 +173,12 @@ def test_rollout_writes_csv(capsys, monkeypatch, tmp_path):
     calls = {}
 
     class FakeModel:
-        def rollout(self, x0, duration, dt=0.01):
-            calls.update(x0=x0, duration=duration, dt=dt)
+        dim_ = 2
+
+        def rollout(self, x0, duration, dt=0.01, **events):
+            calls.update(x0=x0, duration=duration, dt=dt, **events)
             t = np.arange(0.0, duration + dt / 2, dt)
-            return SimpleNamespace(t=t, pos=np.outer(np.exp(-t), x0))
+            return SimpleNamespace(t=t, pos=np.outer(np.exp(-t), x0), goal_history=np.zeros((len(t), 2)))
 
     model_file = tmp_path / "m.json"
     model_file.write_text("{}")
@@ -193,7 +190,8 @@ def test_rollout_writes_csv(capsys, monkeypatch, tmp_path):
     np.testing.assert_array_equal(calls["x0"], [10.0, -5.0])
     lines = (tmp_path / "traj.csv").read_text().splitlines()
     assert lines[0] == "t,x1,x2" and len(lines) == 1 + 5
-    assert "wrote" not in out and out.startswith("t = 2 s: x = (1.353, -0.6767)")
+    assert "wrote" not in out and out.startswith("t = 2 s: x = (1.353, -0.6767), goal (0, 0)")
+    assert calls["perturbations"] == [] and calls["goal_changes"] == [] and calls["max_speed"] is None
 
 
 def test_lasa_list_prints_one_name_per_line(capsys, monkeypatch):

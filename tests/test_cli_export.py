@@ -9,7 +9,7 @@ import pytest
 import sosdyn as sd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 
-from cli_support import run
+from cli_support import assert_one_error_line, run
 
 
 def line_demos(starts, T=60, duration=2.0):
@@ -112,3 +112,99 @@ def test_plot_checks_out_before_work(capsys, saved, tmp_path):
                        "--out", str(tmp_path / "x.png"))
     assert code == 1 and "3-D but the model is 2-D" in err
     assert not (tmp_path / "x.png").exists()
+
+
+def test_export_max_speed_python_and_cpp(capsys, saved, tmp_path):
+    """--max-speed is written into both exports: |xdot| <= v, directions kept, goal movable."""
+    model_path, _ = saved[3]
+    model = sd.load_model(model_path)
+    X = model.goal_ + model.scale_ * np.random.default_rng(1).uniform(-2, 2, size=(300, 3))
+    v = 0.5 * float(np.median(np.linalg.norm(model.predict(X), axis=1)))
+    code, _, err = run(capsys, "export", model_path, "--to", "python", "--max-speed", v, "--out", tmp_path / "f.py")
+    assert code == 0, err
+    spec = importlib.util.spec_from_file_location("field_speed", tmp_path / "f.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    goal = model.goal_ + 1.0
+    step = model.predictor(max_speed=v)
+    np.testing.assert_allclose(module.predict(X, goal=goal), [step(x, goal=goal) for x in X], rtol=1e-12)
+    assert np.linalg.norm(module.predict(X), axis=1).max() <= v * (1 + 1e-12)
+    code, _, err = run(capsys, "export", model_path, "--to", "cpp", "--max-speed", v, "--out", tmp_path / "f.hpp")
+    assert code == 0, err
+    text = (tmp_path / "f.hpp").read_text()
+    assert f"constexpr double max_speed = {v!r};" in text and "const double* goal = nullptr" in text
+    code, _, err = run(capsys, "export", model_path, "--to", "cpp", "--max-speed", 0, "--out", tmp_path / "g.hpp")
+    assert code == 2 and "--max-speed" in err
+
+
+def test_rollout_with_pushes_goal_changes_and_a_speed_limit(capsys, saved, tmp_path):
+    model_path, _ = saved[2]
+    model = sd.load_model(model_path)
+    start = model.goal_ + model.scale_ * np.array([1.0, 0.5])
+    new_goal = model.goal_ + [3.0, -2.0]
+    traj = tmp_path / "traj.csv"
+    code, out, err = run(capsys, "rollout", model_path, "--start", ",".join(repr(float(v)) for v in start),
+                         "--push", "1:2,0", "--goal-change", f"2:{float(new_goal[0])!r},{float(new_goal[1])!r}",
+                         "--duration", 30, "--max-speed", 4.0, "--dt", 0.01, "--out", traj)
+    assert code == 0, err
+    data = np.loadtxt(traj, delimiter=",", skiprows=1)
+    want = model.rollout(start, 30.0, dt=0.01, perturbations=[(1.0, [2, 0])], goal_changes=[(2.0, new_goal)],
+                         max_speed=4.0)
+    np.testing.assert_allclose(data[:, 1:], want.pos, atol=1e-9)
+    np.testing.assert_allclose(data[-1, 1:], new_goal, atol=0.05)          # reaches the moved goal
+    steps = np.linalg.norm(np.diff(data[:, 1:], axis=0), axis=1)
+    jump = int(np.argmax(steps))
+    assert data[jump + 1, 0] == pytest.approx(1.0) and steps[jump] > 1.5      # the push at t = 1
+    assert np.delete(steps, jump).max() / 0.01 <= 4.0 * 1.01                  # --max-speed 4
+    assert "goal (" in out
+
+
+@pytest.mark.parametrize("argv, fragments", [
+    (["--start", "1,2,3"], ["--start has 3 numbers but the model is 2-D", "Try: 2 comma-separated"]),
+    (["--start", "1,2", "--push", "1:5"], ["--push has 1 numbers but the model is 2-D"]),
+    (["--start", "1,2", "--push", "x:5,0"], ["--push expects TIME:VECTOR like 2:5,0"]),
+    (["--start", "1,2", "--goal-change", "20:1,1"], ["--goal-change time 20 is outside [0, --duration 10]"]),
+])
+def test_rollout_bad_options_are_named(capsys, saved, argv, fragments):
+    code, _, err = run(capsys, "rollout", saved[2][0], *argv)
+    assert_one_error_line(code, err, *fragments, need_try=True)
+    assert "--debug" not in err
+
+
+def test_plot_demos_takes_several_files_a_folder_or_a_pattern(capsys, saved, tmp_path):
+    model_path, csvs = saved[3]
+    for i, words in enumerate((["--demos", *csvs], ["--demos", csvs[0].parent / "d3_*.csv"],
+                               ["--demos", csvs[0], "--demos", csvs[1], csvs[2]])):
+        target = tmp_path / f"p{i}.png"
+        code, out, err = run(capsys, "plot", model_path, *words, "--out", target)
+        assert code == 0, err
+        assert "3 reproductions" in out and target.read_bytes()[:4] == b"\x89PNG"
+    code, _, err = run(capsys, "plot", model_path, csvs[0], "--out", tmp_path / "x.png")
+    assert_one_error_line(code, err, "unexpected arguments", "Try: --demos")
+
+
+def test_3d_plot_draws_wall_projections_and_lists_only_what_it_shows(saved):
+    from sosdyn.report.figures import trajectories_3d
+
+    model = sd.load_model(saved[3][0])
+    run_ = model.rollout(model.goal_ + model.scale_, 5.0).pos
+    demo = run_ + 0.1
+    fig = trajectories_3d([demo], [run_], model.goal_)
+    ax = fig.axes[0]
+    lines = ax.get_lines()
+    assert len(lines) == 2 * 4 + 4                 # each path and its 3 projections; the goal and its 3
+    floors = [ln for ln in lines if np.allclose(ln.get_data_3d()[2], ax.get_zlim()[0])]
+    assert len(floors) == 3                        # demo, reproduction, goal on the x1-x2 floor
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels == ["demonstrations", "reproductions", "goal", "projections on the walls"]
+    labels = [t.get_text() for t in trajectories_3d([], [run_], model.goal_).legends[0].get_texts()]
+    assert "demonstrations" not in labels
+
+
+def test_2d_plot_without_demos_has_no_demonstrations_entry(saved):
+    from sosdyn.report.figures import streamlines
+
+    model = sd.load_model(saved[2][0])
+    fig = streamlines(None, model.predict, [], [model.rollout(model.goal_ + model.scale_, 3.0).pos], model.goal_)
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == [
+        "streamlines of the model", "reproductions", "goal"]

@@ -9,10 +9,11 @@ import typing
 
 import numpy as np
 import pytest
+from scipy.linalg import expm
 from cli_support import assert_one_error_line, run
 
 import sosdyn as sd
-from sosdyn.cli.fit import progress_line
+from sosdyn.cli.fit import iteration_cap, progress_line
 from sosdyn.lfd.fit.warp import AUTO_WARPS
 
 DT = 0.02
@@ -49,6 +50,7 @@ class Captured:
         Captured.made["kwargs"] = kwargs
 
     history_: typing.ClassVar[list] = [{"step": "dynamics", "cost": 1.0}]
+    max_iter, tol = 20, 1e-4
     warp_ = None
     verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3, "max_sampled_eig": -1e-3,
                                         "n_samples": 10})()
@@ -68,6 +70,19 @@ class Captured:
         return []
 
 
+@pytest.fixture(scope="module")
+def linear_demos_2d():
+    """xdot = A x with A = [[-1, 4], [0, -1]]: contracting in a learned metric only (not in M = I),
+    so the ICA iterations keep lowering the cost."""
+    A = np.array([[-1.0, 4.0], [0.0, -1.0]])
+    t = np.linspace(0.0, 6.0, 120)
+    demos = []
+    for s in ((-8, 3), (6, 4), (-5, -6)):
+        pos = np.array([expm(A * tk) @ np.asarray(s, float) for tk in t])
+        demos.append(sd.Demonstration(t, pos, pos @ A.T, f"{s}"))
+    return sd.Demonstrations(demos, "linear")
+
+
 @pytest.fixture
 def captured(monkeypatch):
     monkeypatch.setattr(sd, "CDSP", Captured)
@@ -84,7 +99,8 @@ def test_newcomer_csv_folder_fit_plot_export(capsys, tmp_path):
     code, out, err = run(capsys, "fit", folder, "--dt", DT * 3, "--units", "m", "--components", "2",
                          "--out", model)
     assert code == 0, err
-    steps = re.findall(r"^warp (.+?), step (\d+) \((.+)\): cost ([-\d.e+]+), ([\d.]+) s$", out, flags=re.MULTILINE)
+    steps = re.findall(r"^warp (.+?), step (\d+) \((.+)\): cost ([-\d.e+]+) \(([\d.]+) s; ([\d.]+) s since start\)$",
+                       out, flags=re.MULTILINE)
     content = json.loads(model.read_text())
     history = content["state"]["history_"]
     per_warp = {w: [int(s[1]) for s in steps if s[0] == w] for w in ("none", *AUTO_WARPS)}
@@ -140,6 +156,53 @@ def test_goal_tol_refuses_with_a_hint_and_accepts_when_raised(capsys, tmp_path, 
     assert code == 0, err and len(captured["demos"]) == 2
 
 
+def test_goal_tol_is_honoured_by_the_fit_itself(capsys, tmp_path):
+    """A real fit (no stand-in): the value the error suggests is accepted end to end (ends not aligned)."""
+    paths = write_xy(tmp_path / "d", [(8, 2), (-6, 7)], T=60)
+    shifted = np.loadtxt(paths[1], delimiter=",", skiprows=1) + [3.0, 0.0]   # ends ~1.2 off the mean
+    np.savetxt(paths[1], shifted, delimiter=",", header="x,y", comments="")
+    argv = ["fit", *paths, "--dt", 0.1, "--components", 2, "--warp", "none", "--align-ends", "off", "--out", tmp_path / "m.json"]
+    code, _, err = run(capsys, *argv)
+    assert_one_error_line(code, err, "from the mean end point", "--goal-tol")
+    suggested = re.search(r"e\.g\. ([\d.]+)", err).group(1)
+    code, out, err = run(capsys, *argv, "--goal-tol", suggested)
+    assert code == 0, err
+    assert "certificate: passed" in out
+
+
+def write_ms_reach(path, header="time,x,y,z,qx,qy,qz,qw"):
+    """A robot-logger CSV: epoch milliseconds, a 2 s 3-D reach, orientation columns."""
+    t = np.linspace(0, 2, 41)
+    pos = np.outer(1 - t / 2, [0.3, -0.2, 0.5])
+    quat = np.tile([0, 0, 0, 1], (len(t), 1))
+    np.savetxt(path, np.column_stack([1.7e12 + 1e3 * t, pos, quat]), delimiter=",", header=header,
+               comments="", fmt="%.15g")
+    return path
+
+
+def test_ms_stamps_and_orientation_columns_need_options(capsys, tmp_path, captured):
+    """Time in ms and orientation columns: refused with the CLI options to use (no Python names)."""
+    path = write_ms_reach(tmp_path / "reach.csv")
+    out = ["--out", tmp_path / "m.json"]
+    code, _, err = run(capsys, "fit", path, *out)
+    assert_one_error_line(code, err, "orientation columns ['qx', 'qy', 'qz', 'qw']", "--columns x,y,z")
+    code, _, err = run(capsys, "fit", path, "--columns", "x,y,z", *out)
+    assert_one_error_line(code, err, "lasts 2000 s", "--time-units", need_try=True)
+    assert "time_column=" not in err
+    code, _, err = run(capsys, "fit", path, "--columns", "x,y,z", "--time-units", "ms", *out)
+    assert code == 0, err
+    demos = captured["demos"]
+    assert demos.dim == 3 and demos[0].duration == pytest.approx(2.0)
+    np.testing.assert_allclose(demos[0].vel[20], [-0.15, 0.1, -0.25], atol=1e-9)   # units per second
+    code, _, err = run(capsys, "fit", path, "--time-units", "h", *out)
+    assert code == 2 and "--time-units" in err
+    no_time = tmp_path / "xy.csv"
+    np.savetxt(no_time, np.outer(np.linspace(1, 0, 20), [1.0, 2.0]), delimiter=",", header="x,y", comments="")
+    code, _, err = run(capsys, "fit", no_time, *out)
+    assert_one_error_line(code, err, "no time column", "t_ms", "--dt STEP (sosdyn fit / plot)")
+    assert "time_column" not in err
+
+
 @pytest.mark.parametrize("argv, fragments", [
     (["{tmp}/empty"], ["holds no .csv or .npy file"]),
     (["{tmp}/nothing*.csv"], ["no file matches", "Try:"]),
@@ -168,15 +231,6 @@ def test_help_shows_the_defaults(capsys):
         assert default in text, default
 
 
-def test_progress_line_reads_step_cost_elapsed():
-    assert progress_line({"iteration": 2, "step": "metric", "cost": 12.5}, 1.44) == \
-        "step 3 (metric): cost 12.5, 1.4 s"
-    assert progress_line({"iteration": 0, "step": "dynamics", "cost": 2.0, "round": 1}, 3.0) == \
-        "corrective round 1, step 1 (dynamics): cost 2, 3.0 s"
-    assert progress_line({"iteration": 0, "step": "metric", "cost": 2.0, "round": 2, "warp": "none"}, 3.0) == \
-        "warp none, corrective round 2, step 1 (metric): cost 2, 3.0 s"
-
-
 def test_fit_a_shipped_set_prints_preprocessing_crossings_and_the_reproduction_table(capsys, tmp_path):
     code, out, err = run(capsys, "fit", "dataset:hammer", "--components", "2", "--warp", "none",
                          "--out", tmp_path / "m.json")
@@ -194,20 +248,39 @@ def test_fit_a_shipped_set_prints_preprocessing_crossings_and_the_reproduction_t
 
 def test_fit_a_shipped_set_refuses_units_and_unknown_names(capsys, tmp_path):
     code, _, err = run(capsys, "fit", "dataset:hammer", "--units", "mm", "--out", tmp_path / "m.json")
-    assert_one_error_line(code, err, "--units applies to files")
+    assert_one_error_line(code, err, "apply to files; a shipped data set")
     code, _, err = run(capsys, "fit", "dataset:hamer", "--out", tmp_path / "m.json")
     assert_one_error_line(code, err, "Did you mean hammer")
 
 
-def test_fit_names_the_kept_warp_and_an_iteration_cap(capsys):
-    from types import SimpleNamespace
+def test_progress_line_reads_step_cost_and_labelled_times():
+    assert progress_line({"iteration": 2, "step": "metric", "cost": 12.5}, 0.214, 1.44) == \
+        "step 3 (metric): cost 12.5 (0.21 s; 1.4 s since start)"
+    assert progress_line({"iteration": 0, "step": "dynamics", "cost": 2.0, "round": 1}, 0.5, 3.0) == \
+        "corrective round 1, step 1 (dynamics): cost 2 (0.50 s; 3.0 s since start)"
+    assert progress_line({"iteration": 0, "step": "metric", "cost": 2.0, "round": 2, "warp": "none"}, 1, 3.0) == \
+        "warp none, corrective round 2, step 1 (metric): cost 2 (1.00 s; 3.0 s since start)"
 
-    from sosdyn.cli.fitdata import print_choice
-    rows = [{"step": "dynamics (M = I)"}] + [{"step": s} for _ in range(3) for s in ("ica", "dynamics")]
-    print_choice(SimpleNamespace(warp_scores_={"none": 2.0, "60 maps": 1.5, "30 maps": 1.5}, history_=rows,
-                                 max_iter=3))
-    out = " ".join(capsys.readouterr().out.split())
-    assert "none 2, 60 maps 1.5, 30 maps 1.5; kept 60 maps (lowest)" in out     # ties: the first
-    assert "iteration cap (max_iter = 3)" in out
-    print_choice(SimpleNamespace(warp_scores_={}, history_=rows, max_iter=4))
-    assert capsys.readouterr().out == ""
+
+def test_iteration_cap_is_reported_only_when_hit(linear_demos_2d):
+    rows = [{"step": "dynamics (M = I)", "cost": 10.0}]
+    for old, new in ((10.0, 8.0), (8.0, 7.0)):
+        rows += [{"step": "ica", "cost": old}, {"step": "dynamics", "cost": new}]
+    assert iteration_cap(rows, 2, 1e-4) == "stopped at max_iter=2 with relative change 1.25e-01 > tol=0.0001"
+    assert iteration_cap(rows, 3, 1e-4) is None                        # the cap was not reached
+    assert iteration_cap(rows, 2, 0.2) is None                         # the last change met the tolerance
+    capped = sd.CDSP(n_components=2, warp="none", max_iter=1, tol=1e-12).fit(linear_demos_2d)
+    assert iteration_cap(capped.history_, 1, 1e-12).startswith("stopped at max_iter=1 with relative change")
+
+
+def test_fit_says_which_warp_was_kept_and_why(capsys, tmp_path):
+    folder = tmp_path / "demos"
+    write_xy(folder, [(8, 2), (-6, 7), (5, -8)], T=60)
+    code, out, err = run(capsys, "fit", folder, "--dt", DT * 3, "--components", 2, "--smooth", "off", "--trim-rest", "off",
+                         "--align-ends", "off", "--out", tmp_path / "m.json")
+    assert code == 0, err
+    scores = sd.CDSP(n_components=2).fit(sd.load_demos(sorted(folder.glob("*.csv")), dt=DT * 3)).warp_scores_
+    kept = min(scores, key=scores.get)
+    assert f"-> kept {kept} (the lowest)" in out
+    for name, score in scores.items():
+        assert f"{name} {score:.4g}" in out

@@ -3,6 +3,7 @@
 Skipped when the `docs` extra (mkdocs, mkdocs-material, mkdocstrings) is not installed.
 """
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -62,3 +63,13 @@ def test_offline(site):
     for html in site.rglob("*.html"):
         text = html.read_text(encoding="utf-8")
         assert 'src="http' not in text and "fonts.googleapis" not in text, html.name
+
+
+def test_docstrings_render_without_sphinx_roles_and_cdsp_parameters_as_a_list(site):
+    """The hook docs_hooks/roles.py turns :mod:`x` into code; CDSP's parameters are list items."""
+    for html in (site / "api").rglob("*.html"):
+        text = html.read_text(encoding="utf-8")
+        assert not re.search(r":(mod|func|class|meth|data|attr):<code>", text), html
+    lfd = page(site, "api/lfd")
+    cdsp = lfd[lfd.index('id="sosdyn.lfd.CDSP"'):]
+    assert "<li><code>n_components</code> (int or \"bic\")" in cdsp and "<li><code>warp</code>" in cdsp

@@ -90,4 +90,6 @@ def test_quickstart_notebook(tmp_path, monkeypatch):
                             resources={"metadata": {"path": str(tmp_path)}}).execute()
     outputs = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs)
     assert "PASSED" in outputs and "distance to the goal after 12 s" in outputs
+    plot = nb.cells[-1].outputs
+    assert any("image/png" in o.get("data", {}) for o in plot), plot     # a picture, not "<Figure size ...>"
     assert list(tmp_path.iterdir()) == []

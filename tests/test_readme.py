@@ -1,8 +1,16 @@
-"""The README's Python quickstart runs as written, and the picture it opens with exists."""
+"""The README's Python quickstart and its walk-through on the shipped data run as written, and
+the picture it opens with exists."""
+import importlib.util
 import re
+import shlex
+import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
+from cli_support import run
+
+import sosdyn as sd
 
 from sosdyn.errors import SosdynError
 from sosdyn.lfd.data import lasa
@@ -40,3 +48,53 @@ def test_lasa_block_runs(tmp_path, monkeypatch):
     model, traj = scope["model"], scope["traj"]
     assert model.verification_.passed and (tmp_path / "sshape.json").is_file()
     assert traj.pos.shape[1] == 2 and abs(traj.pos[-1] - [10, 5]).max() < 2.0   # heading to the moved goal
+
+
+# ------------------------------------------------- the walk-through on the shipped data (steps 2-4)
+
+SHELL = re.findall(r"```bash\n(.*?)```", README, flags=re.DOTALL)
+WALK = README[README.index("**2. Your own demonstrations**"):README.index("**5. The SOS library")]
+
+
+def readme_commands(text):
+    """The ``sosdyn ...`` lines of the bash blocks in ``text``, comments stripped, as argv lists."""
+    lines = [ln.split("  #")[0].strip() for block in re.findall(r"```bash\n(.*?)```", text, flags=re.DOTALL)
+             for ln in block.splitlines()]
+    return [shlex.split(ln)[1:] for ln in lines if ln.startswith("sosdyn ")]
+
+
+def test_shipped_example_data_is_what_its_generator_writes(tmp_path):
+    spec = importlib.util.spec_from_file_location("make_reach", ROOT / "examples/data/make_reach.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    for path in module.main(tmp_path):
+        assert path.read_bytes() == (ROOT / "examples/data/reach" / path.name).read_bytes(), path.name
+
+
+def test_walkthrough_runs_on_the_shipped_data(capsys, tmp_path, monkeypatch):
+    """Steps 2-4 as written: fit the ms-stamped 3-D logs, plot, roll out, export, and the Python block."""
+    data = tmp_path / "examples" / "data"
+    data.mkdir(parents=True)
+    shutil.copytree(ROOT / "examples/data/reach", data / "reach")
+    monkeypatch.chdir(tmp_path)
+    commands = readme_commands(WALK)
+    assert [c[0] for c in commands] == ["fit", "fit", "plot", "rollout", "export", "export"]
+    for argv in commands:
+        code, _, err = run(capsys, *argv)
+        assert code == 0, (argv, err)
+    model = sd.load_model("reach.json")
+    assert model.dim_ == 3 and model.units_ == "m" and model.verification_.passed
+    assert model.dt_ == pytest.approx(0.01)                   # 100 Hz: milliseconds read as such
+    assert (tmp_path / "reach.png").read_bytes()[:4] == b"\x89PNG"
+    run_csv = np.loadtxt("run.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(run_csv[-1, 1:], [0.35, -0.05, 0.25], atol=5e-3)     # the moved goal
+    steps = np.linalg.norm(np.diff(run_csv[:, 1:], axis=0), axis=1)
+    jump = int(np.argmax(steps))
+    assert run_csv[jump + 1, 0] == pytest.approx(1.0) and steps[jump] > 0.04            # the push at t = 1
+    assert np.delete(steps, jump).max() / model.dt_ <= 0.3 * 1.01                        # --max-speed 0.3
+    assert "max_speed = 0.3;" in (tmp_path / "reach_field.hpp").read_text()
+    block = next(b for b in BLOCKS if "predictor(max_speed" in b)
+    scope = {}
+    exec(compile(block, "README.md", "exec"), scope)  # noqa: S102 -- the README's own code, run as written
+    assert np.linalg.norm(scope["xdot"]) <= 0.3 * (1 + 1e-12)
+    np.testing.assert_allclose(scope["traj"].pos[-1], [0.35, -0.05, 0.25], atol=5e-3)

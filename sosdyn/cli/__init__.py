@@ -3,9 +3,12 @@
     sosdyn fit demo1.csv demo2.csv --out model.json [--components K ...]   # commands in .fit
     sosdyn fit demos/ --dt 0.01 --units m        # a folder (or 'demos/*.csv') of files without time
     sosdyn fit lasa:Leaf_1 --out leaf.json
-    sosdyn rollout model.json --from 10,-5 [--duration T --dt DT --out traj.csv]
-    sosdyn export model.json --to python|cpp --out field.py|field.hpp   # standalone evaluator
-    sosdyn plot model.json [--demos a.csv --demos b.csv | --demos lasa:NAME] --out fig.png|svg
+    sosdyn fit logs/ --time-units ms --columns x,y,z    # ms stamps; position columns named
+    sosdyn rollout model.json --start 10,-5 [--push T:DX,DY --goal-change T:X,Y --max-speed V
+                   --duration T --dt DT --out traj.csv]
+    sosdyn export model.json --to python|cpp [--max-speed V] --out field.py|field.hpp   # standalone,
+                   # predict(X, goal=None) / predict(x, xdot, goal = nullptr): the goal moves at run time
+    sosdyn plot model.json [--demos a.csv b.csv | --demos DIR | --demos lasa:NAME] --out fig.png|svg
     sosdyn experiment fig1 [--repo DIR] [--quick ...]   # python -m problems fig1, in DIR
     sosdyn report [--results reports/results.json --out reports]   # render a results file
     sosdyn lasa list

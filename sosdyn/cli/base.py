@@ -3,13 +3,16 @@ state and small option helpers. The commands live in :mod:`sosdyn.cli` (the pack
 :mod:`.fit` and :mod:`.models`."""
 from __future__ import annotations
 
+import enum
 from contextlib import nullcontext
+from typing import Annotated
 
 import numpy as np
 import typer
 from rich.console import Console
 
 from ..errors import InputError
+from ..lfd.data.columns import TIME_UNITS
 
 app = typer.Typer(name="sosdyn", no_args_is_help=True, add_completion=False,
                   help="SOS programming and provably convergent motion learning (CDSP).")
@@ -45,12 +48,31 @@ def positive(value: float | None) -> float | None:
     return value
 
 
-def parse_point(text: str) -> np.ndarray:
-    """``"10,-5"`` as the array [10, -5]; InputError unless finite numbers."""
+TimeUnit = enum.Enum("TimeUnit", {u: u for u in TIME_UNITS}, type=str)
+
+#: ``--time-units`` and ``--columns`` of the commands that read demonstration files (fit, plot).
+TimeUnitsOption = Annotated[TimeUnit | None, typer.Option(
+    "--time-units", help="Unit of the files' time column (converted to s); default: s, or the column "
+                         "name's suffix (t_ms, time_us).", show_default=False)]
+ColumnsOption = Annotated[str | None, typer.Option(
+    "--columns", help="The position columns, comma-separated names (or indices), e.g. x,y,z or "
+                      "panda_joint1,...,panda_joint7; other columns are then ignored.",
+    show_default="x1..xn or x,y,z; any other column is refused")]
+
+
+def read_options(dt, time_units, columns) -> dict:
+    """The ``load_demos`` keywords of the file-reading options that were given."""
+    given = {"dt": dt, "time_units": time_units and time_units.value, "columns": columns}
+    return {k: v for k, v in given.items() if v is not None}
+
+
+def parse_point(text: str, option: str = "--start") -> np.ndarray:
+    """``"10,-5"`` as the array [10, -5]; InputError naming ``option`` unless finite numbers."""
     try:
         point = np.array([float(v) for v in text.split(",")])
     except ValueError:
-        raise InputError(f"--from expects comma-separated numbers like 10,-5; got {text!r}.") from None
+        raise InputError(f"{option} expects comma-separated numbers like 10,-5; got {text!r}. "
+                         "Try: one number per dimension, no spaces or brackets.") from None
     if not np.all(np.isfinite(point)):
-        raise InputError(f"--from must be finite; got {text!r}.")
+        raise InputError(f"{option} must be finite; got {text!r}. Try: finite numbers.")
     return point

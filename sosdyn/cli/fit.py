@@ -1,14 +1,19 @@
 """``sosdyn fit``: demonstrations in, a certified model file out.
 
 Inputs: files, folders (their ``*.csv`` / ``*.npy``), quoted patterns (``'demos/*.csv'``),
-``lasa:NAME`` or ``dataset:NAME`` (a shipped real set, :func:`sosdyn.load_dataset`); read by :func:`sosdyn.load_demos` (headers ``t,x,y[,z]``, ``t,x1..xn``,
-optional velocities, or no header with time in column 0; ``--dt`` for files without time).
+``lasa:NAME`` or ``dataset:NAME`` (a shipped real set, :func:`sosdyn.load_dataset`); read by
+:func:`sosdyn.load_demos` (headers ``t,x,y[,z]``, ``t,x1..xn``, optional velocities, or no header
+with time in column 0; ``--dt`` for files without time, ``--time-units ms`` or a ``t_ms`` column
+for millisecond stamps, ``--columns`` to name the position columns, e.g. joint names; a column
+with no role is refused, never dropped).
 ``--units`` is recorded, not applied: it names the units of the positions in the model file
 (``state.units_``), on plot axes and in exported code; the numbers are used as they are.
 Before the fit the demonstrations are preprocessed (``--smooth``, ``--trim-rest``,
-``--align-ends``; :mod:`.fitdata`) and crossings are reported; after it, a table of how the
-model reproduces each demonstration. Progress: one plain line per convex step on stdout (step, cost, seconds since the start)
-when stdout is not a terminal, a live status line when it is; nothing with ``--quiet``.
+``--align-ends``; :mod:`.fitdata`) and crossings are reported. Progress: one plain line per
+convex step on stdout (step, cost, seconds of the step and since the start) when stdout is not a
+terminal, a live status line when it is; nothing with ``--quiet``. After the fit: the
+certificate, which warp candidate was kept and each one's training deviation, a line for every
+fit that stopped at the iteration cap, and a table of how the model reproduces each demonstration.
 """
 from __future__ import annotations
 
@@ -24,10 +29,10 @@ from rich.markup import escape
 from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
+from ..lfd.fit.learner import COST_FLOOR, stalled
 from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
-from .base import State, app, err, info, out, positive
-from .fitdata import (DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_choice,
-                      print_score)
+from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
+from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
 from .paths import check_folder, check_output, demo_inputs
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
@@ -46,22 +51,41 @@ class Switch(str, enum.Enum):
     off = "off"
 
 
-def progress_line(row: dict, elapsed: float) -> str:
-    """One convex step of a fit: ``step 3 (metric): cost 12.5, 1.4 s``, prefixed by
-    ``warp 60 maps, decay 1, `` for a candidate of warp="auto" and ``corrective round 1, `` during
-    a refit on corrective data."""
+def progress_line(row: dict, step_s: float, total_s: float) -> str:
+    """One convex step of a fit: ``step 3 (metric): cost 12.5 (0.21 s; 1.4 s since start)``,
+    prefixed by ``warp 60 maps, decay 1, `` for a candidate of warp="auto" and ``corrective
+    round 1, `` during a refit on corrective data. ``step_s``: since the previous line."""
     head = (f"warp {row['warp']}, " if row.get("warp") else "") + \
         (f"corrective round {row['round']}, " if row.get("round") else "")
-    return f"{head}step {row['iteration'] + 1} ({row['step']}): cost {row['cost']:.6g}, {elapsed:.1f} s"
+    return (f"{head}step {row['iteration'] + 1} ({row['step']}): cost {row['cost']:.6g} "
+            f"({step_s:.2f} s; {total_s:.1f} s since start)")
+
+
+def iteration_cap(rows: list[dict], max_iter: int, tol: float) -> str | None:
+    """``stopped at max_iter=20 with relative change 3.1e-04 > tol=0.0001`` when the rows of one
+    fit (one candidate / round) used all ``max_iter`` iterations (ica or metric steps) and the
+    last one still changed the cost by more than ``tol`` (the learner's stopping test,
+    :func:`~sosdyn.lfd.fit.learner.stalled`); None otherwise."""
+    iterations = sum(r["step"] in ("ica", "metric") for r in rows)
+    costs = [r["cost"] for r in rows if r["step"].startswith("dynamics")]
+    if iterations < max_iter or len(costs) < 2 or not rows[-1]["step"].startswith("dynamics"):
+        return None
+    old, new = costs[-2], costs[-1]
+    if stalled(old, new, tol):
+        return None
+    change = (old - new) / max(old, COST_FLOOR)
+    return f"stopped at max_iter={max_iter} with relative change {change:.2e} > tol={tol:g}"
 
 
 class FitProgress:
     """Shows a fit's steps: plain lines on stdout when it is not a terminal (pipes, logs, CI),
     a live status line on a terminal; nothing when --quiet. Use as a context manager and pass
-    :meth:`row` as the model's ``progress``."""
+    :meth:`row` as the model's ``progress``; ``rows`` keeps every row by (warp, round)."""
 
     def __init__(self, message: str):
         self.message, self.start, self._status = message, time.perf_counter(), None
+        self._last = self.start
+        self.rows: dict[tuple, list[dict]] = {}
 
     def __enter__(self):
         if not State.quiet and out.is_terminal:
@@ -77,11 +101,36 @@ class FitProgress:
         return False
 
     def row(self, row: dict) -> None:
-        line = progress_line(row, time.perf_counter() - self.start)
+        now = time.perf_counter()
+        line = progress_line(row, now - self._last, now - self.start)
+        self._last = now
+        self.rows.setdefault((row.get("warp"), row.get("round")), []).append(row)
         if self._status is not None:
             self._status.update(f"{self.message}: {line}")
         elif not State.quiet:
             out.print(line, highlight=False, soft_wrap=True)
+
+    def caps(self, max_iter: int, tol: float) -> list[str]:
+        """One line per fit (candidate / round) that hit the iteration cap."""
+        lines = []
+        for (warp, round_), rows in self.rows.items():
+            cap = iteration_cap(rows, max_iter, tol)
+            if cap:
+                who = " ".join(filter(None, (warp and f"warp {warp}", round_ and f"corrective round {round_}")))
+                lines.append(f"{who or 'the fit'}: {cap} (more iterations: a larger max_iter in Python)")
+        return lines
+
+
+def warp_line(scores: dict) -> str | None:
+    """Which warp="auto" candidate was kept and why: each candidate's training deviation (the
+    rollouts from the training demonstrations' starts against them, data units; inf: not
+    certified); the lowest is kept (ties: the first, as :func:`~sosdyn.lfd.fit.rounds.warp_choice`)."""
+    if len(scores) < 2:
+        return None
+    kept = min(scores, key=scores.get)
+    listed = "; ".join(f"{name} {score:.4g}" for name, score in scores.items())
+    return (f"warp candidates, training deviation (lower is better): {listed} -> kept [bold]{escape(kept)}[/] "
+            "(the lowest)")
 
 
 def _units(value: str | None) -> str | None:
@@ -150,6 +199,8 @@ def fit(
         help="Blend each demonstration onto the mean end point over its last half and print the shifts: auto = "
              "when the ends spread more than 1% of the data's diagonal; on; off; or a number = on, accepting "
              "shifts up to it (data units; default limit 25% of the diagonal).")] = "auto",
+    time_units: TimeUnitsOption = None,
+    columns: ColumnsOption = None,
 ) -> None:
     """Learn a certified CDSP model from demonstrations and save it.
 
@@ -159,22 +210,24 @@ def fit(
 
     lasa = len(demos) == 1 and demos[0].startswith("lasa:")
     shipped = len(demos) == 1 and demos[0].startswith(DATASET_PREFIX)
-    if lasa and (dt, units, goal_tol) != (None, None, None):
-        raise InputError("--dt, --units and --goal-tol apply to files, not to lasa:NAME (time in s, "
-                            "positions in mm). Try: drop them.")
-    if shipped and units is not None:
-        raise InputError("--units applies to files; a shipped data set names its own units. Try: drop it.")
+    if lasa and (dt, units, goal_tol, time_units, columns) != (None,) * 5:
+        raise InputError("--dt, --units, --goal-tol, --time-units and --columns apply to files, not to "
+                         "lasa:NAME (time in s, positions in mm). Try: drop them.")
+    if shipped and (units, time_units, columns) != (None,) * 3:
+        raise InputError("--units, --time-units and --columns apply to files; a shipped data set names its own "
+                         "units and columns. Try: drop them.")
     paths = [] if lasa or shipped else demo_inputs(demos)
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
     raw_tol = goal_tol if goal_tol is not None or align_ends is False else np.inf
-    read = {"dt": dt, "units": units, "goal_tol": raw_tol, "name": Path(demos[0]).resolve().name if folder else None}
+    read = {"units": units, "goal_tol": raw_tol, "name": Path(demos[0]).resolve().name if folder else None}
     if shipped:
         data = load_dataset_input(demos[0], dt)
     else:
         data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
-            paths, **{k: v for k, v in read.items() if v is not None})   # aligning: --align-ends refuses
+            paths, **{k: v for k, v in read.items() if v is not None},   # aligning: --align-ends refuses
+            **read_options(dt, time_units, columns))
     data = sd.check_demonstrations(prepare(data, smooth, trim_rest is Switch.on, align_ends))
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
@@ -194,5 +247,9 @@ def fit(
          f"over {report.n_samples} states")
     if model.warp_ is not None:
         info(f"warp: {report.warp['n_maps']} maps, max Lipschitz number {report.warp['max_lipschitz']:.3f} (< 1)")
-    print_choice(model)
+    chosen = warp_line(getattr(model, "warp_scores_", {}))
+    if chosen:
+        info(chosen)
+    for line in progress.caps(model.max_iter, model.tol):
+        info(f"[yellow]iteration cap[/]: {escape(line)}")
     print_score(model, data)

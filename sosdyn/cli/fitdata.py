@@ -76,23 +76,6 @@ def prepare(data, smooth: str | int, trim_rest: bool, align):
     return result
 
 
-def print_choice(model) -> None:
-    """Which warp candidate was kept and why (lowest training deviation), and whether the kept
-    fit's alternation stopped at its iteration cap (``max_iter``) instead of converging."""
-    scores = getattr(model, "warp_scores_", None) or {}
-    if scores:
-        kept = min(scores, key=scores.get)          # warp_choice's rule among certified fits (ties: first)
-        listed = ", ".join(f"{escape(str(k))} {v:.4g}" for k, v in scores.items())
-        info(f"warp candidates (rollout deviation from the training demos, data units): {listed}; kept {kept} "
-             "(lowest)")
-    rows = [r for r in getattr(model, "history_", []) if isinstance(r, dict)]
-    last = rows[-1].get("round") if rows else None           # corrective rounds: the last round's fit
-    outer = sum(r.get("step") in ("ica", "metric") for r in rows if r.get("round") == last)
-    if outer and outer >= model.max_iter:
-        info(f"note: the alternation stopped at its iteration cap (max_iter = {model.max_iter}) before the "
-             "cost settled; a larger max_iter may fit closer.")
-
-
 def print_score(model, data) -> None:
     """The table of :meth:`CDSP.score` and a warning for reproductions far from their demo."""
     if State.quiet:

@@ -78,11 +78,14 @@ def units_problem(units) -> str | None:
 
 
 class Demonstrations(Sequence):
-    """An immutable sequence of :class:`Demonstration` sharing a ``name`` and ``units``."""
+    """An immutable sequence of :class:`Demonstration` sharing a ``name`` and ``units``.
 
-    __slots__ = ("_demos", "_name", "_units")
+    ``goal_tol`` (None or a number >= 0) is the end-point tolerance the set was accepted with
+    (:func:`check_demonstrations`): a later check of the same set (``CDSP.fit``) uses it too."""
 
-    def __init__(self, demos, name: str = "", units: str = ""):
+    __slots__ = ("_demos", "_name", "_units", "_goal_tol")
+
+    def __init__(self, demos, name: str = "", units: str = "", goal_tol: float | None = None):
         demos = tuple(demos)
         for i, demo in enumerate(demos):
             if not isinstance(demo, Demonstration):
@@ -95,16 +98,19 @@ class Demonstrations(Sequence):
         if problem:
             raise InputError(f"units {problem}. Try: a short name such as 'm' or 'mm'.")
         self._demos, self._name, self._units = demos, str(name), units
+        self._goal_tol = _check_goal_tol(goal_tol)
 
     name = property(lambda self: self._name, doc="Name of the set, e.g. 'Leaf_1' or a file stem.")
     units = property(lambda self: self._units, doc="Position units, e.g. 'mm' for LASA.")
+    goal_tol = property(lambda self: self._goal_tol,
+                        doc="End-point tolerance the set was accepted with (None: the default).")
 
     def __len__(self) -> int:
         return len(self._demos)
 
     def __getitem__(self, index):
         if isinstance(index, slice):
-            return Demonstrations(self._demos[index], self._name, self._units)
+            return Demonstrations(self._demos[index], self._name, self._units, self._goal_tol)
         return self._demos[index]
 
     def __repr__(self) -> str:
@@ -142,7 +148,15 @@ class Demonstrations(Sequence):
             if idx[-1] != len(d.t) - 1:
                 idx = np.append(idx, len(d.t) - 1)
             out.append(Demonstration(d.t[idx], d.pos[idx], d.vel[idx], d.source))
-        return Demonstrations(out, self._name, self._units)
+        return Demonstrations(out, self._name, self._units, self._goal_tol)
+
+
+def _check_goal_tol(goal_tol) -> float | None:
+    if goal_tol is None:
+        return None
+    if isinstance(goal_tol, bool) or not isinstance(goal_tol, (int, float, np.number)) or not goal_tol >= 0:
+        raise InputError(f"goal_tol must be a number >= 0 (or None: 5% of the data scale), got {goal_tol!r}.")
+    return float(goal_tol)
 
 
 def time_problem(t: np.ndarray) -> str | None:
@@ -222,14 +236,17 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
     message names the demo and the first bad sample); time not strictly increasing;
     dimensions that differ between demos; end points that disagree, i.e. a spread
     ``max_i ||x_i(T_i) - mean_j x_j(T_j)||`` above ``goal_tol`` (same units as the data;
-    default 5 % of the diagonal of the bounding box of all positions; ``np.inf`` disables).
+    default: the tolerance ``demos`` was accepted with (``Demonstrations.goal_tol``), else 5 %
+    of the diagonal of the bounding box of all positions; ``np.inf`` disables). The returned
+    set records the tolerance used, so checking it again (``CDSP.fit``) accepts it again.
     """
     try:
         items = list(demos)
     except TypeError as exc:
         raise InputError(f"Expected a sequence of Demonstration, got {type(demos).__name__}.") from exc
     name = getattr(demos, "name", "")
-    demos = Demonstrations(items, name, getattr(demos, "units", ""))
+    goal_tol = _check_goal_tol(getattr(demos, "goal_tol", None) if goal_tol is None else goal_tol)
+    demos = Demonstrations(items, name, getattr(demos, "units", ""), goal_tol)
     if not items:
         raise DemonstrationError(f"No demonstrations in {name or 'the input'}; provide at least one.")
     for i, demo in enumerate(items):
@@ -245,8 +262,6 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
     diagonal = float(np.linalg.norm(all_pos.max(axis=0) - all_pos.min(axis=0)))
     if goal_tol is None:
         goal_tol = GOAL_TOL_FRACTION * diagonal
-    elif isinstance(goal_tol, bool) or not isinstance(goal_tol, (int, float, np.number)) or not goal_tol >= 0:
-        raise InputError(f"goal_tol must be a number >= 0 (or None: 5% of the data scale), got {goal_tol!r}.")
     spread = end_distances(items)[1]
     worst = int(np.argmax(spread))
     if spread[worst] > goal_tol:

@@ -13,16 +13,18 @@ from pathlib import Path
 import numpy as np
 
 from sosdyn.errors import DemonstrationError, InputError
+from sosdyn.lfd.data.columns import (COLUMNS_HINT, TIME_UNITS, check_duration, check_time_units, parse_columns,
+                                    refuse_unclaimed, time_header_names, time_unit)
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_demonstrations, time_problem
 
-TIME_NAMES = ("t", "time", "timestamp")
 _AXES = ("x", "y", "z")
 _DEFAULT_DEMO_NAME = "demo"
 _SNIFF_LINES = 50
 _DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab", None: "whitespace"}
 _DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
-_NO_TIME_HINT = ("name the time column t, time or timestamp, pass time_column=..., or pass "
-                 "dt=<sampling step in s> (sosdyn fit --dt) if the samples are equally spaced")
+_NO_TIME_HINT = ("name the time column t, time or timestamp (t_ms / t_us for milli- / microseconds), or "
+                 "give the sampling step if the samples are equally spaced: --dt STEP (sosdyn fit / plot) "
+                 "or dt=STEP (load_demos), in s")
 
 
 @dataclass(frozen=True)
@@ -177,7 +179,7 @@ def _axes(header, prefix) -> list[int]:
 def _time_index(table: _Table, time_column, dt) -> int | None:
     """The time column, or None when ``dt`` gives the time axis."""
     if dt is not None:
-        named = [h for h in TIME_NAMES if table.header and h in table.header]
+        named = [h for h in time_header_names() if table.header and h in table.header]
         if time_column is not None or named:
             which = repr(time_column) if time_column is not None else f"{named[0]!r} in the header"
             raise InputError(f"{table.path}: both dt = {dt:g} and a time column ({which}) are given; "
@@ -187,29 +189,38 @@ def _time_index(table: _Table, time_column, dt) -> int | None:
         return _column_index(time_column, table, "time")
     if table.header is None:
         return 0
-    named = [h for h in TIME_NAMES if h in table.header]
+    named = [h for h in time_header_names() if h in table.header]
     if not named:
         raise DemonstrationError(f"{table.path}: no time column: the header {table.header} (read with "
-                                 f"{table.layout}) has no column named t, time or timestamp. "
+                                 f"{table.layout}) has no column named t, time or timestamp (or t_ms, ...). "
                                  f"Try: {_NO_TIME_HINT}.")
     return table.header.index(named[0])
 
 
-def _roles(table: _Table, dim, time_column, demo_column, dt):
-    """Column indices (time or None, demo id or None, positions, velocities) of a table."""
+def _roles(table: _Table, dim, time_column, demo_column, dt, columns):
+    """Column indices (time or None, demo id or None, positions, velocities) of a table; with
+    ``columns`` the positions are those (other columns ignored, no velocities read); else a header
+    column with no role is an InputError (:func:`~.columns.refuse_unclaimed`)."""
     header, ncols = table.header, table.cells.shape[1]
     ti = _time_index(table, time_column, dt)
     if demo_column is None and header and _DEFAULT_DEMO_NAME in header:
         demo_column = _DEFAULT_DEMO_NAME
     di = None if demo_column is None else _column_index(demo_column, table, "demo id")
+    if columns is not None:
+        pos = [_column_index(c, table, "position") for c in columns]
+        if dim is not None and len(pos) != dim:
+            raise InputError(f"{table.path}: {len(pos)} position columns {columns} but dim = {dim}.")
+        return ti, di, pos, []
     if header is not None:
         pos, vel = _numbered(header, "x") or _axes(header, ""), _numbered(header, "v") or _axes(header, "v")
         if not pos or (vel and len(vel) != len(pos)) or (dim is not None and len(pos) != dim):
             raise DemonstrationError(
                 f"{table.path}: header {header} (read with {table.layout}) does not give positions "
                 f"x1..xn or x, y, z (and optionally velocities v1..vn or vx, vy, vz with the same "
-                f"n{'' if dim is None else f' = {dim}'})."
+                f"n{'' if dim is None else f' = {dim}'}). Try: name the position columns, {COLUMNS_HINT}, "
+                f"e.g. --columns {','.join(h for i, h in enumerate(header) if i not in (ti, di))}."
             )
+        refuse_unclaimed(header, {ti, di, *pos, *vel}, pos, str(table.path))
         return ti, di, pos, vel
     rest = [c for c in range(ncols) if c not in (ti, di)]
     if dim is None or len(rest) == dim:
@@ -242,9 +253,11 @@ def _as_float(table: _Table, columns: list[int]) -> np.ndarray:
         f"(read with {table.layout}). Try: fix or remove that line.")
 
 
-def _demos_from_file(path: Path, dim, time_column, demo_column, dt) -> list[Demonstration]:
+def _demos_from_file(path: Path, dim, time_column, demo_column, dt, time_units, columns) -> list[Demonstration]:
     table = _read_table(path)
-    ti, di, pos_idx, vel_idx = _roles(table, dim, time_column, demo_column, dt)
+    ti, di, pos_idx, vel_idx = _roles(table, dim, time_column, demo_column, dt, columns)
+    name = None if ti is None or table.header is None else table.header[ti]
+    unit = time_unit(name, time_units, str(path))
     times = None if ti is None else _as_float(table, [ti])[:, 0]
     values = _as_float(table, pos_idx + vel_idx)
     n = len(pos_idx)
@@ -255,16 +268,20 @@ def _demos_from_file(path: Path, dim, time_column, demo_column, dt) -> list[Demo
     for key in ids[np.sort(first)]:
         rows = ids == key
         source = path.name if di is None else f"{path.name} demo {key}"
-        t = np.arange(np.count_nonzero(rows)) * dt if times is None else times[rows]
+        # stamps relative to the first before scaling: exact differences even for epoch stamps
+        t = np.arange(np.count_nonzero(rows)) * dt if times is None else (times[rows] - times[rows][0]) * TIME_UNITS[unit]
         pos, vel = values[rows, :n], values[rows, n:]
         problem = time_problem(t)
         if problem:
             where = f"time column {table.header[ti]!r}" if table.header else f"column {ti} (time)"
-            hint = (f"without a header, column {ti} is time; if the file has no time column pass "
-                    "dt=<sampling step in s>, or add a header row such as t,x1,x2"
+            hint = (f"without a header, column {ti} is time; if the file has no time column give the "
+                    "sampling step (--dt STEP, or dt=STEP in load_demos, in s), or add a header row "
+                    "such as t,x1,x2"
                     if table.header is None and time_column is None else "fix the time column")
             raise DemonstrationError(f"{source}: {where}: {problem} (read with {table.layout}). "
                                      f"Try: {hint}.")
+        if times is not None:
+            check_duration(t, unit, source, f"time column {name!r}" if name else f"column {ti}")
         if vel_idx:
             demos.append(Demonstration(t, pos, vel, source))
         else:
@@ -286,7 +303,8 @@ def _check_dt(dt) -> float | None:
 
 def load_demos(paths, *, dim: int | None = None, time_column: int | str | None = None,
                demo_column: int | str | None = None, dt: float | None = None, name: str | None = None,
-               units: str = "", goal_tol: float | None = None) -> Demonstrations:
+               units: str = "", goal_tol: float | None = None, time_units: str | None = None,
+               columns=None) -> Demonstrations:
     """Load demonstrations from CSV or NPY files and check them (:func:`check_demonstrations`).
 
     ``paths`` is one path or a sequence of paths. Each file holds one demonstration, except a
@@ -297,16 +315,22 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
     * ``.csv`` (any text) without header: the same columns; ``demo_column`` (an index) marks a
       demo-id column.
     * ``.csv`` with a header row (a first row none of whose cells is a number): a time column
-      named ``t``, ``time`` or ``timestamp`` (any case), positions ``x1..xn`` or ``x, y, z``,
-      optionally velocities ``v1..vn`` or ``vx, vy, vz`` and a ``demo`` column, in any order;
-      other columns are ignored.
+      named ``t``, ``time`` or ``timestamp`` (any case; ``t_ms``, ``time_us``, ... in that unit),
+      positions ``x1..xn`` or ``x, y, z``, optionally velocities ``v1..vn`` or ``vx, vy, vz``
+      and a ``demo`` column, in any order. Any other column (orientation ``qx,qy,qz,qw``, joint
+      names, ...) is an InputError naming it: ``columns`` selects the positions explicitly
+      (names like ``["panda_joint1", ..., "panda_joint7"]`` or ``"x,y,z"``, or indices) and
+      then the other columns are ignored and velocities are estimated.
 
     Columns are separated by ',', ';', tab or runs of spaces (detected: ';' or tab when every
     line has one; spaces when every comma sits inside a number; else ','); decimal commas
     ("0,5;1,25") are read when the columns are separated by something else than ','.
 
     Time: ``dt`` (finite, > 0) says the files have no time column: sample k is at ``k dt``
-    (giving dt with a time column is an error). Without ``dt`` a header must name a time
+    (giving dt with a time column is an error). ``time_units`` ("s", "ms" or "us"; default:
+    the column name's suffix, else s) is the unit of the time column; times are converted to
+    seconds from each demonstration's first stamp (t[0] = 0; epoch stamps keep their precision), and a demonstration lasting more than 10 min is refused as implausible (probably
+    ms read as s). Without ``dt`` a header must name a time
     column, and a headerless file has time in column 0 (or ``time_column``); the time must be
     strictly increasing. ``time_column`` / ``demo_column`` override the defaults (an index, or
     a name with a header). Without a header the non-time columns are positions, unless ``dim``
@@ -321,12 +345,16 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
     if dim is not None and (isinstance(dim, bool) or not isinstance(dim, (int, np.integer)) or dim < 1):
         raise InputError(f"dim must be a positive integer or None, got {dim!r}.")
     dt = _check_dt(dt)
+    time_units, columns = check_time_units(time_units), parse_columns(columns)
+    if dt is not None and time_units is not None:
+        raise InputError("time_units applies to a time column, dt is in s and says there is none. "
+                         "Try: drop one of them.")
     demos = []
     for path in map(Path, paths):
         if path.suffix.lower() not in (".csv", ".npy"):
             raise InputError(f"{path}: unsupported file type {path.suffix!r}; use .csv or .npy.")
         if not path.is_file():
             raise InputError(f"{path}: no such file.")
-        demos.extend(_demos_from_file(path, dim, time_column, demo_column, dt))
+        demos.extend(_demos_from_file(path, dim, time_column, demo_column, dt, time_units, columns))
     name = Path(paths[0]).stem if name is None else name
     return check_demonstrations(Demonstrations(demos, name, units), goal_tol=goal_tol)

@@ -44,6 +44,7 @@ from ..fit.contraction import eval_fields, field_exponents, metric_exponents
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
 from ..data.demonstrations import check_demonstrations, sample_step
 from ..runtime.predictor import StatePredictor
+from ..runtime.states import as_state, as_states, check_max_speed, limit_speed
 from ..fit.gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost
 from ..fit.learner import History, Settings, learn, reuse_steps, subsample
 from .fileformat import FORMAT, VERSION, write_model_file
@@ -68,38 +69,37 @@ METRIC_PROX = 1e-2              # default proximal weight of the metric step (we
 class CDSP:
     """Learn a partially contracting dynamical system from demonstrations.
 
-    Parameters
-    ----------
-    n_components : int or "bic"  K, Gaussians of the GMM (paper: 6/7/6/6); "bic" picks K in 1..10
-                                 by the Bayesian information criterion of EM fits.
-    metric_degree : int          degree of M(z) (0 = constant metric; even).
-    field_degree : int           degree of the sub-systems f_k (1 = the paper's A_k x + b_k; odd).
-    gamma : float                contraction rate (1/s, in the data's time units).
-    metric : {"learned", "identity"}   "identity" fixes M = I (SEDS-like quadratic Lyapunov).
-    solver : str                 conic solver ("CLARABEL"; "SCS" or another solver installed in cvxpy).
-    solver_method : {"alternating", "ica"}   plain alternation, or the inner convex approximation
-                                 (ignored with metric="identity": one dynamics step).
-    max_iter, tol                alternation / ICA iterations and relative cost tolerance.
-    eps, margin                  M >= eps I; the trained fields satisfy -G_k >= margin I.
-    metric_prox : float >= 0     proximal weight rho of the metric step (maximise t - rho |w - w0|^2,
-                                 unique maximiser); 0 = the paper's plain max-margin step.
-    refine_gmm : bool            also optimise the GMM's position means/covariances (paper's theta_G).
-    max_samples : int or None    subsample the data to at most this many points (EM and fit).
-    random_state : None, int in [0, 2^32), np.random.Generator or RandomState
-                                 seed of EM and of the verification samples; the integer seed
-                                 actually used is ``seed_`` (and is what a saved file records).
-    verify_samples : int         states of the sampled certificate check, in [100, 10^6].
-    allow_uncertified : bool     return a model whose check failed (flagged) instead of raising.
-    progress : callable or None  called with each history row while fitting.
-    corrective_rounds : int      refits on corrective data from the model's own training rollouts
-                                 (:mod:`.corrective`, :func:`~.rounds.corrective_fits`), 0..10; 0 = none.
-    corrective_tau, corrective_min_dist   the corrective labels' time constant (s) and the distance
-                                 (x the data's scale) below which a rollout state gets no label.
-    warp : "auto", "none" or dict   fit in warped coordinates u = phi(z), phi a diffeomorphism of
-                                 Gaussian bumps fixing the goal (:mod:`.warp`); a dict (keys of
-                                 :data:`~.warp.WARP_DEFAULTS`) is one fixed warp; "auto" fits no warp
-                                 and each :data:`~.warp.AUTO_WARPS` candidate and keeps the one whose
-                                 rollouts from the training demos' starts deviate least from them.
+    **Parameters**
+
+    - ``n_components`` (int or "bic"): K, Gaussians of the GMM (paper: 6/7/6/6); "bic" picks K
+      in 1..10 by the Bayesian information criterion of EM fits.
+    - ``metric_degree`` (int): degree of M(z) (0 = constant metric; even).
+    - ``field_degree`` (int): degree of the sub-systems f_k (1 = the paper's A_k x + b_k; odd).
+    - ``gamma`` (float): contraction rate (1/s, in the data's time units).
+    - ``metric`` ("learned" or "identity"): "identity" fixes M = I (SEDS-like quadratic Lyapunov).
+    - ``solver`` (str): conic solver ("CLARABEL"; "SCS" or another solver installed in cvxpy).
+    - ``solver_method`` ("alternating" or "ica"): plain alternation, or the inner convex
+      approximation (ignored with metric="identity": one dynamics step).
+    - ``max_iter``, ``tol``: alternation / ICA iterations and relative cost tolerance.
+    - ``eps``, ``margin``: M >= eps I; the trained fields satisfy -G_k >= margin I.
+    - ``metric_prox`` (float >= 0): proximal weight rho of the metric step (maximise
+      t - rho |w - w0|^2, unique maximiser); 0 = the paper's plain max-margin step.
+    - ``refine_gmm`` (bool): also optimise the GMM's position means/covariances (paper's theta_G).
+    - ``max_samples`` (int or None): subsample the data to at most this many points (EM and fit).
+    - ``random_state`` (None, int in [0, 2^32), np.random.Generator or RandomState): seed of EM
+      and of the verification samples; the integer seed actually used is ``seed_`` (and is what
+      a saved file records).
+    - ``verify_samples`` (int): states of the sampled certificate check, in [100, 10^6].
+    - ``allow_uncertified`` (bool): return a model whose check failed (flagged) instead of raising.
+    - ``progress`` (callable or None): called with each history row while fitting.
+    - ``corrective_rounds`` (int): refits on corrective data from the model's own training
+      rollouts (``sosdyn.lfd.fit.corrective``, ``corrective_fits``), 0..10; 0 = none.
+    - ``corrective_tau``, ``corrective_min_dist``: the corrective labels' time constant (s) and the
+      distance (x the data's scale) below which a rollout state gets no label.
+    - ``warp`` ("auto", "none" or dict): fit in warped coordinates u = phi(z), phi a
+      diffeomorphism of Gaussian bumps fixing the goal (``sosdyn.lfd.fit.warp``); a dict (keys of
+      ``WARP_DEFAULTS``) is one fixed warp; "auto" fits no warp and each ``AUTO_WARPS`` candidate
+      and keeps the one whose rollouts from the training demos' starts deviate least from them.
 
     Warp (z = (x - x*)/s): the core f is fitted on (phi(z_i), J_phi(z_i) zdot_i) and certified in
     u as always; the model is zdot = J_phi(z)^{-1} f(phi(z)). Since du = J_phi dz, the x-system is
@@ -169,6 +169,17 @@ class CDSP:
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in PARAMS}
+
+    def __repr__(self) -> str:
+        """``CDSP(n_components=6, warp='none')``: the parameters that differ from the defaults;
+        fitted, also ``K``, ``n``, the goal and whether the certificate passed its check."""
+        changed = [f"{k}={v!r}" for k, v in self.get_params().items() if not (v is DEFAULTS[k] or v == DEFAULTS[k])]
+        if hasattr(self, "C_"):
+            warp = "none" if self.warp_ is None else f"{len(self.warp_['sigmas'])} bumps"
+            changed.append(f"fitted: K={self.C_.shape[0]}, n={self.dim_}, goal="
+                           f"{np.array2string(self.goal_, precision=4, separator=', ')}, warp={warp}, "
+                           f"certified={bool(self.verification_.passed)}")
+        return f"CDSP({', '.join(changed)})"
 
     def check_params(self) -> None:
         """Every parameter's type and range, and the solver (InputError saying what to try)."""
@@ -304,15 +315,6 @@ class CDSP:
         if not hasattr(self, "C_"):
             raise NotFittedError("this CDSP model is not fitted yet; call fit(demos) first")
 
-    def _check_points(self, X, what="X"):
-        X = np.asarray(X, dtype=float)
-        X = X[None, :] if X.ndim == 1 else X
-        if X.ndim != 2 or X.shape[1] != self.dim_:
-            raise InputError(f"{what} must have shape (m, {self.dim_}), got {np.shape(X)}")
-        if not np.isfinite(X).all():
-            raise InputError(f"{what} contains NaN or inf")
-        return X
-
     def _maps(self):
         return self.warp_["centers"], self.warp_["vectors"], self.warp_["sigmas"]
 
@@ -329,7 +331,7 @@ class CDSP:
     def predict(self, X):
         """Velocities (m, n) at the states X (m, n), in the data's units."""
         self._check_fitted()
-        X = self._check_points(X)
+        X = as_states(X, self.dim_)
         with np.errstate(over="ignore", invalid="ignore"):
             V = self.field(X, self.goal_)
         bad = np.flatnonzero(~np.isfinite(V).all(axis=1))
@@ -339,22 +341,27 @@ class CDSP:
                              "within a few orders of magnitude of the demonstrations.")
         return V
 
-    def predictor(self) -> StatePredictor:
-        """A fast one-state evaluator, ``predictor(x) -> xdot`` (see :mod:`.evaluator`)."""
+    def predictor(self, max_speed=None) -> StatePredictor:
+        """A fast one-state evaluator, ``step(x, goal=None) -> xdot`` (:mod:`~sosdyn.lfd.runtime.predictor`):
+        ``goal`` moves the goal at run time; ``max_speed`` (data units / s) scales xdot by
+        min(1, max_speed / |xdot|) (same paths and goal, ``docs/theory.md``)."""
         self._check_fitted()
         return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
-                              None if self.warp_ is None else self._maps())
+                              None if self.warp_ is None else self._maps(), max_speed)
 
-    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=()):
+    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.
 
         ``dt`` None means the model's ``dt_``; duration and dt are checked by the integrator, whose
         absolute tolerance is relative to the data's scale ``scale_`` (the same relative accuracy
-        in any units) and whose work is bounded (``max_rollout_calls``, ``max_rollout_seconds``)."""
+        in any units) and whose work is bounded (``max_rollout_calls``, ``max_rollout_seconds``).
+        ``max_speed``: the field scaled by min(1, max_speed / |xdot|), as ``predictor(max_speed=...)``."""
         self._check_fitted()
-        x0 = self._check_points(x0, "x0")[0]
-        goal = self.goal_ if goal is None else self._check_points(goal, "goal")[0]
-        return integrate(self.field, x0, duration=duration, dt=self.dt_ if dt is None else dt, goal=goal,
+        x0 = as_state(x0, self.dim_, "x0")
+        goal = self.goal_ if goal is None else as_state(goal, self.dim_, "goal")
+        max_speed = check_max_speed(max_speed)
+        field = self.field if max_speed is None else (lambda X, g: limit_speed(self.field(X, g), max_speed))
+        return integrate(field, x0, duration=duration, dt=self.dt_ if dt is None else dt, goal=goal,
                          perturbations=perturbations, goal_changes=goal_changes, scale=self.scale_)
 
     def score(self, demos) -> list[dict]:
@@ -398,3 +405,4 @@ class CDSP:
 
 
 DEFAULTS = {name: p.default for name, p in inspect.signature(CDSP).parameters.items()}
+

@@ -25,6 +25,11 @@ under- or overflows (|z| ~ 1e154 and up) the predictor falls back on the mixture
 :meth:`~sosdyn.lfd.fit.gmm.PositionMixture.responsibilities` (one-hot on the nearest component),
 so the far-field behaviour is the same as ``predict``'s too.
 
+Runtime goal: ``predictor(x, goal=g)`` evaluates the model with its goal moved to g, i.e. the
+goal-shifted field translated, s f((x - g) / s) = predictor(x - g + x*): what a rollout uses
+after a goal change. Speed limit (``max_speed``): the velocity scaled by min(1, v_max / |xdot|)
+(:func:`~.states.limit_speed`).
+
 A predictor is a snapshot of the model's arrays: refit or reload the model, then build a new one.
 """
 from __future__ import annotations
@@ -36,21 +41,22 @@ import numpy as np
 
 from sosdyn.errors import InputError
 from ..fit.gmm import PositionMixture
+from .states import as_state, check_max_speed
 
 
 class StatePredictor:
-    """xdot = f(x) at one state x of shape (n,), for a control loop; ``predictor(x)``.
+    """xdot = f(x) at one state x of shape (n,), for a control loop; ``predictor(x, goal=None)``.
 
     Built from a fitted model's arrays (:meth:`sosdyn.lfd.model.cdsp.CDSP.predictor` does this):
-    goal x* (n,), scale s, the position mixture, coefficients C (K, n, m), exponents E (m, n) and
-    the warp (centers, vectors, sigmas) in z-units, or None.
+    goal x* (n,), scale s, the position mixture, coefficients C (K, n, m), exponents E (m, n),
+    the warp (centers, vectors, sigmas) in z-units or None, and the speed limit or None.
     """
 
     def __init__(self, goal: np.ndarray, scale: float, mixture: PositionMixture, C: np.ndarray,
-                 exps: np.ndarray, warp=None):
+                 exps: np.ndarray, warp=None, max_speed: float | None = None):
         inv, lognorm = mixture.factors()
         K, n, m = C.shape
-        self.dim = n
+        self.dim, self._shape = n, (n,)
         self._goal = np.array(goal, dtype=float)
         self._scale = float(scale)
         self._mixture = mixture
@@ -66,17 +72,16 @@ class StatePredictor:
             (tuple(map(float, c)), tuple(map(float, v)), 1.0 / float(s) ** 2,
              math.exp(-float(np.dot(c, c)) / float(s) ** 2)) for c, v, s in zip(*warp)]
         self._forward, self._back = (warp_forward2, warp_back2) if n == 2 else (warp_forward, warp_back)
+        self.max_speed = check_max_speed(max_speed)
 
-    def __call__(self, x) -> np.ndarray:
-        """xdot (n,) at the state x (n,), in the data's units; the same numbers as
-        ``model.predict(x[None])[0]``. Raises InputError for a wrong shape, NaN/inf, or a state
-        so far away that the field overflows float."""
-        x = np.asarray(x, dtype=float)
-        if x.shape != (self.dim,) or not math.isfinite(x.sum()):
-            raise InputError(f"x must be {self.dim} finite numbers (shape ({self.dim},)), got "
-                             f"{'shape ' + str(x.shape) if x.shape != (self.dim,) else x}. Try: "
-                             "model.predict(X) for many states at once.")
-        z = (x - self._goal) / self._scale
+    def __call__(self, x, goal=None) -> np.ndarray:
+        """xdot (n,) at the state x (n,), in the data's units, for the goal ``goal`` (None: the
+        model's); the same numbers as ``model.predict(x[None] - goal + model.goal_)[0]``, then
+        the speed limit. Raises InputError for text, complex numbers, a wrong shape, NaN/inf, or
+        a state so far away that the field overflows float."""
+        x = self._state(x, "x")
+        goal = self._goal if goal is None else self._state(goal, "goal")
+        z = (x - goal) / self._scale
         grads = None
         if self._maps is not None:                   # u = phi(z) and the gradients g_j
             u, grads = self._forward(self._maps, z.tolist())
@@ -99,7 +104,19 @@ class StatePredictor:
             raise InputError(f"x = {x} is so far from the data (scale {self._scale:.3g}) that the field "
                              "overflows float. Try: states within a few orders of magnitude of the "
                              "demonstrations.")
+        if self.max_speed is not None:
+            speed = math.sqrt(float(v @ v))
+            if speed > self.max_speed:
+                v = v * (self.max_speed / speed)
         return v
+
+    def _state(self, value, what: str) -> np.ndarray:
+        """``value`` as a finite float (n,): a finite float array of shape (n,) as it is (the
+        control-loop case, no copy), anything else through :func:`~.states.as_state`."""
+        if (type(value) is np.ndarray and value.shape == self._shape and value.dtype.kind == "f"
+                and math.isfinite(value.sum())):
+            return value
+        return as_state(value, self.dim, what)     # lists, tuples, integers, anything wrong
 
 
 def warp_forward(maps, z: list) -> tuple[list, list]:

@@ -55,7 +55,7 @@ def streamlines(ax, predict: Callable[[np.ndarray], np.ndarray] | None,
     ax.plot(*goal, **GOAL_STYLE)
 
     return finish_state_axes(ax, (xmin, xmax, ymin, ymax), units, title,
-                             stream_legend_handles() if own_figure else None)
+                             stream_legend_handles(bool(demos)) if own_figure else None)
 
 
 @styled

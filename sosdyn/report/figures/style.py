@@ -188,10 +188,12 @@ def ordered_methods(table: Mapping[str, Mapping[str, object]]) -> list[str]:
     return list(dict.fromkeys(m for per_shape in table.values() for m in per_shape))
 
 
-def stream_legend_handles() -> list:
+def stream_legend_handles(demos: bool = True) -> list:
+    """Legend entries of the state-space plots; ``demos=False`` leaves out the demonstrations
+    (a plot without them lists only what it shows)."""
     return [
         Line2D([], [], color=STREAM_COLOR, lw=1.0, label="streamlines of the model"),
-        Line2D([], [], color=DEMO_COLOR, lw=1.8, label="demonstrations"),
+        *([Line2D([], [], color=DEMO_COLOR, lw=1.8, label="demonstrations")] if demos else []),
         Line2D([], [], color=REPRO_COLOR, lw=1.8, ls="--", label="reproductions"),
         Line2D([], [], label="goal", **GOAL_STYLE),
     ]

@@ -86,30 +86,49 @@ def perturbation_trajectories(ax, demo, runs: Mapping[str, np.ndarray],
 @styled
 def trajectories_3d(demos: Sequence[np.ndarray], reproductions: Sequence[np.ndarray], goal,
                     title: str | None = None, *, units: str = "mm") -> Figure:
-    """3-D demonstrations (solid red) and reproductions (dashed blue) with the goal.
+    """3-D demonstrations (solid red) and reproductions (dashed blue) with the goal, and their
+    projections on the three back walls of the box (the x1-x2 floor, the x1-x3 and x2-x3 walls;
+    thin, light), which show the paths' shape whatever the view angle.
 
     The box follows the data ranges (true proportions), except that no side is drawn
     shorter than 35 % of the longest, so a nearly planar motion keeps readable ticks.
     """
     fig = new_figure(5.4, 5.0)
     ax = fig.add_subplot(projection="3d")
-    arrays = [np.asarray(a, dtype=float)[:, :3] for a in (*demos, *reproductions)]
-    for d in demos:
-        d = np.asarray(d, dtype=float)
-        ax.plot(d[:, 0], d[:, 1], d[:, 2], color=DEMO_COLOR, lw=1.5)
-    for r in reproductions:
-        r = np.asarray(r, dtype=float)
-        ax.plot(r[:, 0], r[:, 1], r[:, 2], color=REPRO_COLOR, lw=1.5, ls=(0, (4, 2.5)))
+    demos = [np.asarray(d, dtype=float)[:, :3] for d in demos]
+    repros = [np.asarray(r, dtype=float)[:, :3] for r in reproductions]
     goal = np.asarray(goal, dtype=float)[:3]
+    points = np.vstack([*demos, *repros, goal[None, :]])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    pad = 0.04 * np.maximum(hi - lo, 1e-9 + 0.01 * (hi - lo).max())
+    lo, hi = lo - pad, hi + pad
+    # back walls for the default view (azim -60, elev 30): z = lo, y = hi, x = lo
+    walls = ((2, lo[2]), (1, hi[1]), (0, lo[0]))
+    for paths, color, style in ((demos, DEMO_COLOR, "-"), (repros, REPRO_COLOR, (0, (4, 2.5)))):
+        for p in paths:
+            for axis, value in walls:
+                q = p.copy()
+                q[:, axis] = value
+                ax.plot(q[:, 0], q[:, 1], q[:, 2], color=color, lw=0.8, ls=style, alpha=0.35)
+            ax.plot(p[:, 0], p[:, 1], p[:, 2], color=color, lw=1.5, ls=style)
+    for axis, value in walls:
+        g = goal.copy()
+        g[axis] = value
+        ax.plot([g[0]], [g[1]], [g[2]], **{**GOAL_STYLE, "alpha": 0.35, "markersize": 7})
     ax.plot([goal[0]], [goal[1]], [goal[2]], **GOAL_STYLE)
-    ranges = np.ptp(np.vstack([*arrays, goal[None, :]]), axis=0)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
+    ranges = hi - lo
     ax.set_box_aspect(np.maximum(ranges, 0.35 * ranges.max() + 1e-9), zoom=0.88)
     for axis, name in zip((ax.xaxis, ax.yaxis, ax.zaxis), ("x_1", "x_2", "x_3")):
         axis.set_major_locator(MaxNLocator(4))
         axis.set_label_text(f"${name}$ ({units})")
     if title:
         ax.set_title(title)
-    fig.legend(handles=stream_legend_handles()[1:], loc="outside lower center", ncols=3)
+    handles = stream_legend_handles(bool(demos))[1:] + [
+        Line2D([], [], color="0.5", lw=0.8, alpha=0.5, label="projections on the walls")]
+    fig.legend(handles=handles, loc="outside lower center", ncols=2)
     return fig
 
 

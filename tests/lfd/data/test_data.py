@@ -123,6 +123,16 @@ def test_end_points_must_agree(demos, make_line_demo):
         check_demonstrations(demos, goal_tol=-1.0)
 
 
+def test_accepted_goal_tol_is_kept_for_later_checks(demos, make_line_demo):
+    """A set accepted with a larger goal_tol passes a second check without one (CDSP.fit re-checks)."""
+    far = make_line_demo((10, 5), goal=(4, 0), source="far.csv")
+    accepted = check_demonstrations([demos[0], far], goal_tol=3.0)
+    assert accepted.goal_tol == 3.0 and accepted[:2].goal_tol == 3.0 and accepted.subsample(2).goal_tol == 3.0
+    assert len(check_demonstrations(accepted)) == 2
+    with pytest.raises(DemonstrationError, match="goal_tol = 1"):
+        check_demonstrations(accepted, goal_tol=1.0)
+
+
 def test_zero_demos_and_wrong_types():
     with pytest.raises(DemonstrationError, match="No demonstrations"):
         check_demonstrations([])

@@ -74,7 +74,7 @@ def test_dt_and_a_time_column_together_are_refused(tmp_path):
 
 def test_headerless_file_without_time_says_to_pass_dt(tmp_path):
     path = write(tmp_path, "p.csv", [r.replace("-", "") for r in rows(",", time=False)])  # x1 = 8.18 -> 0
-    with pytest.raises(DemonstrationError, match=r"p\.csv.*column 0.*not strictly increasing.*pass dt="):
+    with pytest.raises(DemonstrationError, match=r"p\.csv.*column 0.*not strictly increasing.*--dt STEP, or dt=STEP"):
         load_demos(path)
     assert load_demos(path, dt=0.1).dim == 2
 
@@ -201,3 +201,66 @@ def test_file_errors(tmp_path, demos):
     short = write_csv(tmp_path / "short.csv", np.column_stack([d.t[:5], d.pos[:5]]))
     with pytest.raises(DemonstrationError, match="only 5 samples"):
         load_demos(short)
+
+
+# ---------------------------------------------------------------- time units, columns
+
+
+def reach(unit_factor, header, extra=()):
+    """Lines of a 2 s 3-D reach with time in 1/unit_factor s, and extra constant columns."""
+    lines = [",".join(header)]
+    for t, (x, y) in zip(T, POS):
+        lines.append(",".join(f"{v:.15g}" for v in (t / unit_factor + 1.7e9 * (unit_factor == 1e-3), x, y, -x,
+                                                        *extra)))
+    return lines
+
+
+@pytest.mark.parametrize("header, kwargs, factor", [
+    ("t_ms", {}, 1e-3), ("time_ms", {}, 1e-3), ("t_us", {}, 1e-6), ("time", {"time_units": "ms"}, 1e-3),
+    ("time", {"time_units": "us"}, 1e-6), ("t", {}, 1.0), ("timestamp_ms", {"time_units": "ms"}, 1e-3)])
+def test_time_units_from_the_header_or_the_option(tmp_path, header, kwargs, factor):
+    demo = load_demos(write(tmp_path, "r.csv", reach(factor, [header, "x", "y", "z"])), **kwargs)[0]
+    np.testing.assert_allclose(demo.t - demo.t[0], T, atol=1e-6)         # seconds, 2 s long
+    seconds = load_demos(write(tmp_path, "s.csv", reach(1.0, ["t", "x", "y", "z"])))[0]
+    np.testing.assert_allclose(demo.vel, seconds.vel, atol=1e-6)      # units per second
+
+
+def test_milliseconds_read_as_seconds_are_refused_with_the_option_to_use(tmp_path):
+    path = write(tmp_path, "epoch.csv", reach(1e-3, ["time", "x", "y", "z"]))   # epoch ms, a 2 s reach
+    with pytest.raises(DemonstrationError, match=r"lasts 2000 s .*time column 'time' read in s.*--time-units"):
+        load_demos(path)
+    with pytest.raises(InputError, match="says ms but time_units = 's'"):
+        load_demos(write(tmp_path, "ms.csv", reach(1e-3, ["t_ms", "x", "y", "z"])), time_units="s")
+    with pytest.raises(InputError, match="time_units must be one of s, ms, us"):
+        load_demos(path, time_units="min")
+
+
+def test_orientation_columns_are_refused_never_dropped(tmp_path):
+    path = write(tmp_path, "pose.csv", reach(1.0, ["t", "x", "y", "z", "qx", "qy", "qz", "qw"], (0, 0, 0, 1)))
+    with pytest.raises(InputError, match=r"orientation columns \['qx', 'qy', 'qz', 'qw'\].*--columns x,y,z"):
+        load_demos(path)
+    demo = load_demos(path, columns="x,y,z")[0]
+    np.testing.assert_allclose(demo.pos[:, :2], POS, atol=1e-6)
+    qw_first = write(tmp_path, "wxyz.csv", reach(1.0, ["t", "x", "y", "z", "qw", "qx", "qy", "qz"], (1, 0, 0, 0)))
+    with pytest.raises(InputError, match="orientation columns"):
+        load_demos(qw_first)
+    other = write(tmp_path, "grip.csv", reach(1.0, ["t", "x", "y", "z", "gripper"], (0.5,)))
+    with pytest.raises(InputError, match=r"columns \['gripper'\] are neither.*columns="):
+        load_demos(other)
+
+
+def test_joint_names_are_mapped_by_columns(tmp_path):
+    names = [f"panda_joint{i}" for i in range(1, 8)]
+    lines = ["t," + ",".join(names)] + [",".join(f"{v:.6f}" for v in (t, *(x * np.arange(1, 8) / 7)))
+                                        for t, (x, _) in zip(T, POS)]
+    path = write(tmp_path, "joints.csv", lines)
+    with pytest.raises(DemonstrationError, match=r"does not give positions.*--columns panda_joint1,.*panda_joint7"):
+        load_demos(path)
+    demos = load_demos(path, columns=names)
+    assert demos.dim == 7
+    np.testing.assert_allclose(demos[0].pos[:, 6], POS[:, 0], atol=1e-6)
+    assert load_demos(path, columns=",".join(names[:3])).dim == 3
+    with pytest.raises(InputError, match="no column named 'elbow'"):
+        load_demos(path, columns=["elbow"])
+    with pytest.raises(InputError, match="each position column once"):
+        load_demos(path, columns="panda_joint1,panda_joint1")

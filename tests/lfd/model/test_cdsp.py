@@ -161,3 +161,13 @@ def test_number_of_components_by_bic():
     model = sd.CDSP(warp="none", n_components="bic", solver_method="ica", max_iter=3).fit(demos)
     assert model.n_components_ == 1 + int(np.argmin(model.bic_))
     assert len(model.bic_) == 10 and model.certified_
+
+
+def test_repr_shows_changed_parameters_and_the_fitted_state(linear_fit):
+    assert repr(sd.CDSP()) == "CDSP()"
+    assert repr(sd.CDSP(n_components=6, warp="none", gamma=np.float64(0.1))) == "CDSP(n_components=6, warp='none')"
+    text = repr(linear_fit)          # CDSP(warp="none", n_components=1, gamma=0.5, max_iter=40) of the linear demos
+    assert text.startswith("CDSP(n_components=1, gamma=0.5, max_iter=40, warp='none', fitted: K=1, n=2, goal=[")
+    assert text.endswith(", warp=none, certified=True)")
+    goal = [float(v) for v in text.split("goal=[")[1].split("]")[0].split(",")]
+    assert goal == pytest.approx(linear_fit.goal_, rel=1e-4) and goal == pytest.approx([2.0, -1.0], abs=0.1)

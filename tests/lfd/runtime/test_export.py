@@ -1,5 +1,4 @@
 """Generated evaluators (sosdyn.lfd.runtime.export) compute what CDSP.predict computes."""
-import importlib.util
 import re
 import shutil
 import subprocess
@@ -10,6 +9,8 @@ import pytest
 from sosdyn.errors import InputError, NotFittedError
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.runtime.export import export, to_cpp, to_python
+
+from export_support import import_source, max_rel_error
 
 TOL = 1e-9
 
@@ -24,19 +25,6 @@ def box_states(model, count, seed=0):
     """``count`` states uniform in twice the data box (about the goal, half-width 2 scale)."""
     rng = np.random.default_rng(seed)
     return model.goal_ + model.scale_ * rng.uniform(-2, 2, size=(count, model.dim_))
-
-
-def max_rel_error(a, b):
-    """max over rows of |a - b|_inf / |b|_inf (|b| > 0 in the box: the goal has measure zero)."""
-    return float(np.max(np.abs(a - b).max(axis=1) / np.abs(b).max(axis=1)))
-
-
-def import_source(source, path):
-    path.write_text(source)
-    spec = importlib.util.spec_from_file_location(f"exported_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_python_export_matches_predict(model, tmp_path):

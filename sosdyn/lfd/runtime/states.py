@@ -1,0 +1,84 @@
+"""States handed to a fitted model at run time: checked before any arithmetic, and the speed limit.
+
+Every public entry point that takes states (``CDSP.predict``, ``CDSP.rollout``, the one-state
+predictor, their ``goal`` arguments) reads them with :func:`as_states`: a real (integer or
+float) array of the model's dimension, finite; strings, ragged lists, dicts, None and complex
+numbers are an InputError with a hint, never numpy's ValueError / TypeError or a silent cast.
+
+Speed limit: :func:`limit_speed` scales each velocity by the positive factor
+``min(1, v_max / |xdot|)``, so |xdot| <= v_max and the direction is kept; ``docs/theory.md``
+says why the certificate's convergence survives it (the same paths, traversed more slowly).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from sosdyn.errors import InputError
+
+_REAL_KINDS = "iuf"           # numpy dtype kinds of a state: signed / unsigned integers, floats
+
+
+def _why_not_numbers(value, arr) -> str:
+    if isinstance(value, (str, bytes)):
+        return (f"is the text {value!r:.40}, not numbers. Try: numbers, e.g. [1.0, 2.0], or parse the "
+                "text first (np.array([float(v) for v in text.split(',')])).")
+    if isinstance(value, dict):
+        return "is a dict. Try: the values in the order of the model's dimensions, e.g. [d['x'], d['y']]."
+    if arr is None or arr.dtype.kind == "O":
+        return (f"is not a rectangular array of numbers (a {type(value).__name__} whose rows differ in "
+                "length, or hold None / other objects). Try: n numbers, or m rows of n numbers each.")
+    if arr.dtype.kind == "c":
+        return "has complex entries; states are real. Try: the real parts (np.real(x)) if the imaginary parts are 0."
+    if arr.dtype.kind == "b":
+        return "holds booleans, not coordinates. Try: numbers."
+    return f"holds {arr.dtype} values, not numbers. Try: an array of floats."
+
+
+def as_states(value, dim: int, what: str = "X") -> np.ndarray:
+    """``value`` as a finite float array (m, dim): one state (dim,) becomes (1, dim).
+
+    InputError (with a hint) for text, dicts, ragged or object arrays, booleans, complex
+    numbers, a wrong shape, NaN or inf."""
+    try:
+        arr = None if isinstance(value, (str, bytes, dict)) else np.asarray(value)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.dtype.kind not in _REAL_KINDS:
+        raise InputError(f"{what} {_why_not_numbers(value, arr)}")
+    arr = arr.astype(float)
+    arr = arr[None, :] if arr.ndim == 1 else arr
+    if arr.ndim != 2 or arr.shape[1] != dim:
+        raise InputError(f"{what} must have shape ({dim},) or (m, {dim}), got {np.shape(value)}. "
+                         f"Try: {dim} coordinates per state.")
+    if not np.isfinite(arr).all():
+        raise InputError(f"{what} contains NaN or inf. Try: finite coordinates.")
+    return arr
+
+
+def as_state(value, dim: int, what: str = "x") -> np.ndarray:
+    """``value`` as one finite state of shape (dim,) (:func:`as_states`, exactly one row)."""
+    arr = as_states(value, dim, what)
+    if np.ndim(value) != 1:
+        raise InputError(f"{what} must be one state of shape ({dim},), got shape {np.shape(value)}. "
+                         "Try: model.predict(X) for many states at once.")
+    return arr[0]
+
+
+def check_max_speed(max_speed) -> float | None:
+    """``max_speed``: None (no limit) or a finite number > 0 (data units per second)."""
+    if max_speed is None:
+        return None
+    real = isinstance(max_speed, (int, float, np.integer, np.floating)) and not isinstance(max_speed, bool)
+    if not real or not 0 < max_speed < np.inf:
+        raise InputError(f"max_speed must be a finite number > 0 (data units per second) or None, got "
+                         f"{max_speed!r}.")
+    return float(max_speed)
+
+
+def limit_speed(V: np.ndarray, max_speed: float | None) -> np.ndarray:
+    """The rows of V scaled by min(1, max_speed / |v|): same directions, |v| <= max_speed."""
+    if max_speed is None:
+        return V
+    speed = np.linalg.norm(V, axis=-1, keepdims=True)
+    with np.errstate(divide="ignore"):
+        return V * np.minimum(1.0, max_speed / speed)
