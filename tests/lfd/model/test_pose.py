@@ -1,0 +1,110 @@
+"""PoseCDSP against a known answer: xdot = -k (x - x_g), rdot = -k r in the chart at R_g.
+
+For this system |s|^2 is a contraction metric at rate 2k (its Jacobian is -k I), every
+trajectory reaches the goal pose, and the solution is known in closed form:
+x(t) = x_g + e^{-kt} (x0 - x_g), R(t) = R_g exp(e^{-kt} r0).
+"""
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from sosdyn.errors import InputError
+from sosdyn.evaluation.poses import angles_deg
+from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
+from sosdyn.lfd.model.pose import PoseCDSP, chart_bound, load_pose_model, right_jacobian
+
+K_RATE = 0.8
+X_GOAL = np.array([0.4, -0.2, 0.3])
+R_GOAL = Rotation.from_rotvec([0.3, -0.5, 0.2])
+Q_GOAL = R_GOAL.as_quat(scalar_first=True)
+_RNG = np.random.default_rng(3)
+#: 8 starts: straight-line demos s(t) = e^{-kt} s0 span R^6 only with >= 6 independent starts.
+STARTS = [(X_GOAL + 0.4 * _RNG.normal(size=3), 1.2 * _RNG.uniform(-1, 1, size=3)) for _ in range(8)]
+
+
+def exact(x0, r0, t):
+    decay = np.exp(-K_RATE * t)[:, None]
+    return X_GOAL + decay * (x0 - X_GOAL), (R_GOAL * Rotation.from_rotvec(decay * r0)).as_quat(scalar_first=True)
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    t = np.linspace(0.0, 12.0, 240)
+    demos = PoseDemonstrations([PoseDemonstration(t, *exact(x0, r0, t), f"start {i}")
+                                for i, (x0, r0) in enumerate(STARTS)], "known", "m")
+    return PoseCDSP(n_components=1, warp="none", max_samples=400).fit(demos)
+
+
+def test_known_system_certified_and_converges(fitted):
+    assert fitted.certified_ and fitted.verify().passed
+    assert angles_deg(fitted.goal_quat_, Q_GOAL)[0] < 0.01        # demos end 0.005 deg short
+    x0, r0 = np.array([0.2, 0.2, 0.6]), np.array([0.4, 0.8, -0.6])      # a start of no demo
+    traj = fitted.rollout(np.concatenate([x0, (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)]),
+                          12.0, dt=0.05)
+    x_true, q_true = exact(x0, r0, traj.t)
+    np.testing.assert_allclose(np.linalg.norm(traj.quat, axis=1), 1.0, atol=1e-12)       # on the sphere
+    assert angles_deg(traj.quat, q_true).max() < 1.0                     # follows the true rotation
+    assert np.abs(traj.pos - x_true).max() < 0.01
+    assert angles_deg(traj.quat[-1], Q_GOAL)[0] < 1.0                    # geodesic error at the end
+    assert np.rad2deg(max(traj.chart_bounds)) < 170                      # the ball provably kept
+
+
+def test_chart_bound_holds_along_rollouts(fitted):
+    for angle in (0.5, 1.5, 2.5):
+        r0 = angle * np.array([0.6, 0.0, 0.8])
+        p0 = np.concatenate([X_GOAL + 0.3, (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)])
+        traj = fitted.rollout(p0, 10.0, dt=0.05)
+        reached = np.deg2rad(angles_deg(traj.quat, Q_GOAL)).max()
+        assert reached <= traj.chart_bounds[0] + 1e-9
+        s0 = fitted.state(p0[:3], p0[3:], fitted.goal_quat_) - np.concatenate([fitted.goal_pos_, np.zeros(3)])
+        assert chart_bound(fitted.cdsp_, s0 / fitted.cdsp_.scale_, fitted.rot_factor_) == traj.chart_bounds[0]
+
+
+def test_predictor_gives_world_angular_velocity(fitted):
+    x0, r0 = np.array([0.5, 0.0, 0.2]), np.array([0.3, -0.7, 0.5])
+    q0 = (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)
+    v, w = fitted.predictor()(x0, q0)
+    h = 1e-5                                                             # the known answer, differentiated
+    x1, q1 = exact(x0, r0, np.array([h]))
+    np.testing.assert_allclose(v, (x1[0] - x0) / h, atol=2e-3)
+    w_true = (Rotation.from_quat(q1[0], scalar_first=True) * Rotation.from_quat(q0, scalar_first=True).inv()
+              ).as_rotvec() / h
+    np.testing.assert_allclose(w, w_true, atol=2e-3)
+    goal = np.concatenate([fitted.goal_pos_ + 1.0, fitted.goal_quat_])  # a moved goal: translated field
+    v2, w2 = fitted.predictor(goal)(x0 + 1.0, q0)
+    np.testing.assert_allclose(np.concatenate([v2, w2]), np.concatenate([v, w]), atol=1e-12)
+
+
+def test_right_jacobian_matches_the_exponential():
+    rng = np.random.default_rng(0)
+    for r in (rng.normal(size=3), 1e-6 * rng.normal(size=3), 2.9 * np.array([0.0, 0.6, 0.8])):
+        d, h = rng.normal(size=3), 1e-6
+        body = (Rotation.from_rotvec(r).inv() * Rotation.from_rotvec(r + h * d)).as_rotvec() / h
+        np.testing.assert_allclose(right_jacobian(r) @ d, body, atol=1e-5)
+
+
+def test_goal_change_and_push(fitted):
+    p0 = np.concatenate([X_GOAL + 0.2, Q_GOAL])
+    turned = Rotation.from_rotvec([0, 0, 0.6]) * R_GOAL
+    goal2 = np.concatenate([X_GOAL - 0.1, turned.as_quat(scalar_first=True)])
+    traj = fitted.rollout(p0, 20.0, dt=0.05, pushes=[(2.0, [0.1, 0, 0, 0.3, 0, 0])], goal_changes=[(6.0, goal2)])
+    assert np.all(np.diff(traj.t) > 0)
+    assert angles_deg(traj.quat[-1], goal2[3:])[0] < 0.1 and np.linalg.norm(traj.pos[-1] - goal2[:3]) < 1e-3
+
+
+def test_bad_poses_refused(fitted):
+    with pytest.raises(InputError, match="7-vector"):
+        fitted.rollout([0, 0, 0], 1.0)
+    with pytest.raises(InputError, match="not unit"):
+        fitted.rollout([0, 0, 0, 3, 0, 0, 0], 1.0)
+    far = (R_GOAL * Rotation.from_rotvec([0, np.deg2rad(175), 0])).as_quat(scalar_first=True)
+    with pytest.raises(InputError, match="cut locus|not defined at 180"):
+        fitted.rollout(np.concatenate([X_GOAL, far]), 1.0)
+
+
+def test_save_load_round_trip(fitted, tmp_path):
+    path = fitted.save(tmp_path / "pose.json")
+    loaded = load_pose_model(path)
+    x, q = np.array([0.5, 0.1, 0.2]), Rotation.from_rotvec([0.1, 0.2, 0.3]).as_quat(scalar_first=True)
+    np.testing.assert_allclose(np.concatenate(loaded.predictor()(x, q)), np.concatenate(fitted.predictor()(x, q)),
+                               rtol=1e-12, atol=1e-14)
