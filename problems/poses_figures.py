@@ -36,7 +36,8 @@ def paths_figure(task, train, test, trajs, model, path: Path) -> Path:
         ax.plot(*tr.pos.T, color=color, lw=2, label=f"rollout from demo {5 + i}")
         draw_frames(ax, tr.pos, tr.quat, 0.06 * float(np.ptp(allp, axis=0).max()))
     ax.scatter(*model.goal_pos_, color="k", marker="*", s=80, label="goal")
-    ax.set_box_aspect(np.ptp(np.vstack([allp] + [tr.pos for tr in trajs]), axis=0))   # equal scales
+    extent = np.ptp(np.vstack([allp] + [tr.pos for tr in trajs]), axis=0)
+    ax.set_box_aspect(np.maximum(extent, 0.4 * extent.max()))       # near-equal scales, no axis squashed flat
     ax.set_xlabel("x (cm)")
     ax.set_ylabel("y (cm)")
     ax.set_zlabel("z (cm)")

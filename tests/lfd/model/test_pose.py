@@ -12,6 +12,7 @@ from sosdyn.errors import InputError
 from sosdyn.evaluation.poses import angles_deg
 from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
 from sosdyn.lfd.model.pose import PoseCDSP, chart_bound, load_pose_model, right_jacobian
+from sosdyn.lfd.model.pose_export import pose_to_python
 
 K_RATE = 0.8
 X_GOAL = np.array([0.4, -0.2, 0.3])
@@ -108,3 +109,15 @@ def test_save_load_round_trip(fitted, tmp_path):
     x, q = np.array([0.5, 0.1, 0.2]), Rotation.from_rotvec([0.1, 0.2, 0.3]).as_quat(scalar_first=True)
     np.testing.assert_allclose(np.concatenate(loaded.predictor()(x, q)), np.concatenate(fitted.predictor()(x, q)),
                                rtol=1e-12, atol=1e-14)
+
+
+def test_python_export_returns_the_same_velocities(fitted):
+    namespace = {}
+    exec(compile(pose_to_python(fitted), "pose_model.py", "exec"), namespace)
+    rng = np.random.default_rng(1)
+    for goal in (None, np.concatenate([fitted.goal_pos_ - 0.3, Rotation.from_rotvec([0.2, 0, 0.4]).as_quat(
+            scalar_first=True)])):
+        for _ in range(3):
+            x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1, 1, 3)).as_quat(scalar_first=True)
+            np.testing.assert_allclose(np.concatenate(namespace["predict_pose"](x, q, goal)),
+                                       np.concatenate(fitted.predictor()(x, q, goal)), rtol=1e-12, atol=1e-14)
