@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 from sosdyn.errors import InputError
 from sosdyn.evaluation.poses import angles_deg
 from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
+from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.pose import PoseCDSP, chart_bound, load_pose_model, right_jacobian
 from sosdyn.lfd.model.pose_export import pose_to_python
 
@@ -121,3 +122,10 @@ def test_python_export_returns_the_same_velocities(fitted):
             x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1, 1, 3)).as_quat(scalar_first=True)
             np.testing.assert_allclose(np.concatenate(namespace["predict_pose"](x, q, goal)),
                                        np.concatenate(fitted.predictor()(x, q, goal)), rtol=1e-12, atol=1e-14)
+
+
+def test_cdsp_points_pose_demos_to_posecdsp():
+    t = np.linspace(0.0, 1.0, 20)
+    demos = PoseDemonstrations([PoseDemonstration(t, *exact(*STARTS[0], t))])
+    with pytest.raises(InputError, match="PoseCDSP"):
+        CDSP().fit(demos)

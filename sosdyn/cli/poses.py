@@ -1,0 +1,67 @@
+"""``sosdyn fit-pose`` and ``sosdyn export-pose``: pose CSVs (t,x,y,z + a quaternion) to a certified
+:class:`~sosdyn.lfd.model.pose.PoseCDSP` file, and that file to a standalone Python evaluator.
+
+    sosdyn fit-pose demos/ --units cm --out pose.json        # headers t,x,y,z,qw,qx,qy,qz or ...,qx,qy,qz,qw
+    sosdyn export-pose pose.json --out pose_model.py         # predict_pose(x, quat, goal=None) -> (v, omega)
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+
+from ..lfd.data.poses import GOAL_TOL_DEG, load_pose_demos
+from ..lfd.model.fileformat import replace_atomically
+from ..lfd.model.pose import PoseCDSP, load_pose_model
+from ..lfd.model.pose_export import pose_to_python
+from .base import app, info, positive
+from .paths import check_folder, check_output, demo_inputs, existing
+
+
+@app.command("fit-pose")
+def fit_pose(
+    demos: Annotated[list[str], typer.Argument(help="Pose CSV files (header t,x,y,z,qw,qx,qy,qz or "
+                                                    "t,x,y,z,qx,qy,qz,qw), folders or quoted patterns.",
+                                               show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="Where to save the pose model (JSON).")] = Path(
+        "pose.json"),
+    units: Annotated[str, typer.Option(help="Units of the positions (recorded, not applied).")] = "",
+    dt: Annotated[float | None, typer.Option(callback=positive, help="Sampling step (s) of files without a "
+                                                                     "time column.")] = None,
+    goal_tol_deg: Annotated[float, typer.Option(help="Refuse end orientations farther than this (deg) from "
+                                                     "their mean; nearer ones are aligned to it.")] = GOAL_TOL_DEG,
+) -> None:
+    """Learn a certified pose model (position + orientation) from pose CSVs and save it."""
+    paths = demo_inputs(demos)
+    check_output(out_path, paths, "demonstration file")
+    check_folder(out_path.parent)
+    data = load_pose_demos(paths, units=units, dt=dt)
+    for note in data.notes:
+        if "renormalised" in note or "sign-flipped" in note:
+            info(escape(note))
+    start = time.perf_counter()
+    model = PoseCDSP(goal_tol_deg=goal_tol_deg).fit(data)
+    model.save(out_path)
+    report = model.cdsp_.verification_
+    moved = ", ".join(f"{a:.1f}" for a in model.orientation_moved_deg_)
+    info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} pose demonstrations, fit in "
+         f"{time.perf_counter() - start:.1f} s); end orientations aligned by {moved} deg")
+    info(f"certificate (6-D chart model): {'[green]passed[/]' if report.passed else '[red]FAILED[/]'} — min Gram "
+         f"eigenvalue {report.min_gram_eig:.2e}, max sampled generalised eigenvalue {report.max_sampled_eig:.2e}")
+
+
+@app.command("export-pose")
+def export_pose(
+    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit-pose`.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="The Python file to write.", show_default=False)],
+) -> None:
+    """Write a standalone Python evaluator (numpy + scipy) of a pose model: predict_pose -> (v, omega)."""
+    existing(model_path, "model file")
+    check_output(out_path, [model_path], "model file")
+    check_folder(out_path.parent)
+    source = pose_to_python(load_pose_model(model_path))
+    replace_atomically(out_path, source.encode("utf-8"))
+    info(f"[green]wrote[/] {escape(str(out_path))}  (python, {len(source.splitlines())} lines)")
