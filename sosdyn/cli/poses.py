@@ -3,6 +3,7 @@
 
     sosdyn fit-pose demos/ --units cm --out pose.json        # headers t,x,y,z,qw,qx,qy,qz or ...,qx,qy,qz,qw
     sosdyn export-pose pose.json --out pose_model.py         # predict_pose(x, quat, goal=None) -> (v, omega)
+    sosdyn export-pose pose.json --cpp --out pose.hpp     # pose_model_pose::predict_pose(x, quat, v, omega, goal)
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from rich.markup import escape
 from ..lfd.data.poses import GOAL_TOL_DEG, load_pose_demos
 from ..lfd.model.fileformat import replace_atomically
 from ..lfd.model.pose import PoseCDSP, load_pose_model
-from ..lfd.model.pose_export import pose_to_python
+from ..lfd.model.pose_export import pose_to_cpp, pose_to_python
 from .base import app, info, positive
 from .paths import check_folder, check_output, demo_inputs, existing
 
@@ -56,12 +57,15 @@ def fit_pose(
 @app.command("export-pose")
 def export_pose(
     model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit-pose`.", show_default=False)],
-    out_path: Annotated[Path, typer.Option("--out", "-o", help="The Python file to write.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="The file to write (.py or .hpp).",
+                                           show_default=False)],
+    cpp: Annotated[bool, typer.Option("--cpp", help="A header-only C++17 evaluator instead of Python.")] = False,
 ) -> None:
-    """Write a standalone Python evaluator (numpy + scipy) of a pose model: predict_pose -> (v, omega)."""
+    """Write a standalone evaluator of a pose model, predict_pose -> (v, omega): Python (numpy + scipy)
+    or, with --cpp, header-only C++17 (namespace pose_model_pose)."""
     existing(model_path, "model file")
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
-    source = pose_to_python(load_pose_model(model_path))
+    source = (pose_to_cpp if cpp else pose_to_python)(load_pose_model(model_path))
     replace_atomically(out_path, source.encode("utf-8"))
-    info(f"[green]wrote[/] {escape(str(out_path))}  (python, {len(source.splitlines())} lines)")
+    info(f"[green]wrote[/] {escape(str(out_path))}  ({'cpp' if cpp else 'python'}, {len(source.splitlines())} lines)")

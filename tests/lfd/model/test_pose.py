@@ -4,6 +4,9 @@ For this system |s|^2 is a contraction metric at rate 2k (its Jacobian is -k I),
 trajectory reaches the goal pose, and the solution is known in closed form:
 x(t) = x_g + e^{-kt} (x0 - x_g), R(t) = R_g exp(e^{-kt} r0).
 """
+import shutil
+import subprocess
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -13,7 +16,7 @@ from sosdyn.evaluation.poses import angles_deg
 from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.pose import PoseCDSP, chart_bound, load_pose_model, right_jacobian
-from sosdyn.lfd.model.pose_export import pose_to_python
+from sosdyn.lfd.model.pose_export import pose_to_cpp, pose_to_python
 
 K_RATE = 0.8
 X_GOAL = np.array([0.4, -0.2, 0.3])
@@ -129,3 +132,40 @@ def test_cdsp_points_pose_demos_to_posecdsp():
     demos = PoseDemonstrations([PoseDemonstration(t, *exact(*STARTS[0], t))])
     with pytest.raises(InputError, match="PoseCDSP"):
         CDSP().fit(demos)
+
+
+CPP_MAIN = """#include <cstdio>
+#include "pose.hpp"
+int main() {
+  double in[14], v[3], w[3];
+  while (std::scanf("%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", in, in + 1, in + 2, in + 3, in + 4,
+                    in + 5, in + 6, in + 7, in + 8, in + 9, in + 10, in + 11, in + 12, in + 13) == 14) {
+    const bool ok = pose_model_pose::predict_pose(in, in + 3, v, w, in[7] == 0 ? nullptr : in + 7);
+    std::printf("%.17g %.17g %.17g %.17g %.17g %.17g %d\\n", v[0], v[1], v[2], w[0], w[1], w[2], ok ? 1 : 0);
+  }
+}
+"""
+
+
+@pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
+def test_cpp_export_returns_the_same_velocities(fitted, tmp_path):
+    (tmp_path / "pose.hpp").write_text(pose_to_cpp(fitted))
+    (tmp_path / "main.cpp").write_text(CPP_MAIN)
+    subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(tmp_path / "main"),
+                    str(tmp_path / "main.cpp")], check=True, capture_output=True, text=True)
+    rng = np.random.default_rng(2)
+    goal = np.concatenate([fitted.goal_pos_ + 0.2, Rotation.from_rotvec([0, 0.3, 0.1]).as_quat(scalar_first=True)])
+    rows, expected = [], []
+    for g in (None, goal):
+        for _ in range(4):
+            x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1.5, 1.5, 3)).as_quat(scalar_first=True)
+            q = q if rng.random() < 0.5 else -q                        # either sign of the same rotation
+            rows.append(np.concatenate([x, q, np.zeros(7) if g is None else g]))
+            expected.append(np.concatenate(fitted.predictor()(x, q, g)))
+    far = (Rotation.from_quat(fitted.goal_quat_, scalar_first=True) * Rotation.from_rotvec([np.deg2rad(175), 0, 0]))
+    rows.append(np.concatenate([np.zeros(3), far.as_quat(scalar_first=True), np.zeros(7)]))    # near the cut locus
+    res = subprocess.run([str(tmp_path / "main")], input="\n".join(" ".join(repr(float(v)) for v in r) for r in rows),
+                         capture_output=True, text=True, check=True)
+    out = np.array([[float(v) for v in line.split()] for line in res.stdout.splitlines()])
+    assert (out[:-1, -1] == 1).all() and out[-1, -1] == 0
+    np.testing.assert_allclose(out[:-1, :6], np.array(expected), rtol=1e-10, atol=1e-12)
