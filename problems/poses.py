@@ -25,7 +25,7 @@ from sosdyn.evaluation.metrics import dtwd
 from sosdyn.evaluation.poses import angles_deg, arrival_index, orientation_dtw
 from sosdyn.lfd.data.poses import CHART_MARGIN, load_pose_demos
 from sosdyn.lfd.model.pose import PoseCDSP
-from problems.poses_figures import orientation_error_figure, paths_figure
+from sosdyn.report.figures.poses import orientation_error, pose_paths
 
 TASKS = ("openbox", "bottle2shelf", "platestandingtolying", "pouring")
 TRAIN, TEST = range(0, 5), range(5, 9)
@@ -80,11 +80,14 @@ def run_task(data: Path, task: str, test_ids, out_dir: Path) -> dict:
                "ori_le_2x_copy": mean["ori_dtw"] <= 2 * mean["copy_ori"],
                "final_pos_le_1pct": max(r["final_pos_frac"] for r in rows) <= POS_TOL,
                "final_ang_le_1deg": max(r["final_ang_deg"] for r in rows) <= ANG_TOL}
-    figs = {"paths": paths_figure(task, train, test, trajs, model, out_dir / f"{task}_paths.png"),
-            "orientation": orientation_error_figure(task, test, trajs, model, out_dir / f"{task}_orientation.png")}
+    labels = [f"demo {i}" for i in test_ids]
+    figs = {"paths": pose_paths(task, train, test, trajs, model.goal_pos_, "cm", labels),
+            "orientation": orientation_error(task, test, trajs, model.goal_quat_, labels)}
+    for kind, fig in figs.items():
+        fig.savefig(out_dir / f"{task}_{kind}.png", dpi=130)
     return {"task": task, "diag_cm": diag, "fit_s": fit_s, "n_test": len(test), "warp": model.cdsp_.warp_scores_,
             "rot_factor": model.rot_factor_, "end_alignment_deg": model.orientation_moved_deg_,
-            "rows": rows, "mean": mean, "targets": verdict, "figures": {k: v.name for k, v in figs.items()}}
+            "rows": rows, "mean": mean, "targets": verdict, "figures": {k: f"{task}_{k}.png" for k in figs}}
 
 
 def fmt(v, digits=2) -> str:
@@ -118,7 +121,7 @@ def write_html(results: dict, out_dir: Path) -> Path:
     figs = "".join(f"<figure><img src=\"{html.escape(r['figures'][k])}\" alt=\"{html.escape(r['task'])} {k}\">"
                    f"<figcaption>{html.escape(r['task'])}: {cap}</figcaption></figure>"
                    for r in results["tasks"] for k, cap in (
-                       ("paths", "training demos (grey), test demos (black) and the model's rollouts from their "
+                       ("paths", "training demos (grey), test demos (black, dashed) and the model's rollouts from their "
                                  "starts (colour), with orientation frames (x red, y green, z blue) along each rollout."),
                        ("orientation", "angle to the goal orientation over time: test demos (dashed) and rollouts "
                                        "(solid); the dotted line is 1 deg.")))

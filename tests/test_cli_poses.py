@@ -52,3 +52,8 @@ def test_fit_and_export_pose(tmp_path, capsys):
     row = np.loadtxt(demos / "d0.csv", delimiter=",", skiprows=1)[10]      # on the data: the known xdot = -x
     v, w = module.predict_pose(row[1:4], np.roll(row[4:], 1))
     np.testing.assert_allclose(v, -row[1:4], atol=0.02 * np.abs(row[1:4]).max())
+    code, out, err = run(capsys, "plot-pose", tmp_path / "pose.json", "--demos", demos, "--out", tmp_path / "p.png")
+    assert code == 0 and "8 demonstrations and rollouts" in out, err
+    assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
+    code, _, err = run(capsys, "plot-pose", tmp_path / "pose.json", "--demos", demos, "--out", tmp_path / "p.pdf")
+    assert_one_error_line(code, err, ".png or .svg", need_try=True)

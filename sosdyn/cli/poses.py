@@ -3,21 +3,27 @@
 
     sosdyn fit-pose demos/ --units cm --out pose.json        # headers t,x,y,z,qw,qx,qy,qz or ...,qx,qy,qz,qw
     sosdyn export-pose pose.json --out pose_model.py         # predict_pose(x, quat, goal=None) -> (v, omega)
+    sosdyn plot-pose pose.json --demos demos/ --out paths.png   # rollouts from the demos' starts, with frames
     sosdyn export-pose pose.json --cpp --out pose.hpp     # pose_model_pose::predict_pose(x, quat, v, omega, goal)
 """
 from __future__ import annotations
 
 import time
 from pathlib import Path
+
+import numpy as np
 from typing import Annotated
 
 import typer
 from rich.markup import escape
 
+from ..errors import InputError
+
 from ..lfd.data.poses import GOAL_TOL_DEG, load_pose_demos
 from ..lfd.model.fileformat import replace_atomically
 from ..lfd.model.pose import PoseCDSP, load_pose_model
 from ..lfd.model.pose_export import pose_to_cpp, pose_to_python
+from ..report.figures.poses import pose_paths
 from .base import app, info, positive
 from .paths import check_folder, check_output, demo_inputs, existing
 
@@ -69,3 +75,29 @@ def export_pose(
     source = (pose_to_cpp if cpp else pose_to_python)(load_pose_model(model_path))
     replace_atomically(out_path, source.encode("utf-8"))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({'cpp' if cpp else 'python'}, {len(source.splitlines())} lines)")
+
+
+@app.command("plot-pose")
+def plot_pose(
+    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit-pose`.", show_default=False)],
+    demos: Annotated[list[str], typer.Option(help="Pose CSVs (files, folders, patterns): drawn, and the model "
+                                                  "rolled out from each one's start.", show_default=False)],
+    out_path: Annotated[Path, typer.Option("--out", "-o", help="The figure (.png or .svg).")] = Path("pose.png"),
+    duration_factor: Annotated[float, typer.Option(callback=positive, help="Rollout duration over each "
+                                                                           "demo's duration.")] = 3.0,
+) -> None:
+    """Draw the demos and the model's rollouts from their starts in 3-D, with orientation frames."""
+    existing(model_path, "model file")
+    paths = demo_inputs(demos)
+    check_output(out_path, [model_path, *paths], "input")
+    check_folder(out_path.parent)
+    if out_path.suffix.lower() not in (".png", ".svg"):
+        raise InputError(f"--out {out_path.name}: the figure is written as .png or .svg. Try: --out pose.png")
+    model = load_pose_model(model_path)
+    data = load_pose_demos(paths)
+    trajs = [model.rollout(np.concatenate([d.pos[0], d.quat[0]]), duration_factor * (d.t[-1] - d.t[0]))
+             for d in data]
+    fig = pose_paths(model_path.stem, [], list(data), trajs, model.goal_pos_, model.cdsp_.units_,
+                     [Path(d.source).stem for d in data])
+    fig.savefig(out_path, dpi=130)
+    info(f"[green]wrote[/] {escape(str(out_path))}  ({len(data)} demonstrations and rollouts)")
