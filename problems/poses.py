@@ -124,7 +124,8 @@ def write_html(results: dict, out_dir: Path) -> Path:
                        ("paths", "training demos (grey), test demos (black, dashed) and the model's rollouts from their "
                                  "starts (colour), with orientation frames (x red, y green, z blue) along each rollout."),
                        ("orientation", "angle to the goal orientation over time: test demos (dashed) and rollouts "
-                                       "(solid); the dotted line is 1 deg.")))
+                                       "(solid); the dotted line is 1 deg. The test demos' own end orientations scatter a few "
+                                       "degrees around the goal (only the training ends were aligned to it).")))
     page = f"""<!doctype html><html lang="en"><head><meta charset="utf-8"><title>sosdyn: poses</title>
 <style>
   :root {{ --accent: #0072B2; --muted: #5f6670; --line: #d9dde3; }}
