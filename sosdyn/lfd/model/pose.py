@@ -33,7 +33,7 @@ from ..data.poses import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_
 from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.contraction import constant_index, eval_metric
 from ..fit.warp import apply as warp_apply, check_warp
-from .cdsp import CDSP
+from .cdsp import CDSP, DEFAULTS
 from .fileformat import read_model_file, write_model_file
 from .files import LOAD_SEED, model_from_content
 from .state import STATE_FIELDS, state_record
@@ -106,6 +106,10 @@ class PoseCDSP:
                 not 0 < goal_tol_deg < 180:
             raise InputError(f"goal_tol_deg must be a number in (0, 180), got {goal_tol_deg!r}.")
         self.goal_tol_deg = float(goal_tol_deg)
+        unknown = sorted(set(cdsp_params) - set(DEFAULTS))
+        if unknown:
+            raise InputError(f"PoseCDSP: unknown parameters {unknown}. Try: goal_tol_deg or a CDSP parameter "
+                             f"({', '.join(DEFAULTS)}).")
         self.cdsp_params = cdsp_params
         CDSP(**cdsp_params).check_params()
 

@@ -98,6 +98,10 @@ def test_goal_change_and_push(fitted):
 
 
 def test_bad_poses_refused(fitted):
+    with pytest.raises(InputError, match="unknown parameters \\['n_comp'\\]"):
+        PoseCDSP(n_comp=3)
+    with pytest.raises(InputError, match="goal_tol_deg"):
+        PoseCDSP(goal_tol_deg=200)
     with pytest.raises(InputError, match="7-vector"):
         fitted.rollout([0, 0, 0], 1.0)
     with pytest.raises(InputError, match="not unit"):
@@ -169,3 +173,18 @@ def test_cpp_export_returns_the_same_velocities(fitted, tmp_path):
     out = np.array([[float(v) for v in line.split()] for line in res.stdout.splitlines()])
     assert (out[:-1, -1] == 1).all() and out[-1, -1] == 0
     np.testing.assert_allclose(out[:-1, :6], np.array(expected), rtol=1e-10, atol=1e-12)
+
+
+def test_rollout_leaving_the_chart_is_refused(fitted, monkeypatch):
+    """Where the a-priori bound says nothing (inf), a chart trajectory reaching 175 deg is refused."""
+    real = fitted.cdsp_.rollout
+
+    def turning_away(s0, duration, dt=None, goal=None):
+        traj = real(s0, duration, dt=dt, goal=goal)
+        angle = np.linspace(0.5, np.deg2rad(175), len(traj.t))          # |r| growing towards the cut locus
+        traj.pos[:, 3:] = fitted.rot_factor_ * angle[:, None] * np.array([0.0, 0.6, 0.8])
+        return traj
+    monkeypatch.setattr(fitted.cdsp_, "rollout", turning_away)
+    monkeypatch.setattr("sosdyn.lfd.model.pose.chart_bound", lambda *args: np.inf)
+    with pytest.raises(InputError, match="out of the chart"):
+        fitted.rollout(np.concatenate([fitted.goal_pos_, fitted.goal_quat_]), 1.0, dt=0.05)
