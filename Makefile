@@ -7,7 +7,7 @@ PYTEST  := $(BIN)/python -m pytest
 # Small-matrix workloads: a multi-threaded OpenBLAS spin-waits (10-100x slower on 2 cores).
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: venv run test test-slow wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data warp-figure demo3d demo7d sweep report learner-table docs clean
+.PHONY: venv run test test-slow wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data warp-figure demo3d demo7d sweep report learner-table poses docs clean
 
 venv: $(STAMP)
 $(STAMP): pyproject.toml
@@ -38,7 +38,7 @@ bench-sos: venv
 	$(BIN)/python -m pip install -q -e '.[bench]'
 	$(BIN)/python -m problems bench-sos
 
-fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data warp-figure demo3d demo7d sweep report learner-table: venv
+fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data warp-figure demo3d demo7d sweep report learner-table poses: venv
 	$(BIN)/python -m problems $@
 
 docs: venv

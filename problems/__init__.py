@@ -24,6 +24,7 @@ EXPERIMENTS = {
     "demo7d": "demo7d",                # a certified CDSP from 5 noisy 7-D joint-space demonstrations
     "sweep": "sweep",                  # a hyper-parameter sweep (joblib processes, or a Dask cluster)
     "learner-table": "learner_table",
+    "poses": "poses",                  # certified pose models on the robottasks Franka demos
     "bench": "bench.learner",          # where the CDSP learner spends its time
     "bench-sos": "bench.sos",          # the SOS layer against SumOfSquares
 }

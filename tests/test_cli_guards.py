@@ -279,7 +279,7 @@ def test_json_text_depth(text, depth):
 def fit_raises(monkeypatch, demos):
     """``fit d0.csv d1.csv`` whose loader raises the given exception."""
     def arrange(exc):
-        def load(paths):
+        def load(paths, **read):
             raise exc
         monkeypatch.setattr(sd, "load_demos", load, raising=False)
         return [*demos[0]]

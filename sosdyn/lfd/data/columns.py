@@ -19,8 +19,9 @@ from sosdyn.errors import DemonstrationError, InputError
 TIME_NAMES = ("t", "time", "timestamp")
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 MAX_DEMO_SECONDS = 600.0
-#: Names of orientation columns (quaternions, Euler angles, rotation vectors): a pose model is
-#: not available yet, so files with them are refused with the option that selects the positions.
+#: Names of orientation columns (quaternions, Euler angles, rotation vectors): position models refuse
+#: files with them, naming the pose path (``sosdyn fit-pose`` / ``load_pose_demos``) and the option
+#: that selects the positions.
 ORIENTATION = re.compile(r"(q|quat|quaternion|orientation|rot|o)_?[wxyz]|roll|pitch|yaw|r[xyz]")
 TIME_UNITS_HINT = "--time-units (sosdyn fit / plot) or time_units= (load_demos)"
 COLUMNS_HINT = "--columns (sosdyn fit / plot) or columns= (load_demos)"
@@ -87,9 +88,9 @@ def refuse_unclaimed(header: list[str], used: set[int], positions: list[int], wh
     orientation = [h for h in extra if ORIENTATION.fullmatch(h)]
     if orientation:
         raise InputError(
-            f"{where}: orientation columns {orientation} are not supported yet (sosdyn learns positions; a "
-            f"pose model is planned). Try: select the position columns to ignore them, {COLUMNS_HINT}, "
-            f"e.g. --columns {positions or 'x,y,z'}.")
+            f"{where}: orientation columns {orientation} in a position model. Try: a pose model from "
+            f"quaternion columns (sosdyn fit-pose, or sd.load_pose_demos + sd.PoseCDSP), or select the "
+            f"position columns to ignore them, {COLUMNS_HINT}, e.g. --columns {positions or 'x,y,z'}.")
     raise InputError(
         f"{where}: columns {extra} are neither time, demo id, positions nor velocities, and would be "
         f"ignored. Try: select the position columns explicitly, {COLUMNS_HINT}, e.g. --columns "

@@ -1,8 +1,9 @@
 """The fitted model: the :class:`CDSP` estimator (it holds state; the maths is in ``fit``),
 its state record (``state``), the signed JSON file format (``fileformat``) and loading /
-saving model files (``files``).
+saving model files (``files``); the pose model :class:`PoseCDSP` (``pose``, ``pose_export``).
 """
 from .cdsp import CDSP
 from .files import load_model, save_model
+from .pose import PoseCDSP, load_pose_model
 
-__all__ = ["CDSP", "load_model", "save_model"]
+__all__ = ["CDSP", "PoseCDSP", "load_model", "load_pose_model", "save_model"]

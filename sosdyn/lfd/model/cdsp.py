@@ -43,6 +43,7 @@ from ..fit.certificate import (
 from ..fit.contraction import eval_fields, field_exponents, metric_exponents
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
 from ..data.demonstrations import check_demonstrations, sample_step
+from ..data.poses import PoseDemonstrations
 from ..runtime.predictor import StatePredictor
 from ..runtime.states import as_state, as_states, check_max_speed, limit_speed
 from ..fit.gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost
@@ -199,6 +200,9 @@ class CDSP:
     def _fit(self, demos):
         t_start = time.perf_counter()
         self.check_params()
+        if isinstance(demos, PoseDemonstrations):
+            raise InputError("these are pose demonstrations (position + orientation). Try: sosdyn.PoseCDSP(**params)"
+                             ".fit(demos), the certified CDSP of the 6-D chart state (same parameters).")
         demos = check_demonstrations(demos)
         if self.warp == "auto":
             return self._fit_auto(demos, t_start)

@@ -1,0 +1,257 @@
+"""PoseCDSP: a certified model of position and orientation (docs/theory.md, "Poses").
+
+State s = (x, c r) in R^6: the position x and the rotation vector r = log(R_g^T R) of the
+orientation in the chart at the goal orientation R_g (:func:`~sosdyn.lfd.data.poses.chart`),
+r scaled by ``rot_factor_`` c = max |x - x_g|_inf / max |r|_inf over the training data (each block
+by its own data scale, so the two are commensurate). A :class:`~.cdsp.CDSP` is fitted on the 6-D
+demonstrations: positions and orientations coupled, its usual certificate (contraction at rate
+gamma in the metric, SOS + sampled check + the warp's numbers) on R^6 with goal (x_g, 0).
+
+Carrying over to rotations: exp_{R_g}: r -> R_g exp(r) is a diffeomorphism of the open ball
+|r| < pi onto SO(3) minus the cut locus {angle(R_g^T R) = pi}; a chart trajectory that stays in
+the ball is a rotation trajectory, and r -> 0 is R -> R_g. The ball is kept: with a constant
+metric M (metric_degree 0) the certificate gives d/dt (u^T M u) <= -gamma u^T M u (u = z, or
+phi(z) with a warp), so the ellipsoid through the start is invariant and
+|r(t)| <= :func:`chart_bound` (z0) for all t; a rollout whose bound is not below
+pi - CHART_MARGIN is checked sample by sample and refused (InputError) if it would leave.
+
+Rollout: the chart state is integrated (the CDSP's integrator) and mapped by R = R_g exp(r):
+unit quaternions by construction, no drift off the sphere. Velocities: v = xdot, and the world
+angular velocity omega = R J_r(r) rdot (:func:`right_jacobian`, the right Jacobian of SO(3):
+R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r)).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from sosdyn.errors import InputError, ModelFileError, NotFittedError
+from ..data.poses import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart,
+                          chart_demonstrations, goal_orientation)
+from ..fit.certificate import DEFAULT_SAMPLES
+from ..fit.contraction import constant_index, eval_metric
+from ..fit.warp import apply as warp_apply, check_warp
+from .cdsp import CDSP, DEFAULTS
+from .fileformat import read_model_file, write_model_file
+from .files import LOAD_SEED, model_from_content
+from .state import STATE_FIELDS, state_record
+
+POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 1
+SMALL_ANGLE = 1e-4               # below this |r| the right Jacobian's series is used
+
+
+def right_jacobian(r) -> np.ndarray:
+    """J_r(r) = I - (1 - cos t)/t^2 [r]_x + (t - sin t)/t^3 [r]_x^2, t = |r| (series below SMALL_ANGLE)."""
+    r = np.asarray(r, dtype=float)
+    t = float(np.linalg.norm(r))
+    K = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    a, b = ((0.5 - t * t / 24.0, 1.0 / 6.0 - t * t / 120.0) if t < SMALL_ANGLE
+            else ((1.0 - np.cos(t)) / t**2, (t - np.sin(t)) / t**3))
+    return np.eye(3) - a * K + b * K @ K
+
+
+def metric_matrix(model: CDSP) -> np.ndarray | None:
+    """The certified metric M when it is constant (metric_degree 0 or identity), else None."""
+    used = np.abs(model.W_).max(axis=(0, 1)) > 0
+    k = constant_index(model.metric_exps_)
+    return None if used.sum() != 1 or not used[k] else \
+        eval_metric(model.W_, model.metric_exps_, np.zeros((1, model.dim_)))[0]
+
+
+def chart_bound(model: CDSP, z0, rot_factor: float) -> float:
+    """An upper bound on sup_t |r(t)| from the start z0 (z-units): with u = phi(z) and constant M,
+    u^T M u is non-increasing, so |r| = s |z_r| / c <= s / c * sqrt(u0^T M u0) * b with b =
+    sqrt(lambda_max(P M^-1 P^T)) (P picks the r block; no warp) or 1 / (sqrt(lambda_min M) prod(1 - l_j))
+    (warp: |z| <= |u| / prod(1 - l_j)). inf when M is not constant."""
+    M = metric_matrix(model)
+    if M is None:
+        return np.inf
+    z0 = np.asarray(z0, dtype=float)
+    if model.warp_ is None:
+        level, Minv = float(z0 @ M @ z0), np.linalg.inv(M)
+        b = np.sqrt(np.linalg.eigvalsh(Minv[3:, 3:]).max())
+    else:
+        u0 = warp_apply(z0[None], *model._maps(), np.zeros(model.dim_))[0]
+        level = float(u0 @ M @ u0)
+        lower = check_warp(model._maps(), 1, 0)["singular_bound"]
+        b = 1.0 / (np.sqrt(np.linalg.eigvalsh(M).min()) * lower) if lower > 0 else np.inf
+    return float(model.scale_ / rot_factor * np.sqrt(max(level, 0.0)) * b)
+
+
+@dataclass
+class PoseTrajectory:
+    """A pose rollout: ``t`` (T,), ``pos`` (T, 3), ``quat`` (T, 4 unit, w x y z), ``chart_bounds``:
+    the a-priori bound on the angle from the goal (radians) of each segment (between events)."""
+
+    t: np.ndarray
+    pos: np.ndarray
+    quat: np.ndarray
+    chart_bounds: list = field(default_factory=list)
+
+
+class PoseCDSP:
+    """Learn a certified pose motion (position and orientation) from :class:`PoseDemonstrations`.
+
+    ``goal_tol_deg``: end orientations further than this from their chordal mean are refused
+    (they are aligned to it otherwise, ``orientation_moved_deg_``); every other keyword is a
+    :class:`CDSP` parameter of the 6-D chart model ``cdsp_``.
+    """
+
+    name = "PoseCDSP"
+
+    def __init__(self, goal_tol_deg: float = GOAL_TOL_DEG, **cdsp_params):
+        if isinstance(goal_tol_deg, bool) or not isinstance(goal_tol_deg, (int, float)) or \
+                not 0 < goal_tol_deg < 180:
+            raise InputError(f"goal_tol_deg must be a number in (0, 180), got {goal_tol_deg!r}.")
+        self.goal_tol_deg = float(goal_tol_deg)
+        unknown = sorted(set(cdsp_params) - set(DEFAULTS))
+        if unknown:
+            raise InputError(f"PoseCDSP: unknown parameters {unknown}. Try: goal_tol_deg or a CDSP parameter "
+                             f"({', '.join(DEFAULTS)}).")
+        self.cdsp_params = cdsp_params
+        CDSP(**cdsp_params).check_params()
+
+    def fit(self, demos: PoseDemonstrations) -> PoseCDSP:
+        """Goal orientation, aligned ends, the chart, the scale c, then the certified 6-D CDSP."""
+        if not isinstance(demos, PoseDemonstrations):
+            raise InputError(f"PoseCDSP.fit takes PoseDemonstrations (sosdyn.lfd.data.poses.load_pose_demos), "
+                             f"got {type(demos).__name__}.")
+        goal_quat = goal_orientation(demos)
+        aligned, self.orientation_moved_deg_ = align_orientations(demos, goal_quat, self.goal_tol_deg)
+        X = np.vstack([d.pos for d in aligned])
+        R = np.vstack([chart(d.quat, goal_quat) for d in aligned])
+        pos_scale, rot_scale = np.abs(X - aligned.goal_pos).max(), np.abs(R).max()
+        self.rot_factor_ = float(pos_scale / rot_scale) if rot_scale > 0 and pos_scale > 0 else 1.0
+        self.goal_quat_ = goal_quat
+        self.cdsp_ = CDSP(**self.cdsp_params).fit(chart_demonstrations(aligned, goal_quat, self.rot_factor_))
+        return self
+
+    # ------------------------------------------------------------------ state and chart
+    def _check_fitted(self):
+        if not hasattr(self, "cdsp_"):
+            raise NotFittedError("this PoseCDSP is not fitted yet; call fit(pose_demos) first")
+
+    @property
+    def goal_pos_(self) -> np.ndarray:
+        return self.cdsp_.goal_[:3]
+
+    @property
+    def certified_(self) -> bool:
+        return bool(self.cdsp_.certified_)
+
+    def _pose(self, p, what: str) -> tuple[np.ndarray, np.ndarray]:
+        p = np.asarray(p, dtype=float)
+        if p.shape != (7,) or not np.isfinite(p).all():
+            raise InputError(f"{what} must be a finite 7-vector (x, y, z, qw, qx, qy, qz), got shape {p.shape}.")
+        if not 0.5 < np.linalg.norm(p[3:]) < 1.5:
+            raise InputError(f"{what}: the quaternion {p[3:]} is not unit (norm {np.linalg.norm(p[3:]):.3g}).")
+        return p[:3], p[3:] / np.linalg.norm(p[3:])
+
+    def _goal(self, goal) -> tuple[np.ndarray, np.ndarray]:
+        return (self.goal_pos_, self.goal_quat_) if goal is None else self._pose(goal, "goal")
+
+    def state(self, x, quat, goal_quat) -> np.ndarray:
+        """s = (x, c r), r = log(R_g^T R) (refused near the cut locus)."""
+        return np.concatenate([x, self.rot_factor_ * chart(quat, goal_quat, "the start orientation")[0]])
+
+    def orientation(self, S, goal_quat) -> np.ndarray:
+        """Unit quaternions (w x y z) R_g exp(r) of the chart states S (m, 6)."""
+        Rg = Rotation.from_quat(goal_quat, scalar_first=True)
+        return (Rg * Rotation.from_rotvec(S[:, 3:] / self.rot_factor_)).as_quat(scalar_first=True)
+
+    # ------------------------------------------------------------------ motion
+    def predictor(self, goal=None):
+        """``step(x, quat, goal=None) -> (v, omega)``: linear velocity (3,) and world angular velocity
+        (3,) at the position x and orientation quat (w x y z), for the goal pose (7-vector; default
+        the model's, fixed here or per call)."""
+        self._check_fitted()
+        fixed = self._goal(goal)
+        step6 = self.cdsp_.predictor()
+        g6 = self.cdsp_.goal_
+
+        def step(x, quat, goal=None):
+            gx, gq = fixed if goal is None else self._pose(goal, "goal")
+            x = np.asarray(x, dtype=float)
+            s = self.state(x, np.asarray(quat, dtype=float), gq)
+            sdot = step6(s - np.concatenate([gx, np.zeros(3)]) + g6)
+            r, rdot = s[3:] / self.rot_factor_, sdot[3:] / self.rot_factor_
+            R = Rotation.from_quat(gq, scalar_first=True) * Rotation.from_rotvec(r)
+            return sdot[:3], R.apply(right_jacobian(r) @ rdot)
+        return step
+
+    def rollout(self, p0, duration, dt=None, goal=None, pushes=(), goal_changes=()) -> PoseTrajectory:
+        """Integrate from the pose p0 = (x, y, z, qw, qx, qy, qz) for ``duration`` s; ``pushes``
+        [(t, (dx, dy, dz, wx, wy, wz))]: x += dx and R <- exp(w) R (world rotation vector);
+        ``goal_changes`` [(t, goal pose)]. Between events the chart state at the goal in effect is
+        integrated and mapped back (module docstring); a segment whose a-priori bound is not below
+        pi - CHART_MARGIN and whose samples leave it is refused."""
+        self._check_fitted()
+        x, q = self._pose(p0, "p0")
+        gx, gq = self._goal(goal)
+        events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in pushes] +
+                        [(float(t), 1, np.asarray(g, dtype=float)) for t, g in goal_changes], key=lambda e: e[:2])
+        if any(not 0 <= e[0] < duration for e in events) or any(k == 0 and d.shape != (6,) for _, k, d in events):
+            raise InputError(f"events must lie in [0, duration = {duration}) and pushes be 6-vectors (dx, w).")
+        ts, P, Q, bounds, t0 = [], [], [], [], 0.0
+        for t_end, kind, data in events + [(float(duration), -1, None)]:
+            if t_end > t0:
+                traj = self._segment(x, q, gx, gq, t_end - t0, dt, bounds)
+                keep = slice(1 if ts else 0, None)
+                ts.append(t0 + traj.t[keep])
+                P.append(traj.pos[keep, :3])
+                Q.append(self.orientation(traj.pos, gq)[keep])
+                x, q, t0 = traj.pos[-1, :3], Q[-1][-1] if len(Q[-1]) else q, t_end
+            if kind == 0:
+                x = x + data[:3]
+                q = (Rotation.from_rotvec(data[3:]) * Rotation.from_quat(q, scalar_first=True)).as_quat(
+                    scalar_first=True)
+            elif kind == 1:
+                gx, gq = self._pose(data, "goal change")
+        return PoseTrajectory(np.concatenate(ts), np.vstack(P), np.vstack(Q), bounds)
+
+    def _segment(self, x, q, gx, gq, duration, dt, bounds):
+        s0 = self.state(x, q, gq)
+        g6 = np.concatenate([gx, np.zeros(3)])
+        bound = chart_bound(self.cdsp_, (s0 - g6) / self.cdsp_.scale_, self.rot_factor_)
+        bounds.append(bound)
+        traj = self.cdsp_.rollout(s0, duration, dt=dt, goal=g6)
+        angle = np.linalg.norm(traj.pos[:, 3:], axis=1) / self.rot_factor_
+        if bound >= np.pi - CHART_MARGIN and angle.max() >= np.pi - CHART_MARGIN:
+            raise InputError(f"the rollout turns {np.rad2deg(angle.max()):.0f} deg from the goal orientation, "
+                             "out of the chart (cut locus at 180 deg). Try: a start nearer the demonstrations.")
+        return traj
+
+    # ------------------------------------------------------------------ evidence and files
+    def verify(self, n_samples=None, seed=None):
+        """The 6-D model's certificate check (:meth:`CDSP.verify`)."""
+        self._check_fitted()
+        return self.cdsp_.verify(n_samples, seed)
+
+    def save(self, path, key=None):
+        """The pose model file: the 6-D CDSP's params and state, the goal orientation and c."""
+        self._check_fitted()
+        from_state = self.cdsp_
+        content = {"format": POSE_FORMAT, "version": POSE_VERSION, "goal_tol_deg": self.goal_tol_deg,
+                   "goal_quat": self.goal_quat_, "rot_factor": self.rot_factor_,
+                   "params": dict(from_state.get_params(), random_state=from_state.seed_),
+                   "state": state_record({k: getattr(from_state, k) for k in STATE_FIELDS})}
+        return write_model_file(content, path, key)
+
+
+def load_pose_model(path, key=None) -> PoseCDSP:
+    """Read a file written by :meth:`PoseCDSP.save`: every CDSP field validated, the goal orientation
+    a unit quaternion, c > 0, and the certificate re-checked (as :func:`~.files.load_model`)."""
+    content = read_model_file(path, key, POSE_FORMAT, POSE_VERSION)
+    q, c = np.asarray(content.get("goal_quat", []), dtype=float), content.get("rot_factor")
+    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-9 or not isinstance(c, (int, float)) or not c > 0:
+        raise ModelFileError(f"{path}: goal_quat must be a unit 4-vector and rot_factor > 0. Try: refit and save.")
+    model = PoseCDSP(content.get("goal_tol_deg", GOAL_TOL_DEG))
+    model.cdsp_ = model_from_content(content)
+    report = model.cdsp_.verify(DEFAULT_SAMPLES, LOAD_SEED)
+    if not report.passed:
+        raise ModelFileError(f"{path}: the stored certificate does not check out; refusing to load.\n{report}")
+    model.cdsp_.verification_, model.cdsp_.certified_ = report, True
+    model.goal_quat_, model.rot_factor_ = q, float(c)
+    return model

@@ -1,0 +1,70 @@
+"""Pose figures: 3-D paths with orientation frames, and the angle to the goal orientation over time.
+
+Both take plain data: demonstrations with ``.t``, ``.pos`` (T, 3), ``.quat`` (T, 4, w x y z) and
+rollouts with the same fields; they return a :class:`matplotlib.figure.Figure`.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from sosdyn.evaluation.poses import angles_deg
+from .style import new_figure, styled
+
+ROLLOUT_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9")
+FRAME_COLORS = ("#d62728", "#2ca02c", "#1f77b4")     # x, y, z axes of a frame
+N_FRAMES = 7
+FLOOR = 1e-3                 # angles below this (deg) are drawn at it (log axis)
+
+
+def draw_frames(ax, pos, quat, length: float) -> None:
+    """Orientation triads (x red, y green, z blue) at N_FRAMES samples equally spaced along pos."""
+    idx = np.unique(np.linspace(0, len(pos) - 1, N_FRAMES).astype(int))
+    axes = Rotation.from_quat(quat[idx], scalar_first=True).as_matrix() * length     # columns = body axes
+    for k, color in enumerate(FRAME_COLORS):
+        ax.quiver(*pos[idx].T, *axes[:, :, k].T, color=color, lw=1.0, arrow_length_ratio=0.0)
+
+
+@styled
+def pose_paths(title, background, demos, trajs, goal_pos, units: str = "", labels=None):
+    """Background demos (grey), demos (black, dashed) and rollouts (colour) with frames, the goal (star)."""
+    fig = new_figure(7.0, 5.6)
+    ax = fig.add_subplot(projection="3d")
+    allp = np.vstack([d.pos for d in list(background) + list(demos)])
+    for d in background:
+        ax.plot(*d.pos.T, color="0.7", lw=1)
+    for i, (d, tr) in enumerate(zip(demos, trajs)):
+        ax.plot(*d.pos.T, color="k", lw=1, ls="--", label="demo" if i == 0 else None)
+        ax.plot(*tr.pos.T, color=ROLLOUT_COLORS[i % len(ROLLOUT_COLORS)], lw=2,
+                label=f"rollout from {labels[i] if labels else f'demo {i}'}")
+        draw_frames(ax, tr.pos, tr.quat, 0.06 * float(np.ptp(allp, axis=0).max()))
+    ax.scatter(*goal_pos, color="k", marker="*", s=80, label="goal")
+    extent = np.ptp(np.vstack([allp] + [tr.pos for tr in trajs]), axis=0)
+    ax.set_box_aspect(np.maximum(extent, 0.4 * extent.max()))       # near-equal scales, no axis squashed flat
+    unit = f" ({units})" if units else ""
+    ax.set_xlabel(f"x{unit}")
+    ax.set_ylabel(f"y{unit}")
+    ax.set_zlabel(f"z{unit}")
+    ax.set_title(f"{title}: paths and orientation frames")
+    ax.legend(loc="upper left", fontsize=7)
+    return fig
+
+
+@styled
+def orientation_error(title, demos, trajs, goal_quat, labels=None):
+    """Angle to the goal orientation (deg, log axis) over time: demos dashed, rollouts solid; 1 deg dotted."""
+    fig = new_figure(7.0, 3.0)
+    ax = fig.add_subplot()
+    for i, (d, tr) in enumerate(zip(demos, trajs)):
+        color = ROLLOUT_COLORS[i % len(ROLLOUT_COLORS)]
+        ax.plot(d.t - d.t[0], np.maximum(angles_deg(d.quat, goal_quat), FLOOR), color=color, ls="--", lw=1)
+        ax.plot(tr.t, np.maximum(angles_deg(tr.quat, goal_quat), FLOOR), color=color, lw=1.8,
+                label=labels[i] if labels else f"demo {i}")
+    ax.axhline(1.0, color="0.4", ls=":", lw=1)
+    ax.set_yscale("log")
+    ax.set_ylim(FLOOR, 200)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("angle to goal (deg)")
+    ax.set_title(f"{title}: orientation error (dashed: demo, solid: rollout)")
+    ax.legend(ncol=4, loc="upper right")
+    return fig

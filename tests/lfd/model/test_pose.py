@@ -1,0 +1,190 @@
+"""PoseCDSP against a known answer: xdot = -k (x - x_g), rdot = -k r in the chart at R_g.
+
+For this system |s|^2 is a contraction metric at rate 2k (its Jacobian is -k I), every
+trajectory reaches the goal pose, and the solution is known in closed form:
+x(t) = x_g + e^{-kt} (x0 - x_g), R(t) = R_g exp(e^{-kt} r0).
+"""
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from sosdyn.errors import InputError
+from sosdyn.evaluation.poses import angles_deg
+from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
+from sosdyn.lfd.model.cdsp import CDSP
+from sosdyn.lfd.model.pose import PoseCDSP, chart_bound, load_pose_model, right_jacobian
+from sosdyn.lfd.model.pose_export import pose_to_cpp, pose_to_python
+
+K_RATE = 0.8
+X_GOAL = np.array([0.4, -0.2, 0.3])
+R_GOAL = Rotation.from_rotvec([0.3, -0.5, 0.2])
+Q_GOAL = R_GOAL.as_quat(scalar_first=True)
+_RNG = np.random.default_rng(3)
+#: 8 starts: straight-line demos s(t) = e^{-kt} s0 span R^6 only with >= 6 independent starts.
+STARTS = [(X_GOAL + 0.4 * _RNG.normal(size=3), 1.2 * _RNG.uniform(-1, 1, size=3)) for _ in range(8)]
+
+
+def exact(x0, r0, t):
+    decay = np.exp(-K_RATE * t)[:, None]
+    return X_GOAL + decay * (x0 - X_GOAL), (R_GOAL * Rotation.from_rotvec(decay * r0)).as_quat(scalar_first=True)
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    t = np.linspace(0.0, 12.0, 240)
+    demos = PoseDemonstrations([PoseDemonstration(t, *exact(x0, r0, t), f"start {i}")
+                                for i, (x0, r0) in enumerate(STARTS)], "known", "m")
+    return PoseCDSP(n_components=1, warp="none", max_samples=400).fit(demos)
+
+
+def test_known_system_certified_and_converges(fitted):
+    assert fitted.certified_ and fitted.verify().passed
+    assert angles_deg(fitted.goal_quat_, Q_GOAL)[0] < 0.01        # demos end 0.005 deg short
+    x0, r0 = np.array([0.2, 0.2, 0.6]), np.array([0.4, 0.8, -0.6])      # a start of no demo
+    traj = fitted.rollout(np.concatenate([x0, (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)]),
+                          12.0, dt=0.05)
+    x_true, q_true = exact(x0, r0, traj.t)
+    np.testing.assert_allclose(np.linalg.norm(traj.quat, axis=1), 1.0, atol=1e-12)       # on the sphere
+    assert angles_deg(traj.quat, q_true).max() < 1.0                     # follows the true rotation
+    assert np.abs(traj.pos - x_true).max() < 0.01
+    assert angles_deg(traj.quat[-1], Q_GOAL)[0] < 1.0                    # geodesic error at the end
+    assert np.rad2deg(max(traj.chart_bounds)) < 170                      # the ball provably kept
+
+
+def test_chart_bound_holds_along_rollouts(fitted):
+    for angle in (0.5, 1.5, 2.5):
+        r0 = angle * np.array([0.6, 0.0, 0.8])
+        p0 = np.concatenate([X_GOAL + 0.3, (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)])
+        traj = fitted.rollout(p0, 10.0, dt=0.05)
+        reached = np.deg2rad(angles_deg(traj.quat, Q_GOAL)).max()
+        assert reached <= traj.chart_bounds[0] + 1e-9
+        s0 = fitted.state(p0[:3], p0[3:], fitted.goal_quat_) - np.concatenate([fitted.goal_pos_, np.zeros(3)])
+        assert chart_bound(fitted.cdsp_, s0 / fitted.cdsp_.scale_, fitted.rot_factor_) == traj.chart_bounds[0]
+
+
+def test_predictor_gives_world_angular_velocity(fitted):
+    x0, r0 = np.array([0.5, 0.0, 0.2]), np.array([0.3, -0.7, 0.5])
+    q0 = (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)
+    v, w = fitted.predictor()(x0, q0)
+    h = 1e-5                                                             # the known answer, differentiated
+    x1, q1 = exact(x0, r0, np.array([h]))
+    np.testing.assert_allclose(v, (x1[0] - x0) / h, atol=2e-3)
+    w_true = (Rotation.from_quat(q1[0], scalar_first=True) * Rotation.from_quat(q0, scalar_first=True).inv()
+              ).as_rotvec() / h
+    np.testing.assert_allclose(w, w_true, atol=2e-3)
+    goal = np.concatenate([fitted.goal_pos_ + 1.0, fitted.goal_quat_])  # a moved goal: translated field
+    v2, w2 = fitted.predictor(goal)(x0 + 1.0, q0)
+    np.testing.assert_allclose(np.concatenate([v2, w2]), np.concatenate([v, w]), atol=1e-12)
+
+
+def test_right_jacobian_matches_the_exponential():
+    rng = np.random.default_rng(0)
+    for r in (rng.normal(size=3), 1e-6 * rng.normal(size=3), 2.9 * np.array([0.0, 0.6, 0.8])):
+        d, h = rng.normal(size=3), 1e-6
+        body = (Rotation.from_rotvec(r).inv() * Rotation.from_rotvec(r + h * d)).as_rotvec() / h
+        np.testing.assert_allclose(right_jacobian(r) @ d, body, atol=1e-5)
+
+
+def test_goal_change_and_push(fitted):
+    p0 = np.concatenate([X_GOAL + 0.2, Q_GOAL])
+    turned = Rotation.from_rotvec([0, 0, 0.6]) * R_GOAL
+    goal2 = np.concatenate([X_GOAL - 0.1, turned.as_quat(scalar_first=True)])
+    traj = fitted.rollout(p0, 20.0, dt=0.05, pushes=[(2.0, [0.1, 0, 0, 0.3, 0, 0])], goal_changes=[(6.0, goal2)])
+    assert np.all(np.diff(traj.t) > 0)
+    assert angles_deg(traj.quat[-1], goal2[3:])[0] < 0.1 and np.linalg.norm(traj.pos[-1] - goal2[:3]) < 1e-3
+
+
+def test_bad_poses_refused(fitted):
+    with pytest.raises(InputError, match="unknown parameters \\['n_comp'\\]"):
+        PoseCDSP(n_comp=3)
+    with pytest.raises(InputError, match="goal_tol_deg"):
+        PoseCDSP(goal_tol_deg=200)
+    with pytest.raises(InputError, match="7-vector"):
+        fitted.rollout([0, 0, 0], 1.0)
+    with pytest.raises(InputError, match="not unit"):
+        fitted.rollout([0, 0, 0, 3, 0, 0, 0], 1.0)
+    far = (R_GOAL * Rotation.from_rotvec([0, np.deg2rad(175), 0])).as_quat(scalar_first=True)
+    with pytest.raises(InputError, match="cut locus|not defined at 180"):
+        fitted.rollout(np.concatenate([X_GOAL, far]), 1.0)
+
+
+def test_save_load_round_trip(fitted, tmp_path):
+    path = fitted.save(tmp_path / "pose.json")
+    loaded = load_pose_model(path)
+    x, q = np.array([0.5, 0.1, 0.2]), Rotation.from_rotvec([0.1, 0.2, 0.3]).as_quat(scalar_first=True)
+    np.testing.assert_allclose(np.concatenate(loaded.predictor()(x, q)), np.concatenate(fitted.predictor()(x, q)),
+                               rtol=1e-12, atol=1e-14)
+
+
+def test_python_export_returns_the_same_velocities(fitted):
+    namespace = {}
+    exec(compile(pose_to_python(fitted), "pose_model.py", "exec"), namespace)
+    rng = np.random.default_rng(1)
+    for goal in (None, np.concatenate([fitted.goal_pos_ - 0.3, Rotation.from_rotvec([0.2, 0, 0.4]).as_quat(
+            scalar_first=True)])):
+        for _ in range(3):
+            x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1, 1, 3)).as_quat(scalar_first=True)
+            np.testing.assert_allclose(np.concatenate(namespace["predict_pose"](x, q, goal)),
+                                       np.concatenate(fitted.predictor()(x, q, goal)), rtol=1e-12, atol=1e-14)
+
+
+def test_cdsp_points_pose_demos_to_posecdsp():
+    t = np.linspace(0.0, 1.0, 20)
+    demos = PoseDemonstrations([PoseDemonstration(t, *exact(*STARTS[0], t))])
+    with pytest.raises(InputError, match="PoseCDSP"):
+        CDSP().fit(demos)
+
+
+CPP_MAIN = """#include <cstdio>
+#include "pose.hpp"
+int main() {
+  double in[14], v[3], w[3];
+  while (std::scanf("%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", in, in + 1, in + 2, in + 3, in + 4,
+                    in + 5, in + 6, in + 7, in + 8, in + 9, in + 10, in + 11, in + 12, in + 13) == 14) {
+    const bool ok = pose_model_pose::predict_pose(in, in + 3, v, w, in[7] == 0 ? nullptr : in + 7);
+    std::printf("%.17g %.17g %.17g %.17g %.17g %.17g %d\\n", v[0], v[1], v[2], w[0], w[1], w[2], ok ? 1 : 0);
+  }
+}
+"""
+
+
+@pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
+def test_cpp_export_returns_the_same_velocities(fitted, tmp_path):
+    (tmp_path / "pose.hpp").write_text(pose_to_cpp(fitted))
+    (tmp_path / "main.cpp").write_text(CPP_MAIN)
+    subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(tmp_path / "main"),
+                    str(tmp_path / "main.cpp")], check=True, capture_output=True, text=True)
+    rng = np.random.default_rng(2)
+    goal = np.concatenate([fitted.goal_pos_ + 0.2, Rotation.from_rotvec([0, 0.3, 0.1]).as_quat(scalar_first=True)])
+    rows, expected = [], []
+    for g in (None, goal):
+        for _ in range(4):
+            x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1.5, 1.5, 3)).as_quat(scalar_first=True)
+            q = q if rng.random() < 0.5 else -q                        # either sign of the same rotation
+            rows.append(np.concatenate([x, q, np.zeros(7) if g is None else g]))
+            expected.append(np.concatenate(fitted.predictor()(x, q, g)))
+    far = (Rotation.from_quat(fitted.goal_quat_, scalar_first=True) * Rotation.from_rotvec([np.deg2rad(175), 0, 0]))
+    rows.append(np.concatenate([np.zeros(3), far.as_quat(scalar_first=True), np.zeros(7)]))    # near the cut locus
+    res = subprocess.run([str(tmp_path / "main")], input="\n".join(" ".join(repr(float(v)) for v in r) for r in rows),
+                         capture_output=True, text=True, check=True)
+    out = np.array([[float(v) for v in line.split()] for line in res.stdout.splitlines()])
+    assert (out[:-1, -1] == 1).all() and out[-1, -1] == 0
+    np.testing.assert_allclose(out[:-1, :6], np.array(expected), rtol=1e-10, atol=1e-12)
+
+
+def test_rollout_leaving_the_chart_is_refused(fitted, monkeypatch):
+    """Where the a-priori bound says nothing (inf), a chart trajectory reaching 175 deg is refused."""
+    real = fitted.cdsp_.rollout
+
+    def turning_away(s0, duration, dt=None, goal=None):
+        traj = real(s0, duration, dt=dt, goal=goal)
+        angle = np.linspace(0.5, np.deg2rad(175), len(traj.t))          # |r| growing towards the cut locus
+        traj.pos[:, 3:] = fitted.rot_factor_ * angle[:, None] * np.array([0.0, 0.6, 0.8])
+        return traj
+    monkeypatch.setattr(fitted.cdsp_, "rollout", turning_away)
+    monkeypatch.setattr("sosdyn.lfd.model.pose.chart_bound", lambda *args: np.inf)
+    with pytest.raises(InputError, match="out of the chart"):
+        fitted.rollout(np.concatenate([fitted.goal_pos_, fitted.goal_quat_]), 1.0, dt=0.05)
