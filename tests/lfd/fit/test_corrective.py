@@ -6,7 +6,7 @@ import pytest
 
 import sosdyn as sd
 from sosdyn.errors import InputError
-from sosdyn.lfd.model import cdsp as cdsp_module
+from sosdyn.lfd.fit import pipeline
 from sosdyn.lfd.fit.certificate import check_certificate
 from sosdyn.lfd.fit.corrective import (
     REST_FRACTION,
@@ -105,7 +105,7 @@ def test_the_pseudo_demonstration_ends_at_the_goal(linear_demos):
     ({"corrective_min_dist": np.nan}, "corrective_min_dist must be a finite number >= 0"),
 ])
 def test_bad_corrective_parameters_fail_before_any_optimisation(kwargs, match, linear_demos, monkeypatch):
-    monkeypatch.setattr(cdsp_module, "fit_joint_gmm", lambda *a: pytest.fail("EM ran before the check"))
+    monkeypatch.setattr(pipeline, "fit_joint_gmm", lambda *a: pytest.fail("EM ran before the check"))
     with pytest.raises(InputError, match=match) as info:
         sd.CDSP(**kwargs).fit(linear_demos)
     assert "Try: the default" in str(info.value)
@@ -135,12 +135,12 @@ def test_an_uncertified_refit_ends_the_rounds_and_keeps_a_certified_one(linear_d
         calls.append(report)
         return dataclasses.replace(report, passed=len(calls) != 2)
 
-    monkeypatch.setattr(cdsp_module, "check_certificate", failing_second)
+    monkeypatch.setattr(pipeline, "check_certificate", failing_second)
     model = sd.CDSP(n_components=1, gamma=0.5, max_iter=5, verify_samples=500, corrective_rounds=3,
                 warp="none").fit(linear_demos)
     assert len(calls) == 2 and model.corrective_round_ == 0 and len(model.corrective_scores_) == 1
     assert model.certified_ and {r["round"] for r in model.history_} == {0}
-    monkeypatch.setattr(cdsp_module, "check_certificate", lambda *a: dataclasses.replace(check_certificate(*a),
+    monkeypatch.setattr(pipeline, "check_certificate", lambda *a: dataclasses.replace(check_certificate(*a),
                                                                                             passed=False))
     with pytest.raises(sd.NotCertifiedError):              # round 0 itself: raised as for a plain fit
         sd.CDSP(n_components=1, gamma=0.5, max_iter=5, verify_samples=500, corrective_rounds=3,

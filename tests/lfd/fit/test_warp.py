@@ -7,8 +7,8 @@ import pytest
 
 from sosdyn.errors import InputError, ModelFileError
 from sosdyn.evaluation.metrics import dtwd
-from sosdyn.lfd.model import cdsp as cdsp_module
 from sosdyn.lfd.model.cdsp import CDSP
+from sosdyn.lfd.fit import pipeline
 from sosdyn.lfd.fit.corrective import rollout_deviation
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.runtime.predictor import warp_back, warp_back2, warp_forward, warp_forward2
@@ -143,7 +143,7 @@ def test_predict_is_the_pulled_back_field_and_the_goal_an_equilibrium(hook_model
     X = np.random.default_rng(0).uniform(-2, 2, (40, 2))
     Z = (X - m.goal_) / m.scale_
     U, J = jacobian(Z, *maps_of(m), np.zeros(2))
-    core = m._core(U)
+    core = pipeline.core_field(U, m.mixture_, m.C_, m.field_exps_)
     expected = np.array([np.linalg.solve(J[i], core[i]) for i in range(len(X))]) * m.scale_
     assert np.abs(m.predict(X) - expected).max() <= 1e-12 * np.abs(expected).max()
     step = m.predictor()
@@ -187,11 +187,11 @@ def test_auto_keeps_the_candidate_of_lowest_training_score(hook_models):
 def test_auto_fits_each_distinct_warp_once(hook_models, monkeypatch):
     """Two candidates whose greedy fits give the same bumps (here: the same settings) share one core
     fit and one score; a third, different one gets its own."""
-    monkeypatch.setattr(cdsp_module, "AUTO_WARPS", {"a": dict(WARP_DEFAULTS, n_maps=10), "b": dict(
+    monkeypatch.setattr(pipeline, "AUTO_WARPS", {"a": dict(WARP_DEFAULTS, n_maps=10), "b": dict(
         WARP_DEFAULTS, n_maps=10), "c": dict(WARP_DEFAULTS, n_maps=5)})
     calls = []
-    core = CDSP._fit_core
-    monkeypatch.setattr(CDSP, "_fit_core", lambda self, *a: calls.append(a[1]) or core(self, *a))
+    core = pipeline.fit_core
+    monkeypatch.setattr(pipeline, "fit_core", lambda *a: calls.append(a[1]) or core(*a))
     scores = CDSP(**CDSP_SMALL).fit(hook_models[0]).warp_scores_
     assert [None if m is None else len(m[2]) for m in calls] == [None, 10, 5]
     assert scores["a"] == scores["b"] != scores["c"] and np.isfinite(list(scores.values())).all()
@@ -208,7 +208,7 @@ def test_auto_keeps_no_warp_where_it_reproduces_best(linear_demos):
                                   {"l_max": 0}, {"beta": 0}, {"beta": 1.5}, {"decay": 1.5}, {"n_points": 3},
                                   {"match": "median"}, {"target": "circle"}, {"n_map": 10}, "yes", 3, None])
 def test_bad_warp_parameters_are_input_errors_before_fitting(warp, monkeypatch, hook_demos):
-    monkeypatch.setattr("sosdyn.lfd.model.cdsp.fit_joint_gmm", lambda *a: pytest.fail("fitted"))
+    monkeypatch.setattr("sosdyn.lfd.fit.pipeline.fit_joint_gmm", lambda *a: pytest.fail("fitted"))
     with pytest.raises(InputError, match="Try:"):
         CDSP(warp=warp).fit(hook_demos)
 
