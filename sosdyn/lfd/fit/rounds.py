@@ -21,7 +21,7 @@ from .corrective import (
     augmented,
     corrective_demonstration,
     corrective_pairs,
-    demo_score,
+    demo_scores,
     thin,
     training_rollouts,
     training_score,
@@ -72,16 +72,16 @@ def corrective_fits(fit_round: Callable, demos: Demonstrations, n_rounds: int, t
     return kept, models[kept], scores, pairs, history
 
 
-def warp_choice(fits: dict, demos: Demonstrations):
+def warp_choice(fits: dict, demos: Demonstrations, block_field: Callable):
     """The kept fit among ``fits`` {name: fit, or None for a warped candidate that did not certify
-    (score inf)}: each distinct fit scored once by :func:`~.corrective.demo_score` (a candidate
-    may share an earlier one's fit), the certified one of lowest score kept. Returns (the kept
-    fit, {name: score}); ties: the first candidate."""
-    scores = {}
-    for name, fitted in fits.items():
-        same = next((n for n in scores if fitted is not None and fits[n] is fitted), None)
-        scores[name] = float("inf") if fitted is None else scores[same] if same is not None else demo_score(
-            lambda X, m=fitted: m.field(X, m.goal_), demos)
+    (score inf)}: the distinct fits (a candidate may share an earlier one's fit) scored together by
+    :func:`~.corrective.demo_scores` on ``block_field(distinct fits)``, the certified one of lowest
+    score kept. Returns (the kept fit, {name: score}); ties: the first candidate."""
+    distinct = [f for i, f in enumerate(fits.values()) if f is not None and
+                all(f is not g for g in list(fits.values())[:i])]
+    scored = demo_scores(block_field(distinct), len(distinct), demos)
+    scores = {name: float("inf") if f is None else scored[next(i for i, g in enumerate(distinct) if g is f)]
+              for name, f in fits.items()}
     live = [name for name in fits if fits[name] is not None]
     return fits[min(live, key=lambda w: (not fits[w].certified_, scores[w]))], scores
 

@@ -14,6 +14,8 @@ from sosdyn.lfd.fit.corrective import (
     augmented,
     corrective_demonstration,
     corrective_pairs,
+    demo_score,
+    demo_scores,
     nearest,
     rest_rule,
     rollout_deviation,
@@ -180,3 +182,15 @@ def test_a_corrective_model_round_trips_through_a_file(leaf2_models, tmp_path):
     X = np.array([[-10.0, 5.0], [3.0, -20.0]])
     np.testing.assert_array_equal(loaded.predict(X), model.predict(X))
     assert loaded.certified_ and loaded.dt_ == model.dt_ and loaded.scale_ == model.scale_
+
+
+def test_demo_scores_of_several_fields_are_each_ones_demo_score(linear_demos, linear_system):
+    """Three fields scored in one Euler loop: the true system (score near 0: Euler's error only), a
+    slower one, and one that diverges (inf); each equal, bit for bit, to its own demo_score."""
+    A, goal = linear_system
+    fields = [lambda X: (X - goal) @ A.T, lambda X: 0.5 * (X - goal) @ A.T, lambda X: -(X - goal) @ A.T]
+    m = len(linear_demos)
+    both = demo_scores(lambda X, live: np.vstack([fields[b](X[k * m:(k + 1) * m]) for k, b in enumerate(live)]),
+                       3, linear_demos)
+    assert both == [demo_score(f, linear_demos) for f in fields]
+    assert both[0] < 0.05 < both[1] < np.inf == both[2]
