@@ -8,6 +8,7 @@
 * scaling sweeps (log-log plots): K, metric degree, field degree, number of demonstration
   samples; the default fit against the dimension n = 2..7 with the issue-14 goals (:mod:`.scaling_n`);
 * the learner's dynamics step on the re-solve path, "direct" vs "cvxpy" back end;
+* the default's overhead: ``CDSP()`` over its plain core on the paper's shapes (:mod:`.default_overhead`);
 * a profile (pyinstrument) of every configuration that misses its target.
 
 Writes ``reports/bench/{fits,scaling,scaling_n,backends,profiles}.json``, the plots ``reports/bench/scaling_*``
@@ -42,7 +43,7 @@ from sosdyn.report.figures import save_figure, scaling_plot
 
 from ..settings import BENCH, PAPER_SHAPES
 from .learner_report import summary_markdown
-from . import predict, scaling_n
+from . import default_overhead, predict, scaling_n
 from .profiling import profile_call
 from .synthetic import demos as synth
 from .timing import environment, fmt_s, median, now, timing, write_json
@@ -319,6 +320,8 @@ def rebuild_summary(out_dir: Path) -> None:
                profiles=read("profiles.json")["profiles"])
     if (out_dir / "sos.json").exists():
         res["sos_summary"] = read("sos.json").get("summary")
+    if (out_dir / "overhead.json").exists():
+        res["overhead"] = read("overhead.json")
     (out_dir / "summary.md").write_text(summary_markdown(res, out_dir))
     log(f"rebuilt {out_dir}/summary.md from the JSON files")
 
@@ -327,7 +330,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m problems bench")
     ap.add_argument("--quick", action="store_true", help="tiny sizes (smoke test)")
     ap.add_argument("--out", default=str(BENCH))
-    ap.add_argument("--skip", default="", help="comma list of parts to skip: shapes,sweeps,scaling_n,backends,profiles,predict")
+    ap.add_argument("--skip", default="", help="comma list of parts to skip: shapes,sweeps,scaling_n,backends,profiles,predict,overhead")
     ap.add_argument("--summary", action="store_true", help="only rebuild summary.md from the JSON files of the last runs")
     args = ap.parse_args(argv)
     out_dir = Path(args.out)
@@ -344,6 +347,8 @@ def main(argv=None):
         if part not in skip:
             write_json(out_dir / name, data)
     keep("shapes", "fits.json", {"environment": res["environment"], "fits": res["fits"]})
+    res["overhead"] = None if "overhead" in skip else default_overhead.run(args.quick, log)
+    keep("overhead", "overhead.json", {"environment": res["environment"], **(res["overhead"] or {})})
     res["sweeps"] = {} if "sweeps" in skip else run_sweeps(args.quick)
     res["scaling_n"] = None if "scaling_n" in skip else scaling_n.run((2, 3) if args.quick else (2, 3, 4, 5, 6, 7),
                                                                        args.quick, log)

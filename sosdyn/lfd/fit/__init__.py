@@ -5,5 +5,7 @@ metric and the contraction matrix G_k of eq. (6) as numbers and as polynomial ma
 ``certificate`` (certify, extract, the independent check, collapse diagnostic), ``steps`` (one
 convex step per module), ``refine`` (the mixture), ``learner`` (the alternating stages),
 ``warp`` (the diffeomorphic pre-warp), ``corrective`` and ``rounds`` (fits made of several fits,
-scored by training rollouts), ``params`` (the estimator's parameters and their checks).
+scored by training rollouts), ``params`` (the estimator's parameters and their checks), and on
+top ``pipeline``: the whole fit path (demonstrations -> warp candidates -> core fits ->
+certificate -> choice) that ``CDSP.fit`` calls once.
 """

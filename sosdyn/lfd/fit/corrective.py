@@ -3,7 +3,7 @@
 A fitted field f is rolled out from the first sample of every training demonstration and from
 the midpoint of every pair of those (:func:`rollout_starts`: starts between the demonstrated
 ones, where reproductions from new starts go) by explicit
-Euler (:func:`~sosdyn.lfd.rollout.euler_until_rest`) with the data's own median time step dt,
+Euler (:func:`~sosdyn.lfd.rollout.euler_until_rest`; several fields at once: :func:`demo_scores`) with the data's own median time step dt,
 stopped when every velocity component of every start has stayed below ``REST_FRACTION`` times the
 data's largest velocity component for ``REST_WINDOW`` steps, or after ``ROLLOUT_SPAN`` times the
 longest demonstration's duration (and never more than ``sosdyn.limits`` max_rollout_steps). Every
@@ -34,7 +34,7 @@ from scipy.spatial import cKDTree
 from sosdyn.errors import SolverError
 from sosdyn.limits import check_count, get_limits
 from ..data.demonstrations import Demonstration, Demonstrations, sample_step
-from ..rollout import euler_until_rest
+from ..rollout import euler_blocks_until_rest
 
 ROUNDS, TAU, MIN_DIST = 0, 0.5, 0.02   # CDSP's defaults: refits (off: warp="auto" does better), tau (s), min_dist
 REST_FRACTION = 2e-3    # at rest: every |xdot_c| below this fraction of the data's largest |xdot_c|
@@ -100,7 +100,7 @@ def training_rollouts(field: Callable[[np.ndarray], np.ndarray], demos: Demonstr
     finite, or a state gets farther than DIVERGED x the data's extent from the goal (Euler with
     the data's step is unstable for this field)."""
     dt, vel_tol, max_steps = rest_rule(demos)
-    return _rollouts(field, demos, rollout_starts(demos), dt, vel_tol, max_steps)
+    return _rollouts(lambda X, live: field(X), demos, rollout_starts(demos), 1, dt, vel_tol, max_steps)[0]
 
 
 def score_steps(demos: Demonstrations) -> int:
@@ -119,21 +119,29 @@ def demo_score(field: Callable[[np.ndarray], np.ndarray], demos: Demonstrations)
     """:func:`training_score` of Euler rollouts of ``field`` from the demonstrations' first samples
     only, as long as the longest demonstration (:func:`rest_rule`'s dt and rest test, :func:`score_steps`):
     the score of the first len(demos) :func:`training_rollouts` at a fraction of their cost."""
+    return demo_scores(lambda X, live: field(X), 1, demos)[0]
+
+
+def demo_scores(field: Callable[[np.ndarray, list], np.ndarray], fields: int, demos: Demonstrations) -> list[float]:
+    """:func:`demo_score` of ``fields`` fields at once: ``field(X, live)`` evaluates field b on the
+    b-th block of len(demos) rows of X for b in ``live`` (:func:`~sosdyn.lfd.rollout.euler_blocks_until_rest`;
+    each block stops by its own rest test), so the per-step work of all of them is shared."""
     dt, vel_tol, _ = rest_rule(demos)
     steps = score_steps(demos)
-    return training_score(_rollouts(field, demos, np.array([d.pos[0] for d in demos]), dt, vel_tol, steps), demos)
+    starts = np.tile(np.array([d.pos[0] for d in demos]), (fields, 1))
+    return [training_score(reps, demos) for reps in _rollouts(field, demos, starts, fields, dt, vel_tol, steps)]
 
 
-def _rollouts(field, demos, starts, dt, vel_tol, max_steps) -> list[np.ndarray] | None:
-    """:func:`~sosdyn.lfd.rollout.euler_until_rest` from ``starts``; None if a rollout diverges."""
+def _rollouts(field, demos, starts, blocks, dt, vel_tol, max_steps) -> list:
+    """:func:`~sosdyn.lfd.rollout.euler_blocks_until_rest` from ``starts``: per block its rollouts, or
+    None if one diverges (a SolverError, or farther than DIVERGED x the data's extent from the goal)."""
     goal = np.asarray(demos.goal, dtype=float)
     extent = max(float(np.abs(d.pos - goal).max()) for d in demos)
-    try:
-        with np.errstate(over="ignore", invalid="ignore"):     # a diverging rollout is reported as None
-            reps = euler_until_rest(field, starts, dt=dt, max_steps=max_steps, vel_tol=vel_tol, window=REST_WINDOW)
-    except SolverError:
-        return None
-    return None if max(float(np.abs(x - goal).max()) for x in reps) > DIVERGED * extent else reps
+    with np.errstate(over="ignore", invalid="ignore"):     # a diverging rollout is reported as None
+        out = euler_blocks_until_rest(field, starts, blocks, dt=dt, max_steps=max_steps, vel_tol=vel_tol,
+                                      window=REST_WINDOW)
+    return [None if isinstance(reps, SolverError) or max(float(np.abs(x - goal).max()) for x in reps)
+            > DIVERGED * extent else reps for reps in out]
 
 
 def training_score(rollouts: list[np.ndarray] | None, demos: Demonstrations) -> float:
@@ -162,5 +170,5 @@ def augmented(demos: Demonstrations, extra: list[Demonstration]) -> Demonstratio
 
 __all__ = ["DIVERGED", "MAX_PAIRS", "MIN_DIST", "MIN_PAIRS", "REST_FRACTION", "REST_WINDOW",
            "ROLLOUT_SPAN", "ROUNDS", "TAU", "augmented", "corrective_demonstration",
-           "corrective_pairs", "demo_score", "nearest", "rest_rule", "rollout_deviation", "rollout_starts",
-           "score_steps", "thin", "training_rollouts", "training_score"]
+           "corrective_pairs", "demo_score", "demo_scores", "nearest", "rest_rule", "rollout_deviation",
+           "rollout_starts", "score_steps", "thin", "training_rollouts", "training_score"]

@@ -131,16 +131,37 @@ class PositionMixture:
         the limit of the softmax as the quadratic terms dominate log pi_k and the normalisers.
         Raises :class:`InputError` for rows of X that are NaN or inf.
         """
+        return responsibilities_of([self], [X])[0]
+
+
+def responsibilities_of(mixtures: list, blocks: list) -> list[np.ndarray]:
+    """:meth:`PositionMixture.responsibilities` of ``mixtures[b]`` at the rows of ``blocks[b]``, for
+    every b, with one log-sum-exp over all rows: the log-joints padded with -inf to the largest K
+    (exact zeros in every sum), so each block's numbers are its mixture's own (at round-off when
+    the K differ: the sums' association may change)."""
+    L = []
+    for mix, X in zip(mixtures, blocks):
         X = np.asarray(X, dtype=float)
+        n = mix.means.shape[1]
         bad = np.flatnonzero(~np.isfinite(X).all(axis=1)) if X.ndim == 2 else []
-        if X.ndim != 2 or X.shape[1] != self.means.shape[1] or len(bad):
+        if X.ndim != 2 or X.shape[1] != n or len(bad):
             what = f"row {bad[0]} = {X[bad[0]]} is not finite" if len(bad) else f"has shape {X.shape}"
-            raise InputError(f"responsibilities: X {what}; pass finite states of shape "
-                             f"(m, {self.means.shape[1]}).")
-        lj = self.log_joint(X)
-        far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
-        lj[far] = 0.0
-        h = np.exp(lj - logsumexp(lj, axis=1, keepdims=True))
-        if far.any():
-            h[far] = np.eye(self.n_components)[np.argmin(self.log_mahalanobis(X[far]), axis=1)]
-        return h
+            raise InputError(f"responsibilities: X {what}; pass finite states of shape (m, {n}).")
+        L.append(mix.log_joint(X))
+    K = max(mix.n_components for mix in mixtures)
+    lj = L[0] if len(L) == 1 else np.full((sum(len(lb) for lb in L), K), -np.inf)
+    if len(L) > 1:
+        rows = np.cumsum([0] + [len(lb) for lb in L])
+        for lb, r in zip(L, rows):
+            lj[r:r + len(lb), :lb.shape[1]] = lb
+    far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
+    lj[far] = 0.0
+    h = np.exp(lj - logsumexp(lj, axis=1, keepdims=True))
+    out, start = [], 0
+    for mix, X, lb in zip(mixtures, blocks, L):
+        hb, fb = h[start:start + len(lb), :mix.n_components], far[start:start + len(lb)]
+        if fb.any():
+            hb[fb] = np.eye(mix.n_components)[np.argmin(mix.log_mahalanobis(np.asarray(X, float)[fb]), axis=1)]
+        out.append(hb)
+        start += len(lb)
+    return out

@@ -1,6 +1,7 @@
 """Fits made of several CDSP fits: corrective rounds, and the choice of warp (``warp="auto"``).
 
-Both take a function that makes one certified fit (raising NotCertifiedError otherwise) and keep,
+Corrective rounds take a function that makes one certified fit (raising NotCertifiedError
+otherwise), the warp choice the candidates' fits (:func:`~.pipeline.candidate_fits`); both keep,
 among the certified fits, the one whose reproductions of the TRAINING demonstrations deviate least
 from them (:func:`~.corrective.training_score`; lower is better). A fitted model here is anything
 with ``field(X, goal)``, ``goal_``, ``scale_``, ``certified_`` and ``history_``.
@@ -20,8 +21,7 @@ from .corrective import (
     augmented,
     corrective_demonstration,
     corrective_pairs,
-    demo_score,
-    score_steps,
+    demo_scores,
     thin,
     training_rollouts,
     training_score,
@@ -72,26 +72,18 @@ def corrective_fits(fit_round: Callable, demos: Demonstrations, n_rounds: int, t
     return kept, models[kept], scores, pairs, history
 
 
-def warp_choice(fit_candidate: Callable, candidates: dict, demos: Demonstrations):
-    """``fit_candidate(name, settings)`` for every ``candidates`` item (settings None: no warp, must
-    certify; a warped candidate that does not certify scores inf), each scored by
-    :func:`~.corrective.demo_score` (once per distinct model: a candidate may return an earlier
-    one's fit). Returns (the kept model, {name: score}); ties: the first candidate. The scoring
-    rollouts' size is checked before any fit (:func:`~.corrective.score_steps`)."""
-    score_steps(demos)
-    fits, scores = {}, {}
-    for name, settings in candidates.items():
-        try:
-            fits[name] = fit_candidate(name, settings)
-        except NotCertifiedError:
-            if settings is None:
-                raise
-            scores[name] = float("inf")
-            continue
-        same = next((n for n in fits if n != name and fits[n] is fits[name]), None)
-        scores[name] = scores[same] if same is not None else demo_score(
-            lambda X, m=fits[name]: m.field(X, m.goal_), demos)
-    return fits[min(fits, key=lambda w: (not fits[w].certified_, scores[w]))], scores
+def warp_choice(fits: dict, demos: Demonstrations, block_field: Callable):
+    """The kept fit among ``fits`` {name: fit, or None for a warped candidate that did not certify
+    (score inf)}: the distinct fits (a candidate may share an earlier one's fit) scored together by
+    :func:`~.corrective.demo_scores` on ``block_field(distinct fits)``, the certified one of lowest
+    score kept. Returns (the kept fit, {name: score}); ties: the first candidate."""
+    distinct = [f for i, f in enumerate(fits.values()) if f is not None and
+                all(f is not g for g in list(fits.values())[:i])]
+    scored = demo_scores(block_field(distinct), len(distinct), demos)
+    scores = {name: float("inf") if f is None else scored[next(i for i, g in enumerate(distinct) if g is f)]
+              for name, f in fits.items()}
+    live = [name for name in fits if fits[name] is not None]
+    return fits[min(live, key=lambda w: (not fits[w].certified_, scores[w]))], scores
 
 
 __all__ = ["corrective_fits", "warp_choice"]

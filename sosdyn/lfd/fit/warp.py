@@ -59,6 +59,7 @@ MAX_MAPS = 10_000               # bumps of one warp, fitted or loaded (a load ch
 #: so near singular that J_phi^-1 multiplies velocities by up to 1 / floor. Fitted warps stay far above
 #: it: the 30 LASA shapes under the three warp settings of "auto" reach 7.0e-8 at the lowest.
 MIN_CONDITION = 1e-12
+FIT_CHUNK = 2_000_000           # numbers of trial bumps' images (centres x sigmas x points) held at once
 
 
 def lipschitz_numbers(vectors: np.ndarray, sigmas: np.ndarray) -> np.ndarray:
@@ -168,6 +169,22 @@ def radial_targets(curve: np.ndarray, goal: np.ndarray, decay: float = 0.0) -> n
     return goal + d * np.divide(r_min, r, out=np.ones_like(r), where=r > 0)[:, None]
 
 
+def _bump_errors(cur, miss, Y, goal, centres, grid, l_max: float, beta: float):
+    """For every centre cur[i], i in ``centres``, and sigma in ``grid`` (row-major): the bump of
+    vector beta miss_i shrunk to l <= l_max, and sum |Y - psi(cur)|^2. Returns (least error, its
+    flat index, (psi(cur), vector) there)."""
+    v = beta * miss[centres]                                                     # (c, n)
+    norms = np.array([max(np.linalg.norm(r), 1e-300) for r in v])
+    v = v[:, None, :] * np.minimum(1.0, l_max * grid[None, :] / (LIP_FACTOR * norms[:, None]))[:, :, None]
+    d2 = np.sum((cur[None, :, :] - cur[centres][:, None, :]) ** 2, axis=-1)      # (c, N)
+    rho = np.exp(-d2[:, None, :] / grid[None, :, None] ** 2)                     # (c, s, N)
+    rho_goal = np.exp(-np.sum((goal - cur[centres]) ** 2, axis=-1)[:, None] / grid[None, :] ** 2)
+    new = cur + (rho - rho_goal[:, :, None])[..., None] * v[:, :, None, :]       # (c, s, N, n)
+    e = np.sum(((Y - new) ** 2).reshape(len(centres) * len(grid), -1), axis=1)
+    k = int(np.argmin(e))
+    return float(e[k]), k, (new.reshape((-1,) + cur.shape)[k], v.reshape(-1, cur.shape[1])[k])
+
+
 def fit_maps(X: np.ndarray, Y: np.ndarray, goal: np.ndarray, n_maps: int, l_max: float, beta: float,
              scale: float, n_candidates: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Greedy matching of X onto Y (module docstring): (centers (m, n), vectors (m, n), sigmas (m,)),
@@ -175,6 +192,7 @@ def fit_maps(X: np.ndarray, Y: np.ndarray, goal: np.ndarray, n_maps: int, l_max:
     would take it lower); sigmas from ``scale`` * SIGMA_GRID; centres among the
     ``n_candidates`` points of largest mismatch (the one whose best bump lowers the mismatch most)."""
     cur, goal = np.array(X, dtype=float), np.asarray(goal, dtype=float)
+    grid = scale * SIGMA_GRID
     centers, vectors, sigmas = [], [], []
     err = float(np.sum((Y - cur) ** 2))
     log_cond, floor = 0.0, math.log(MIN_CONDITION) - math.log1p(-l_max) + 1e-9   # log prod (1 - l_j); floor
@@ -183,14 +201,11 @@ def fit_maps(X: np.ndarray, Y: np.ndarray, goal: np.ndarray, n_maps: int, l_max:
             break
         miss = Y - cur
         best = None
-        for i in np.argsort(-np.sum(miss ** 2, axis=1))[:n_candidates]:
-            for s in scale * SIGMA_GRID:
-                v = beta * miss[i]
-                v = v * min(1.0, l_max * s / (LIP_FACTOR * max(np.linalg.norm(v), 1e-300)))
-                new = cur + (_bump(cur, cur[i], s) - _bump(goal, cur[i], s))[:, None] * v
-                e = float(np.sum((Y - new) ** 2))
-                if best is None or e < best[0]:
-                    best = (e, cur[i].copy(), s, v, new)
+        top = np.argsort(-np.sum(miss ** 2, axis=1))[:n_candidates]
+        for chunk in np.array_split(top, min(len(top), -(-len(top) * len(grid) * cur.size // FIT_CHUNK))):
+            e, k, new = _bump_errors(cur, miss, Y, goal, chunk, grid, l_max, beta)
+            if best is None or e < best[0]:         # the first (centre, sigma) of least error
+                best = (e, cur[chunk[k // len(grid)]].copy(), grid[k % len(grid)], new[1], new[0])
         if best[0] >= err * (1 - 1e-6):
             break
         err, c, s, v, cur = best
@@ -220,9 +235,45 @@ def fit_warp(curves: list[tuple[np.ndarray, np.ndarray]], goal: np.ndarray, sett
 
 def pulled_back(Z: np.ndarray, maps, field) -> np.ndarray:
     """zdot = J_phi(z)^{-1} f(phi(z)) at the rows of Z (k, n), ``maps`` = (centers, vectors, sigmas)
-    fixing 0, ``field`` f on rows of U (stacked n x n solves)."""
-    U, J = jacobian(Z, *maps, np.zeros(Z.shape[1]))
-    return np.linalg.solve(J, field(U)[:, :, None])[:, :, 0]
+    fixing 0, ``field`` f on rows of U. Since J_phi = A_m ... A_1, A_j = I + v_j g_j^T with the gradient
+    g_j = -2/sigma_j^2 rho_j (u_j - c_j) at the j-th intermediate point u_j, and A_j^{-1} = I - v_j g_j^T /
+    (1 + g_j.v_j) (Sherman-Morrison; 1 + g_j.v_j >= 1 - l_j > 0): forward u_{j+1} = u_j + (rho_j(u_j) -
+    rho_j(0)) v_j, kept as u_j = w_j - s_j with w_{j+1} = w_j + rho_j v_j and the constant s_j = sum_{i<j}
+    rho_i(0) v_i folded into the centres; back, from y = f(phi(z)), y <- y - v_j (g_j.y) / (1 + g_j.v_j) for
+    j = m..1 (one pass of O(m n) per row, no n x n solve). The maps' arrays may also be per row, (m, k, n), (m, k, n), (m, k): each row its own warp (:func:`stacked_maps`)."""
+    C, V, S = (np.asarray(a, dtype=float) for a in maps)
+    m, (k, n) = len(S), np.shape(Z)
+    V = np.broadcast_to(V[:, None, :] if V.ndim == 2 else V, (m, k, n))
+    C = np.broadcast_to(C[:, None, :] if C.ndim == 2 else C, (m, k, n))
+    S2 = np.broadcast_to(S[:, None] ** 2 if S.ndim == 1 else S ** 2, (m, k))
+    shift = np.cumsum(np.exp(-np.sum(C ** 2, axis=-1) / S2)[..., None] * V, axis=0)   # s_{j+1}
+    centres = C + np.concatenate([np.zeros((1, k, n)), shift[:-1]])                     # c_j + s_j
+    D, R, W, nS2 = np.empty((m, k, n)), np.empty((m, k, 1)), np.array(Z, dtype=float), -S2[..., None]
+    for j in range(m):
+        np.subtract(W, centres[j], out=D[j])                                            # u_j - c_j
+        np.exp(np.vecdot(D[j], D[j])[:, None] / nS2[j], out=R[j])                       # rho_j(u_j)
+        W += R[j] * V[j]
+    F = np.array(field(W - shift[-1] if m else W), dtype=float)
+    G = (-2.0 / S2[..., None]) * R * D                                                   # g_j
+    Vd = V / (1.0 + np.vecdot(G, V))[..., None]                                         # v_j / (1 + g_j.v_j)
+    for j in range(m - 1, -1, -1):
+        F -= np.vecdot(G[j], F)[:, None] * Vd[j]
+    return F
+
+
+def stacked_maps(maps: list, rows: int, n: int):
+    """Per-row maps for :func:`pulled_back`: block b of ``rows`` consecutive rows gets ``maps[b]``
+    ((centers, vectors, sigmas) or None), every block padded to the most bumps with v = 0, c = 0,
+    sigma = 1 (an identity map: its terms add exactly 0). None if no block has a bump."""
+    m = max((len(mp[2]) for mp in maps if mp is not None), default=0)
+    if m == 0:
+        return None
+    C, V, S = np.zeros((m, len(maps), n)), np.zeros((m, len(maps), n)), np.ones((m, len(maps)))
+    for b, mp in enumerate(maps):
+        if mp is not None:
+            k = len(mp[2])
+            C[:k, b], V[:k, b], S[:k, b] = mp
+    return tuple(np.repeat(a, rows, axis=1) for a in (C, V, S))
 
 
 def check_warp(maps, n_samples: int, seed: int) -> dict:
@@ -248,4 +299,4 @@ def check_warp(maps, n_samples: int, seed: int) -> dict:
 __all__ = ["AUTO_WARPS", "BOUND_TOL", "CHECK_BOX", "LIP_FACTOR", "MATCHES", "MAX_MAPS", "MIN_CONDITION", "SIGMA_GRID",
            "TARGETS", "WARP_DEFAULTS",
            "apply", "arc_fraction", "bumps_at", "check_maps", "check_warp", "fit_maps", "fit_warp", "invert",
-           "jacobian", "line_targets", "lipschitz_numbers", "pulled_back", "radial_targets"]
+           "jacobian", "line_targets", "lipschitz_numbers", "pulled_back", "radial_targets", "stacked_maps"]

@@ -7,7 +7,9 @@ matrix, so the virtual system ydot = sum_k h_k(x) f_k(y) contracts in the metric
 gamma whatever the weights h_k, and every trajectory converges to x* (Theorem 1). With a warp
 (parameter ``warp``, :mod:`.warp`) the same holds in u = phi(z) and carries over to z (class docstring).
 
-The estimator holds parameters and learned state; the mathematics is in functions on arrays:
+The estimator holds parameters and learned state; the mathematics is in functions on arrays.
+``fit`` calls :func:`sosdyn.lfd.fit.pipeline.fit` once, the whole fit path read top-down
+(demonstrations -> warp candidates -> core fits -> certificate and check -> choice), which calls
 :mod:`.learner` (the stages), :mod:`.steps` (the convex steps), :mod:`.contraction` (G_k and M),
 :mod:`.certificate` (certify and check), :mod:`.refine` (the mixture), :mod:`.gmm` (EM),
 :mod:`.warp` (the pre-warp), :mod:`.rounds` (fits made of several fits).
@@ -23,46 +25,27 @@ from __future__ import annotations
 
 import inspect
 import time
-import warnings
-from dataclasses import replace
 from numbers import Integral
 from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from sosdyn.errors import InputError, NotCertifiedError, NotFittedError
-from ..fit.certificate import (
-    DEFAULT_SAMPLES,
-    CertificateReport,
-    certify,
-    check_certificate,
-    collapse_diagnostic,
-    extract_certificate,
-)
-from ..fit.contraction import eval_fields, field_exponents, metric_exponents
+from sosdyn.errors import InputError, NotFittedError
+from ..fit.certificate import DEFAULT_SAMPLES, CertificateReport
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
-from ..data.demonstrations import check_demonstrations, sample_step
+from ..data.demonstrations import check_demonstrations
 from ..data.poses import PoseDemonstrations
-from ..runtime.predictor import StatePredictor
-from ..runtime.states import as_state, as_states, check_max_speed, limit_speed
-from ..fit.gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost
-from ..fit.learner import History, Settings, learn, reuse_steps, subsample
-from .fileformat import FORMAT, VERSION, write_model_file
-from .state import STATE_FIELDS, state_record
-from ..fit.params import (
-    MAX_SEED,
-    PARAMS,
-    check_params,
-    check_solver,
-    preset_params,
-    resolve_seed,
-    warp_settings,
-)
+from ..fit.learner import reuse_steps
+from ..fit.params import MAX_SEED, PARAMS, check_params, check_solver, preset_params
+from ..fit.pipeline import check_fit, field_at, maps_of
+from ..fit.pipeline import fit as fit_path
 from ..rollout import rollout as integrate
 from ..rollout.quality import reproduction_table
-from ..fit.rounds import corrective_fits, warp_choice
-from ..fit.warp import AUTO_WARPS, check_warp, fit_warp, jacobian, pulled_back
+from ..runtime.predictor import StatePredictor
+from ..runtime.states import as_state, as_states, check_max_speed, limit_speed
+from .fileformat import FORMAT, VERSION, write_model_file
+from .state import STATE_FIELDS, state_record
 
 METRIC_PROX = 1e-2              # default proximal weight of the metric step (well-posed alternation)
 
@@ -198,120 +181,14 @@ class CDSP:
             return self._fit(demos)
 
     def _fit(self, demos):
+        """The fit path (:func:`~sosdyn.lfd.fit.pipeline.fit`) on the checked parameters and
+        demonstrations; its learned attributes become this model's."""
         t_start = time.perf_counter()
         self.check_params()
         if isinstance(demos, PoseDemonstrations):
             raise InputError("these are pose demonstrations (position + orientation). Try: sosdyn.PoseCDSP(**params)"
                              ".fit(demos), the certified CDSP of the 6-D chart state (same parameters).")
-        demos = check_demonstrations(demos)
-        if self.warp == "auto":
-            return self._fit_auto(demos, t_start)
-        settings = warp_settings(self.warp)
-        self.warp_scores_ = {}
-        return self._fit_core(demos, None if settings is None else
-                              fit_warp([(d.t, d.pos) for d in demos], demos.goal, settings), t_start)
-
-    def _fit_auto(self, demos, t_start):
-        """warp="auto": :func:`~.rounds.warp_choice` among no warp and AUTO_WARPS (same seed); a
-        candidate whose fitted bumps equal an earlier one's (the greedy fit stopped early) reuses its fit."""
-        seed = resolve_seed(self.random_state)
-        fitted = {}
-
-        def fit_candidate(name, settings):
-            tagged = None if self.progress is None else (lambda row: self.progress(dict(row, warp=name)))
-            maps = None if settings is None else fit_warp([(d.t, d.pos) for d in demos], demos.goal, settings)
-            key = None if maps is None else b"".join(np.ascontiguousarray(a).tobytes() for a in maps)
-            if key not in fitted:
-                fitted[key] = CDSP(**dict(self.get_params(), random_state=seed, progress=tagged))._fit_core(
-                    demos, maps, time.perf_counter())
-            return fitted[key]
-
-        kept, self.warp_scores_ = warp_choice(fit_candidate, {"none": None, **AUTO_WARPS}, demos)
-        self.__dict__.update({k: v for k, v in vars(kept).items() if k.endswith("_") and k != "warp_scores_"})
-        self.timings_ = dict(kept.timings_, total_s=time.perf_counter() - t_start)
-        return self
-
-    def _fit_core(self, demos, maps, t_start):
-        """One fit, plain or with corrective rounds (:func:`~.rounds.corrective_fits`; the kept
-        round's learned state becomes this model's, ``history_`` holds every round's rows), through
-        the warp ``maps`` (data units, or None)."""
-        if self.corrective_rounds == 0:
-            self.corrective_round_, self.corrective_scores_, self.corrective_pairs_ = 0, [], []
-            return self._fit_plain(demos, t_start, maps)
-        seed = resolve_seed(self.random_state)
-
-        def fit_round(r, data):
-            tagged = None if self.progress is None else (lambda row: self.progress(dict(row, round=r)))
-            return CDSP(**dict(self.get_params(), random_state=seed, corrective_rounds=0, progress=tagged)
-                        )._fit_plain(data, time.perf_counter(), maps)
-
-        self.corrective_round_, kept, self.corrective_scores_, self.corrective_pairs_, history = corrective_fits(
-            fit_round, demos, self.corrective_rounds, self.corrective_tau, self.corrective_min_dist)
-        self.__dict__.update({k: v for k, v in vars(kept).items() if k.endswith("_")
-                              and not k.startswith("corrective_")})
-        self.history_, self.dt_ = history, sample_step(demos)
-        self.timings_ = dict(kept.timings_, total_s=time.perf_counter() - t_start)
-        return self
-
-    def _fit_plain(self, demos, t_start, maps=None):
-        """One fit of the mixture, the fields and the metric, then the certificate and its check;
-        with ``maps`` (a warp in data units, :func:`~.warp.fit_warp`) in u = phi(z) on (phi(z_i),
-        J_phi(z_i) zdot_i), the warp stored in z-units as ``warp_`` (None if it has no bump)."""
-        K = 1 if self.n_components == "bic" else int(self.n_components)
-        X, Xdot, subsampled = subsample(*demos.stacked(), self.max_samples)
-        if X.shape[0] < MIN_SAMPLES_PER_COMPONENT * K:
-            raise InputError(f"{X.shape[0]} samples{' (after max_samples)' if subsampled else ''} are "
-                             f"too few for {K} Gaussians; use fewer components, more demonstrations"
-                             f"{' or a larger max_samples' if subsampled else ''}")
-        self.seed_ = resolve_seed(self.random_state)
-        self.dim_, self.goal_ = demos.dim, np.asarray(demos.goal, dtype=float)
-        self.scale_ = float(np.abs(X - self.goal_).max()) or 1.0
-        self.dt_ = sample_step(demos)
-        self.units_ = demos.units
-        Z, Zdot = (X - self.goal_) / self.scale_, Xdot / self.scale_
-        self.warp_ = None if maps is None or not len(maps[2]) else {
-            "centers": (maps[0] - self.goal_) / self.scale_, "vectors": maps[1] / self.scale_,
-            "sigmas": maps[2] / self.scale_}
-        if self.warp_ is not None:
-            Z, J = jacobian(Z, *self._maps(), np.zeros(self.dim_))
-            Zdot = np.einsum("tij,tj->ti", J, Zdot)
-        history = History(self.progress)
-        self.history_, self.timings_ = history.rows, {}
-        settings = Settings.from_params(self.get_params())
-
-        t0 = time.perf_counter()
-        gmm, bic = fit_joint_gmm(Z, Zdot, self.n_components, self.seed_)
-        if bic is not None:
-            self.bic_ = bic
-        self.n_components_ = gmm.n_components
-        self.mixture_ = PositionMixture.from_joint(gmm, self.dim_)
-        self.timings_["em_s"] = time.perf_counter() - t0
-        self.field_exps_ = field_exponents(self.dim_, self.field_degree)
-        self.metric_exps_ = metric_exponents(self.dim_, settings.learned_metric_degree)
-        self.gmr_cost_ = gmr_cost(gmm, Z, Zdot)
-
-        t0 = time.perf_counter()
-        self.C_, self.W_, self.mixture_ = learn(Z, Zdot, self.mixture_, settings, history)
-        self.timings_["learn_s"] = time.perf_counter() - t0
-
-        t0 = time.perf_counter()
-        sol = certify(self.C_, self.field_exps_, self.W_, self.metric_exps_, self.gamma, 0.5 * self.eps,
-                      self.solver)
-        self.certificate_ = extract_certificate(sol, 0.5 * self.eps)
-        self.timings_["certify_s"] = time.perf_counter() - t0
-        self.metric_collapse_ = collapse_diagnostic(self.C_, self.field_exps_, self.W_, self.metric_exps_,
-                                                    self.gamma, self.seed_)
-        t0 = time.perf_counter()
-        self.verification_ = self.verify()
-        self.timings_["verify_s"] = time.perf_counter() - t0
-        self.timings_["total_s"] = time.perf_counter() - t_start
-        self.certified_ = self.verification_.passed
-        if not self.certified_:
-            msg = f"the learned model's certificate failed its independent check:\n{self.verification_}"
-            if not self.allow_uncertified:
-                raise NotCertifiedError(msg, "solver_error", "a smaller gamma, a larger margin, or "
-                                        "solver='SCS'; or pass allow_uncertified=True to inspect it")
-            warnings.warn(msg, stacklevel=2)
+        self.__dict__.update(vars(fit_path(check_demonstrations(demos), self.get_params(), self.progress, t_start)))
         return self
 
     # ------------------------------------------------------------------ prediction
@@ -319,18 +196,9 @@ class CDSP:
         if not hasattr(self, "C_"):
             raise NotFittedError("this CDSP model is not fitted yet; call fit(demos) first")
 
-    def _maps(self):
-        return self.warp_["centers"], self.warp_["vectors"], self.warp_["sigmas"]
-
-    def _core(self, U):
-        """udot = sum_k h_k(u) f_k(u) at the rows of U (the certified system)."""
-        return np.einsum("tk,tki->ti", self.mixture_.responsibilities(U), eval_fields(self.C_, self.field_exps_, U))
-
     def field(self, X, goal):
-        """xdot at the rows of X for the goal ``goal`` (the field translated to the goal):
-        s f(z), or through the warp s J_phi(z)^{-1} f(phi(z)), z = (x - goal) / s."""
-        Z = (X - goal) / self.scale_
-        return (self._core(Z) if self.warp_ is None else pulled_back(Z, self._maps(), self._core)) * self.scale_
+        """xdot at the rows of X for the goal ``goal`` (:func:`~sosdyn.lfd.fit.pipeline.field_at`)."""
+        return field_at(X, goal, self.scale_, self.mixture_, self.C_, self.field_exps_, self.warp_)
 
     def predict(self, X):
         """Velocities (m, n) at the states X (m, n), in the data's units."""
@@ -351,7 +219,7 @@ class CDSP:
         min(1, max_speed / |xdot|) (same paths and goal, ``docs/theory.md``)."""
         self._check_fitted()
         return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
-                              None if self.warp_ is None else self._maps(), max_speed)
+                              None if self.warp_ is None else maps_of(self.warp_), max_speed)
 
     def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.
@@ -386,12 +254,8 @@ class CDSP:
             raise InputError(f"seed must be None or an integer in [0, {MAX_SEED}], got {seed!r}")
         n_samples = self.verify_samples if n_samples is None else n_samples
         seed = self.seed_ if seed is None else int(seed)
-        report = check_certificate(self.C_, self.field_exps_, self.W_, self.metric_exps_, self.gamma,
-                                   self.certificate_, n_samples, seed)
-        if self.warp_ is None:
-            return report
-        warp = check_warp(self._maps(), n_samples, seed)
-        return replace(report, warp=warp, passed=report.passed and warp["passed"])
+        return check_fit(self.C_, self.field_exps_, self.W_, self.metric_exps_, self.gamma, self.certificate_,
+                         self.warp_, n_samples, seed)
 
     def save(self, path, key=None) -> Path:
         """Write the model to ``path`` (JSON, atomically): format, version, parameters, learned state,

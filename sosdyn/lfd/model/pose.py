@@ -32,6 +32,7 @@ from ..data.poses import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_
                           chart_demonstrations, goal_orientation)
 from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.contraction import constant_index, eval_metric
+from ..fit.pipeline import maps_of
 from ..fit.warp import apply as warp_apply, check_warp
 from .cdsp import CDSP, DEFAULTS
 from .fileformat import read_model_file, write_model_file
@@ -73,9 +74,9 @@ def chart_bound(model: CDSP, z0, rot_factor: float) -> float:
         level, Minv = float(z0 @ M @ z0), np.linalg.inv(M)
         b = np.sqrt(np.linalg.eigvalsh(Minv[3:, 3:]).max())
     else:
-        u0 = warp_apply(z0[None], *model._maps(), np.zeros(model.dim_))[0]
+        u0 = warp_apply(z0[None], *maps_of(model.warp_), np.zeros(model.dim_))[0]
         level = float(u0 @ M @ u0)
-        lower = check_warp(model._maps(), 1, 0)["singular_bound"]
+        lower = check_warp(maps_of(model.warp_), 1, 0)["singular_bound"]
         b = 1.0 / (np.sqrt(np.linalg.eigvalsh(M).min()) * lower) if lower > 0 else np.inf
     return float(model.scale_ / rot_factor * np.sqrt(max(level, 0.0)) * b)
 

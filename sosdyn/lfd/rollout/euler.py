@@ -27,37 +27,69 @@ def euler_until_rest(field: Callable[[np.ndarray], np.ndarray], starts, *, dt: f
     state or a velocity becomes NaN/inf (the trajectory diverged).
     """
     X = np.array(starts, dtype=float, ndmin=2)
+    (out,) = euler_blocks_until_rest(lambda X, blocks: field(X), X, 1, dt=dt, max_steps=max_steps,
+                                     vel_tol=vel_tol, window=window)
+    if isinstance(out, SolverError):
+        raise out
+    return out
+
+
+def euler_blocks_until_rest(field: Callable[[np.ndarray, list], np.ndarray], starts, blocks: int, *, dt: float,
+                            max_steps: int, vel_tol: float, window: int) -> list:
+    """:func:`euler_until_rest` for ``blocks`` independent systems at once: the rows of ``starts``
+    (m, n) are ``blocks`` equal consecutive blocks, each with its own stop rule (its own rows'
+    velocities) and length. ``field(X, live)`` gets the rows of the blocks ``live`` (their indices,
+    increasing; the blocks that have neither stopped nor diverged) stacked in that order. Returns,
+    per block, its trajectories (as :func:`euler_until_rest`) or the SolverError of its divergence.
+    """
+    X = np.array(starts, dtype=float, ndmin=2)
     if X.ndim != 2 or not np.all(np.isfinite(X)):
         raise InputError(f"starts must be a finite array (m, n), got shape {X.shape}.")
-    for name, value, lo in (("max_steps", max_steps, 2), ("window", window, 1)):
+    for name, value, lo in (("max_steps", max_steps, 2), ("window", window, 1), ("blocks", blocks, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
             raise InputError(f"{name} must be an integer >= {lo}, got {value!r}.")
     for name, value in (("dt", dt), ("vel_tol", vel_tol)):
         if not (isinstance(value, (int, float, np.floating)) and np.isfinite(value) and value > 0):
             raise InputError(f"{name} must be a positive number, got {value!r}.")
     m, n = X.shape
-    check_count(max_steps * m, "max_rollout_steps", f"An Euler reproduction of {m} starts x max_steps",
-                "lower max_steps")
+    if m % blocks:
+        raise InputError(f"{m} starts do not split into {blocks} equal blocks.")
+    check_count(max_steps * (m // blocks), "max_rollout_steps",     # per system: the work of one reproduction
+                f"An Euler reproduction of {m // blocks} starts x max_steps", "lower max_steps")
     check_bytes(8.0 * max_steps * m * n, "The Euler reproduction's trajectory array", "lower max_steps")
+    size = m // blocks
     out = np.empty((max(max_steps - 1, window), m, n))
-    quiet, i = 0, 0                             # steps in a row with every |v| < vel_tol; step
+    done: list = [None] * blocks
+    quiet, i = np.zeros(blocks, dtype=int), 0     # steps in a row with every |v| < vel_tol (per block); step
+    rows_of = {}                                  # the live blocks' rows, by their number (the set only shrinks)
     while True:
         i += 1
-        if not np.all(np.isfinite(X)):
-            bad = int(np.flatnonzero(~np.isfinite(X).all(axis=1))[0])
-            raise SolverError(f"The reproduction from start {bad} diverged: its state is NaN/inf at "
-                              f"step {i}.", hint="check the model's stability, or lower dt.")
-        out[i - 1] = X
-        V = np.asarray(field(X), dtype=float)
-        if V.shape != X.shape:
-            raise InputError(f"The field returned shape {V.shape} for X of shape {X.shape}; "
+        live = [b for b in range(blocks) if done[b] is None]
+        if len(live) not in rows_of:
+            rows_of[len(live)] = np.concatenate([np.arange(b * size, (b + 1) * size) for b in live])
+        rows = rows_of[len(live)]
+        out[i - 1, rows] = X[rows]
+        V = np.asarray(field(X[rows], live), dtype=float)
+        if V.shape != (len(rows), n):
+            raise InputError(f"The field returned shape {V.shape} for X of shape {(len(rows), n)}; "
                              "expected the same shape.")
-        if not np.all(np.isfinite(V)):
-            bad = int(np.flatnonzero(~np.isfinite(V).all(axis=1))[0])
-            raise SolverError(f"The reproduction from start {bad} diverged: the field returned NaN/inf "
-                              f"at step {i}.", hint="check the model's stability, or lower dt.")
-        quiet = quiet + 1 if np.all(np.abs(V) < vel_tol) else 0
-        if i >= window and (quiet >= window or i >= max_steps - 1):
-            return [out[:i, s].copy() for s in range(m)]
+        for k, b in enumerate(live):
+            Vb = V[k * size:(k + 1) * size]
+            if not np.all(np.isfinite(Vb)):
+                bad = int(np.flatnonzero(~np.isfinite(Vb).all(axis=1))[0])
+                done[b] = SolverError(f"The reproduction from start {bad} diverged: the field returned NaN/inf "
+                                      f"at step {i}.", hint="check the model's stability, or lower dt.")
+                continue
+            quiet[b] = quiet[b] + 1 if np.all(np.abs(Vb) < vel_tol) else 0
+            if i >= window and (quiet[b] >= window or i >= max_steps - 1):
+                done[b] = [out[:i, s].copy() for s in range(b * size, (b + 1) * size)]
         with np.errstate(over="ignore", invalid="ignore"):
-            X = X + dt * V
+            X[rows] = X[rows] + dt * V
+        for b in range(blocks):
+            Xb = X[b * size:(b + 1) * size]
+            if done[b] is None and not np.all(np.isfinite(Xb)):
+                bad = int(np.flatnonzero(~np.isfinite(Xb).all(axis=1))[0])
+                done[b] = SolverError(f"The reproduction from start {bad} diverged: its state is NaN/inf at "
+                                      f"step {i + 1}.", hint="check the model's stability, or lower dt.")
+        if all(d is not None for d in done):
+            return done

@@ -6,7 +6,7 @@ import pytest
 
 import sosdyn as sd
 from sosdyn.errors import InputError
-from sosdyn.lfd.model import cdsp as cdsp_module
+from sosdyn.lfd.fit import pipeline
 from sosdyn.lfd.fit.certificate import check_certificate
 from sosdyn.lfd.fit.corrective import (
     REST_FRACTION,
@@ -14,6 +14,8 @@ from sosdyn.lfd.fit.corrective import (
     augmented,
     corrective_demonstration,
     corrective_pairs,
+    demo_score,
+    demo_scores,
     nearest,
     rest_rule,
     rollout_deviation,
@@ -105,7 +107,7 @@ def test_the_pseudo_demonstration_ends_at_the_goal(linear_demos):
     ({"corrective_min_dist": np.nan}, "corrective_min_dist must be a finite number >= 0"),
 ])
 def test_bad_corrective_parameters_fail_before_any_optimisation(kwargs, match, linear_demos, monkeypatch):
-    monkeypatch.setattr(cdsp_module, "fit_joint_gmm", lambda *a: pytest.fail("EM ran before the check"))
+    monkeypatch.setattr(pipeline, "fit_joint_gmm", lambda *a: pytest.fail("EM ran before the check"))
     with pytest.raises(InputError, match=match) as info:
         sd.CDSP(**kwargs).fit(linear_demos)
     assert "Try: the default" in str(info.value)
@@ -135,12 +137,12 @@ def test_an_uncertified_refit_ends_the_rounds_and_keeps_a_certified_one(linear_d
         calls.append(report)
         return dataclasses.replace(report, passed=len(calls) != 2)
 
-    monkeypatch.setattr(cdsp_module, "check_certificate", failing_second)
+    monkeypatch.setattr(pipeline, "check_certificate", failing_second)
     model = sd.CDSP(n_components=1, gamma=0.5, max_iter=5, verify_samples=500, corrective_rounds=3,
                 warp="none").fit(linear_demos)
     assert len(calls) == 2 and model.corrective_round_ == 0 and len(model.corrective_scores_) == 1
     assert model.certified_ and {r["round"] for r in model.history_} == {0}
-    monkeypatch.setattr(cdsp_module, "check_certificate", lambda *a: dataclasses.replace(check_certificate(*a),
+    monkeypatch.setattr(pipeline, "check_certificate", lambda *a: dataclasses.replace(check_certificate(*a),
                                                                                             passed=False))
     with pytest.raises(sd.NotCertifiedError):              # round 0 itself: raised as for a plain fit
         sd.CDSP(n_components=1, gamma=0.5, max_iter=5, verify_samples=500, corrective_rounds=3,
@@ -180,3 +182,15 @@ def test_a_corrective_model_round_trips_through_a_file(leaf2_models, tmp_path):
     X = np.array([[-10.0, 5.0], [3.0, -20.0]])
     np.testing.assert_array_equal(loaded.predict(X), model.predict(X))
     assert loaded.certified_ and loaded.dt_ == model.dt_ and loaded.scale_ == model.scale_
+
+
+def test_demo_scores_of_several_fields_are_each_ones_demo_score(linear_demos, linear_system):
+    """Three fields scored in one Euler loop: the true system (score near 0: Euler's error only), a
+    slower one, and one that diverges (inf); each equal, bit for bit, to its own demo_score."""
+    A, goal = linear_system
+    fields = [lambda X: (X - goal) @ A.T, lambda X: 0.5 * (X - goal) @ A.T, lambda X: -(X - goal) @ A.T]
+    m = len(linear_demos)
+    both = demo_scores(lambda X, live: np.vstack([fields[b](X[k * m:(k + 1) * m]) for k, b in enumerate(live)]),
+                       3, linear_demos)
+    assert both == [demo_score(f, linear_demos) for f in fields]
+    assert both[0] < 0.05 < both[1] < np.inf == both[2]

@@ -5,7 +5,7 @@ import pytest
 
 import sosdyn as sd
 from sosdyn.errors import InfeasibleError, InputError
-from sosdyn.lfd.model import cdsp as cdsp_module
+from sosdyn.lfd.fit import pipeline as cdsp_module
 
 SMALL = {"n_components": 1, "gamma": 0.5, "max_iter": 5, "verify_samples": 500, "warp": "none"}
 

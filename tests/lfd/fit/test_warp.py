@@ -7,8 +7,8 @@ import pytest
 
 from sosdyn.errors import InputError, ModelFileError
 from sosdyn.evaluation.metrics import dtwd
-from sosdyn.lfd.model import cdsp as cdsp_module
 from sosdyn.lfd.model.cdsp import CDSP
+from sosdyn.lfd.fit import pipeline
 from sosdyn.lfd.fit.corrective import rollout_deviation
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.runtime.predictor import warp_back, warp_back2, warp_forward, warp_forward2
@@ -18,6 +18,7 @@ from sosdyn.lfd.rollout import euler_until_rest
 from sosdyn.lfd.fit.warp import (
     AUTO_WARPS,
     LIP_FACTOR,
+    SIGMA_GRID,
     WARP_DEFAULTS,
     apply,
     check_maps,
@@ -26,7 +27,9 @@ from sosdyn.lfd.fit.warp import (
     jacobian,
     line_targets,
     lipschitz_numbers,
+    pulled_back,
     radial_targets,
+    stacked_maps,
 )
 
 GOAL = np.array([0.3, -0.2])
@@ -110,6 +113,45 @@ def test_fit_maps_respects_l_max_and_reduces_the_mismatch():
     assert after < 0.05 * before                    # measured 0.25 -> 0.0037
 
 
+def test_fit_maps_is_the_greedy_loop_over_centres_and_sigmas():
+    """The vectorised search picks, at every step, the bump the plain double loop over the candidate
+    centres and the sigma grid picks (the first one of least error): the same arrays, bit for bit."""
+    rng = np.random.default_rng(3)
+    X = np.cumsum(rng.normal(size=(60, 2)), axis=0) * 0.1
+    Y = radial_targets(X, X[-1], 0.75)
+    cur, centers = X.copy(), []
+    for _ in range(15):
+        best = None
+        for i in np.argsort(-np.sum((Y - cur) ** 2, axis=1))[:8]:
+            for s in 1.5 * SIGMA_GRID:
+                v = 0.5 * (Y - cur)[i]
+                v = v * min(1.0, 0.5 * s / (LIP_FACTOR * max(np.linalg.norm(v), 1e-300)))
+                new = cur + (np.exp(-np.sum((cur - cur[i]) ** 2, axis=1) / s ** 2)
+                             - np.exp(-np.sum((X[-1] - cur[i]) ** 2) / s ** 2))[:, None] * v
+                e = float(np.sum((Y - new) ** 2))
+                if best is None or e < best[0]:
+                    best = (e, cur[i].copy(), new)
+        centers.append(best[1])
+        cur = best[2]
+    C, V, S = fit_maps(X, Y, X[-1], 15, 0.5, 0.5, 1.5)
+    assert len(S) == 15 and np.array_equal(C, np.array(centers))
+    assert np.array_equal(apply(X, C, V, S, X[-1]), cur)
+
+
+def test_per_row_maps_are_each_rows_own_warp():
+    """stacked_maps: three blocks (a warp, none, another warp) through one pulled_back call give,
+    bit for bit, each block through its own warp (the field itself for none)."""
+    (C1, V1, S1, _), (C2, V2, S2, _) = random_maps(6, 1), random_maps(4, 2)
+    Z = np.random.default_rng(5).uniform(-1, 1, (6, 2))
+    f = lambda U: np.column_stack([-U[:, 0] + U[:, 1] ** 2, -2 * U[:, 1]])    # noqa: E731
+    both = pulled_back(Z, stacked_maps([(C1, V1, S1), None, (C2, V2, S2)], 2, 2), f)
+    alone = np.vstack([pulled_back(Z[:2], (C1, V1, S1), f), f(Z[2:4]), pulled_back(Z[4:], (C2, V2, S2), f)])
+    assert np.array_equal(both, alone)
+    U, J = jacobian(Z[:2], C1, V1, S1, np.zeros(2))
+    np.testing.assert_allclose(both[:2], np.linalg.solve(J, f(U)[:, :, None])[:, :, 0], rtol=1e-13, atol=1e-15)
+    assert stacked_maps([None, None], 3, 2) is None
+
+
 CDSP_SMALL = {"n_components": 3, "max_samples": 300, "verify_samples": 500}
 
 
@@ -143,7 +185,7 @@ def test_predict_is_the_pulled_back_field_and_the_goal_an_equilibrium(hook_model
     X = np.random.default_rng(0).uniform(-2, 2, (40, 2))
     Z = (X - m.goal_) / m.scale_
     U, J = jacobian(Z, *maps_of(m), np.zeros(2))
-    core = m._core(U)
+    core = pipeline.core_field(U, m.mixture_, m.C_, m.field_exps_)
     expected = np.array([np.linalg.solve(J[i], core[i]) for i in range(len(X))]) * m.scale_
     assert np.abs(m.predict(X) - expected).max() <= 1e-12 * np.abs(expected).max()
     step = m.predictor()
@@ -187,11 +229,11 @@ def test_auto_keeps_the_candidate_of_lowest_training_score(hook_models):
 def test_auto_fits_each_distinct_warp_once(hook_models, monkeypatch):
     """Two candidates whose greedy fits give the same bumps (here: the same settings) share one core
     fit and one score; a third, different one gets its own."""
-    monkeypatch.setattr(cdsp_module, "AUTO_WARPS", {"a": dict(WARP_DEFAULTS, n_maps=10), "b": dict(
+    monkeypatch.setattr(pipeline, "AUTO_WARPS", {"a": dict(WARP_DEFAULTS, n_maps=10), "b": dict(
         WARP_DEFAULTS, n_maps=10), "c": dict(WARP_DEFAULTS, n_maps=5)})
     calls = []
-    core = CDSP._fit_core
-    monkeypatch.setattr(CDSP, "_fit_core", lambda self, *a: calls.append(a[1]) or core(self, *a))
+    core = pipeline.fit_core
+    monkeypatch.setattr(pipeline, "fit_core", lambda *a: calls.append(a[1]) or core(*a))
     scores = CDSP(**CDSP_SMALL).fit(hook_models[0]).warp_scores_
     assert [None if m is None else len(m[2]) for m in calls] == [None, 10, 5]
     assert scores["a"] == scores["b"] != scores["c"] and np.isfinite(list(scores.values())).all()
@@ -208,7 +250,7 @@ def test_auto_keeps_no_warp_where_it_reproduces_best(linear_demos):
                                   {"l_max": 0}, {"beta": 0}, {"beta": 1.5}, {"decay": 1.5}, {"n_points": 3},
                                   {"match": "median"}, {"target": "circle"}, {"n_map": 10}, "yes", 3, None])
 def test_bad_warp_parameters_are_input_errors_before_fitting(warp, monkeypatch, hook_demos):
-    monkeypatch.setattr("sosdyn.lfd.model.cdsp.fit_joint_gmm", lambda *a: pytest.fail("fitted"))
+    monkeypatch.setattr("sosdyn.lfd.fit.pipeline.fit_joint_gmm", lambda *a: pytest.fail("fitted"))
     with pytest.raises(InputError, match="Try:"):
         CDSP(warp=warp).fit(hook_demos)
 

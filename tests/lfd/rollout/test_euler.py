@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from sosdyn.errors import InputError, SolverError
-from sosdyn.lfd.rollout import euler_until_rest
+from sosdyn.lfd.rollout import euler_blocks_until_rest, euler_until_rest
 
 
 def test_euler_on_xdot_minus_x_is_the_geometric_sequence_and_stops_at_rest():
@@ -25,3 +25,26 @@ def test_euler_arguments_are_keywords_and_checked():
         euler_until_rest(lambda X: -X, [[1.0]], dt=0.1, max_steps=10, vel_tol=0.1, window=0)
     with pytest.raises(SolverError, match="diverged"), np.errstate(over="ignore"):
         euler_until_rest(lambda X: X ** 2, [[10.0]], dt=0.5, max_steps=100, vel_tol=0.1, window=2)
+
+
+def test_blocks_stop_on_their_own_and_a_diverging_block_leaves_the_others_alone():
+    """Block 0: xdot = -x (rests at step 39 as above); block 1: xdot = -x/2 (slower); block 2:
+    xdot = x^2 from 10 (blows up). Each block's trajectories equal euler_until_rest on its own."""
+    rates = {0: -1.0, 1: -0.5}
+    calls = []
+
+    def field(X, live):
+        calls.append(list(live))
+        return np.vstack([X[k:k + 1] ** 2 if b == 2 else rates[b] * X[k:k + 1] for k, b in enumerate(live)])
+
+    kw = dict(dt=0.1, max_steps=1000, vel_tol=0.05, window=3)
+    with np.errstate(over="ignore"):
+        out = euler_blocks_until_rest(field, [[1.0, -2.0], [1.0, -2.0], [10.0, 10.0]], 3, **kw)
+    for b in (0, 1):
+        alone = euler_until_rest(lambda X, r=rates[b]: r * X, [[1.0, -2.0]], **kw)
+        assert len(out[b]) == 1 and np.array_equal(out[b][0], alone[0])
+    assert len(out[0][0]) == 39 and len(out[1][0]) > 39
+    assert isinstance(out[2], SolverError) and "diverged" in str(out[2])
+    assert calls[0] == [0, 1, 2] and calls[-1] == [1]         # stopped blocks are no longer evaluated
+    with pytest.raises(InputError, match="equal blocks"):
+        euler_blocks_until_rest(field, [[1.0], [2.0], [3.0]], 2, **kw)

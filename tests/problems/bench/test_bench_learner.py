@@ -44,6 +44,11 @@ def test_bench_learner_quick(tmp_path, times_ok):
     profiles = json.loads((tmp_path / "profiles.json").read_text())["profiles"]
     assert profiles and profiles[0]["self"]
     assert "## Targets" in (tmp_path / "summary.md").read_text()
+    over = json.loads((tmp_path / "overhead.json").read_text())
+    assert [r["shape"] for r in over["shapes"]] == ["BendedLine"]
+    assert over["ratio"] == pytest.approx(over["default_s"] / over["core_s"]) and over["default_s"] > 0
+    assert set(over["shapes"][0]["warp_scores"]) == {"none", "60 maps, decay 0.75", "60 maps, decay 1"}
+    assert "default CDSP() ≤ 2x its plain core" in (tmp_path / "summary.md").read_text()
 
 
 def test_a_missing_timing_is_an_error_not_zero():
@@ -54,9 +59,10 @@ def test_a_missing_timing_is_an_error_not_zero():
 
 def test_a_partial_run_leaves_the_skipped_parts_files_alone(tmp_path):
     before = {name: f"{{\"kept\": \"{name}\"}}" for name in
-              ("fits.json", "scaling.json", "backends.json", "profiles.json", "bench.json", "summary.md")}
+              ("fits.json", "scaling.json", "backends.json", "profiles.json", "bench.json", "summary.md",
+               "overhead.json")}
     for name, text in before.items():
         (tmp_path / name).write_text(text)
-    parts = "shapes,sweeps,scaling_n,backends,profiles,predict"
+    parts = "shapes,sweeps,scaling_n,backends,profiles,predict,overhead"
     assert learner.main(["--quick", "--skip", parts, "--out", str(tmp_path)]) == 0
     assert {name: (tmp_path / name).read_text() for name in before} == before

@@ -1,0 +1,70 @@
+"""The default's overhead (issue 26 item 1): ``CDSP()`` against its own plain core ``CDSP(warp="none")``.
+
+On the paper's four LASA shapes, in one process: one warm-up fit (the first fit of a process pays
+one-off costs, imports and first calls, that neither side should carry), then per shape the core
+fit and the default fit, alternately. Reports each time, the sum over shapes and the ratio
+default / core (target: <= 2), and the default's split from ``model.timings_``: ``candidates_s``
+(its three warp candidates: two greedy warp fits and three core fits, one of them the plain core
+itself) and ``choice_s`` (the training rollouts that score them); the floor of the ratio is the
+candidates' core fits, about 3 x the core. ``python -m problems bench --skip ...`` runs it as the
+part ``overhead`` (``overhead.json``); alone: ``python -m problems.bench.default_overhead``.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from sosdyn.lfd import CDSP, load_lasa
+from sosdyn.lfd.fit.params import PLAIN
+
+from ..settings import BENCH, PAPER_SHAPES
+from .timing import environment, fmt_s, now, timing, write_json
+
+TARGET = 2.0                # issue 26: default fit <= 2 x its plain core, sum over the paper's shapes
+WARM_UP = "Angle"           # not one of the paper's shapes
+
+
+def run(quick: bool = False, log=print) -> dict:
+    """Core and default fits of the paper's shapes (module docstring); ``quick``: one shape, small fits."""
+    shapes = [s.name for s in PAPER_SHAPES][:1 if quick else None]
+    small = dict(max_iter=2, verify_samples=500, max_samples=500) if quick else {}
+    CDSP(**PLAIN, **small).fit(load_lasa(WARM_UP))
+    rows = []
+    for name in shapes:
+        demos = load_lasa(name)
+        t0 = now()
+        CDSP(**PLAIN, **small).fit(demos)
+        core = now() - t0
+        t0 = now()
+        model = CDSP(**small).fit(demos)
+        default = now() - t0
+        T = model.timings_
+        rows.append({"shape": name, "core_s": core, "default_s": default, "ratio": default / core,
+                     "candidates_s": timing(T, "candidates_s", "model.timings_"),
+                     "choice_s": timing(T, "choice_s", "model.timings_"), "warp_scores": model.warp_scores_,
+                     "kept": min(model.warp_scores_, key=model.warp_scores_.get)})
+        log(f"overhead: {name:17s} core {fmt_s(core):>8s} default {fmt_s(default):>8s} ({default / core:.1f}x; "
+            f"candidates {fmt_s(rows[-1]['candidates_s'])}, choice {fmt_s(rows[-1]['choice_s'])}; kept "
+            f"{rows[-1]['kept']!r})")
+    core, default = sum(r["core_s"] for r in rows), sum(r["default_s"] for r in rows)
+    res = {"shapes": rows, "core_s": core, "default_s": default, "ratio": default / core, "target": TARGET,
+           "met": default / core <= TARGET, "candidates_over_core": sum(r["candidates_s"] for r in rows) / core,
+           "choice_over_core": sum(r["choice_s"] for r in rows) / core}
+    log(f"overhead: sum: core {fmt_s(core)}, default {fmt_s(default)}: {res['ratio']:.2f}x (target <= {TARGET}); "
+        f"candidates {res['candidates_over_core']:.2f}x core, choice {res['choice_over_core']:.2f}x core")
+    return res
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m problems.bench.default_overhead")
+    ap.add_argument("--quick", action="store_true", help="one shape, small fits (smoke test)")
+    ap.add_argument("--out", default=str(BENCH))
+    args = ap.parse_args(argv)
+    res = run(args.quick)
+    write_json(Path(args.out) / "overhead.json", {"environment": environment(), **res})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
