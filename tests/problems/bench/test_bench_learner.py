@@ -37,6 +37,13 @@ def test_bench_learner_quick(tmp_path, times_ok):
     for r in scal["rows"]:
         times_ok(r, ("total", "em", "build", "solve", "verify", "resolve_overhead", "solve_check"))
         assert r["build"] >= r["sos_build"] > 0 and r["build_over_solve"] == pytest.approx(r["build"] / r["solve"])
+        steps = r["per_step"]                   # the solver split by step kind adds up to the whole
+        assert set(steps) == {"dynamics", "ica"} and sum(s["sdps"] for s in steps.values()) == r["sdp_solves"]
+        assert sum(s["solve"] for s in steps.values()) == pytest.approx(r["solve"])
+        assert sum(s["iterations"] for s in steps.values()) == r["iterations"]
+    times_ok(scal["joint7"]["core"], ("total", "em", "build", "solve", "verify"))
+    assert scal["joint7"]["core"]["certified"] and scal["joint7"]["full"] > 0
+    assert scal["goals"]["joint7_core"]["value"] == scal["joint7"]["core"]["total"]
     assert scal["goals"]["ratio"]["value"] == pytest.approx(scal["rows"][1]["total"] / scal["rows"][0]["total"])
     assert "### state dimension n" in (tmp_path / "summary.md").read_text()
     targets = json.loads((tmp_path / "bench.json").read_text())["targets"]

@@ -17,6 +17,13 @@ from sosdyn.sos import QuadraticForm
 from sosdyn.sos.rigorous import ANSWERED
 
 TIGHT_CLARABEL = dict(tol_feas=1e-10, tol_gap_abs=1e-10, tol_gap_rel=1e-10)
+#: Clarabel factors the KKT systems of the constant-cone steps (``affine_psd``: linear fields, constant
+#: metric) on one thread: they are small (PSD blocks of at most 3n x 3n; an ICA step at n = 7 has ~1700
+#: rows), so a second thread costs more in synchronisation than it gains (issue 26: ~20 % of an ICA
+#: solve at n = 7). Their answers were the same bit for bit (fits at n = 2, 7 and the 7-D joint-space
+#: demos); the larger Gram blocks of higher-degree steps keep Clarabel's default (there the thread
+#: count changes the round-off).
+ONE_THREAD = dict(max_threads=1)
 FALLBACK_SOLVER = "SCS"
 FALLBACK_SETTINGS = dict(backend="cvxpy", eps=1e-9, max_iters=200_000)
 
@@ -103,6 +110,7 @@ def solve_with_fallback(prog, solver, affine_psd=False):
 
     ``affine_psd``: Clarabel (direct back end) gets the PSD blocks fixed by their equality rows
     as cones on affine expressions (:func:`~sosdyn.sos.conic.affine_cones`); the SCS retry never.
+    With ``affine_psd``, Clarabel runs on one thread (``ONE_THREAD``).
 
     Usable means the whole certificate passed the independent check (``sol.usable``). A proof
     of infeasibility (or unboundedness) is an answer, not a numerical failure, and is raised as
@@ -118,12 +126,13 @@ def solve_with_fallback(prog, solver, affine_psd=False):
     The library's own retries (``SOSProgram.solve(retry=...)``, :mod:`sosdyn.sos.remedies`) are
     off here: this is the learner's retry policy, and its fits stay what they were.
     """
-    direct = {"retry": False, **({"affine_psd": True} if affine_psd and solver.upper() == "CLARABEL" else {})}
+    clarabel = solver.upper() == "CLARABEL"
+    direct = {"retry": False, **({"affine_psd": True, **ONE_THREAD} if affine_psd and clarabel else {})}
     sol = prog.solve(solver=solver, **direct)
     if sol.usable or sol.status in ("infeasible", "unbounded") or solver == FALLBACK_SOLVER:
         return sol.raise_for_status()
     first = f"{solver}: {sol.status} ({sol.raw_status})"
-    if solver.upper() == "CLARABEL" and sol.status in ANSWERED:
+    if clarabel and sol.status in ANSWERED:
         tight = prog.solve(solver=solver, **TIGHT_CLARABEL, **direct)
         if tight.usable:
             tight.info["fallback"] = f"{solver} with tighter tolerances after {first}"
