@@ -49,11 +49,11 @@ def fit(name, train):
     t0 = time.perf_counter()
     if name == "CDSP":
         model = sd.CDSP(random_state=SEED).fit(train)
-        command = trials.translated(model.predictor(), model.goal_)
+        command = trials.speed_limited(trials.translated(model.predictor(), model.goal_))
         record = {"certified": bool(model.certified_), "warp": model.warp_ is not None}
     else:
         model = GMR(random_state=SEED).fit(train)
-        command = lambda x, goal: model.field(x[None], goal)[0]    # noqa: E731 (GMR.field takes the goal)
+        command = trials.speed_limited(lambda x, goal: model.field(x[None], goal)[0])   # field takes the goal
         record = {}
     return model, command, dict(record, fit_time_s=time.perf_counter() - t0)
 

@@ -2,8 +2,8 @@
 
 A trial starts the gripper at x0 (inverse kinematics, at rest), then at every simulator step
 (240 Hz) reads the end effector x and the current goal g(t), asks the model for
-xdot = f_g(x), limits its speed to |xdot| <= v_max and sends the joint velocities of
-:mod:`.control`. Disturbances: a push (a force on the end effector for :data:`PUSH_STEPS` steps)
+xdot = f_g(x) with its speed limited to |xdot| <= v_max (:func:`speed_limited`) and sends the
+joint velocities of :mod:`.control`. Disturbances: a push (a force on the end effector for :data:`PUSH_STEPS` steps)
 and a goal moved once by a few cm (the red marker moves with it). Measured per trial: the final
 distance to the current goal, the time from which the gripper stays within :data:`TOL` of it,
 whether a joint came within 0.5 deg of a limit, the peak joint speed (measured: a push can spin the
@@ -70,8 +70,14 @@ def translated(field, trained_goal):
     return lambda x, g: field(x - g + trained_goal)
 
 
-def run_trial(sim, command, goal0, spec: TrialSpec, *, max_speed=MAX_SPEED, on_step=None) -> tuple[dict, dict]:
-    """Drive the arm with ``command(x, goal) -> xdot`` from ``spec.start``; (measurements, path).
+def speed_limited(command, max_speed=MAX_SPEED):
+    """(x, g) -> ``command(x, g)`` scaled by min(1, max_speed / |xdot|)."""
+    return lambda x, g: limit_speed(command(x, g), max_speed)
+
+
+def run_trial(sim, command, goal0, spec: TrialSpec, *, on_step=None) -> tuple[dict, dict]:
+    """Drive the arm with ``command(x, goal) -> xdot`` (speed-limited) from ``spec.start``;
+    (measurements, path).
 
     ``on_step(k, t, sim, event)`` (optional) is called every step; ``event`` is "start", "push",
     "goal" (the first step of a disturbance) or None."""
@@ -99,7 +105,7 @@ def run_trial(sim, command, goal0, spec: TrialSpec, *, max_speed=MAX_SPEED, on_s
         xs[k], gs[k] = x, goal
         if on_step is not None:
             on_step(k, ts[k], sim, event)
-        qdot_cmd = sim.command(limit_speed(command(x, goal), max_speed))
+        qdot_cmd = sim.command(command(x, goal))
         peak_cmd = max(peak_cmd, float(np.abs(qdot_cmd).max()))
         sim.step()
         q, qdot = sim.joints()

@@ -77,9 +77,10 @@ def test_panda_jacobian_and_inverse_kinematics():
         assert err < 1e-4 and np.all((q > sim.lo) & (q < sim.hi))
         x0, quat = sim.ee()
         assert np.degrees(np.linalg.norm(control.rotation_error(quat, arm.DOWN))) < 0.1
-        dq = 1e-6 * np.array([1, -2, 1, 3, -1, 2, 1.0])
+        dq = 1e-3 * np.array([1, -2, 1, 3, -1, 2, 1.0])  # pybullet's poses are float32: no tinier steps
         sim.reset(q + dq)
-        np.testing.assert_allclose((sim.ee()[0] - x0) / 1e-6, (sim.jacobian(q) @ dq)[:3] / 1e-6, atol=1e-4)
+        moved, predicted = sim.ee()[0] - x0, (sim.jacobian(q) @ dq)[:3]
+        assert np.linalg.norm(moved - predicted) < 0.01 * np.linalg.norm(predicted)
     finally:
         sim.close()
 
