@@ -18,7 +18,8 @@ from sosdyn.report.figures.style import DEMO_COLOR, GOAL_STYLE, method_color, ne
 
 from .frames import save_gif, save_key_frames
 from .tasks import N_TRAIN
-from .trials import MAX_SPEED, PUSH_FORCE, PUSH_STEPS, TOL
+from .arm import RATE
+from .trials import GOAL_WINDOW, MAX_SPEED, PUSH_FORCE, PUSH_STEPS, PUSH_WINDOW, TOL
 
 MARGIN = 0.1                 # m around the demonstrations in the 3-D figure
 
@@ -129,7 +130,7 @@ def write_page(out_dir, results: dict, paths: dict, demos_of: dict, showcase) ->
     if showcase is not None:
         r, rec = showcase["row"], showcase["recorder"]
         err_mm = 1e3 * r["final_pos_err_m"]
-        titles = {"push": f"push {PUSH_FORCE:.0f} N for {1e3 * PUSH_STEPS / 240:.0f} ms",
+        titles = {"push": f"push {PUSH_FORCE:.0f} N for {1e3 * PUSH_STEPS / RATE:.0f} ms",
                   "goal moved": f"goal moved {1e2 * np.linalg.norm(r['goal_shift_m']):.0f} cm",
                   "end": f"end: {err_mm:.2f} mm from the goal"}
         save_key_frames(rec.frames, titles, r["method"], fig_dir / "frames")
@@ -141,12 +142,12 @@ def write_page(out_dir, results: dict, paths: dict, demos_of: dict, showcase) ->
                      f"goal moved at t = {r['goal_move_time_s']:.1f} s; within {TOL * 1e3:.0f} mm of the new "
                      f"goal from t = {_num(r['time_to_goal_s'], '.1f')} s.</figcaption></figure>")
         if rec.clip:
-            save_gif(rec.clip, fig_dir / "trial.gif", f"CDSP {r['task']}")
+            save_gif(rec.clip, fig_dir / "trial.gif", f"CDSP, {r['task']}")
             parts.append("<figure><img src='figures/trial.gif' alt='animated trial'><figcaption>The same "
                          "trial, one frame per 0.5 s played at 10 frames per second (5x real time)."
                          "</figcaption></figure>")
-    n_cdsp = [x for x in rows if x["method"] == "CDSP"]
-    verdict = f"{sum(x['success'] for x in n_cdsp)} of {len(n_cdsp)} CDSP trials succeeded"
+    verdict = "; ".join(f"{m}: {sum(x['success'] for x in rows if x['method'] == m)} of "
+                        f"{sum(x['method'] == m for x in rows)} trials succeeded" for m in dict.fromkeys(x["method"] for x in rows))
     shift = ", ".join(f"{v:+.3f}" for v in meta["transform"]["shift_m"])
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
@@ -158,7 +159,7 @@ def write_page(out_dir, results: dict, paths: dict, demos_of: dict, showcase) ->
 <p><b>Demonstrations</b>: the real Franka Panda RoboTasks recordings (Auddy et al. 2023; 9 kinesthetic
 demonstrations per task, positions in cm), mapped into the simulated Panda's base frame by
 <code>x_sim = x_cm / 100 + ({shift}) m</code>: one translation for all tasks, placing the centre of their
-bounding box 0.5 m in front of the robot, 0.3 m above the floor; every 50th sample is reachable with the gripper
+bounding box 0.5 m in front of the robot, 0.3 m above the floor; every 50th sample checked is reachable with the gripper
 pointing down (inverse kinematics error &lt; 0.1 mm, joints at least
 {min(v['min_joint_margin_deg'] for v in meta['reachability'].values()):.0f}° from their limits).
 Models learn from demonstrations 0-{N_TRAIN - 1} (positions in m); demonstrations {N_TRAIN}-8 give held-out starts.</p>
@@ -166,8 +167,8 @@ Models learn from demonstrations 0-{N_TRAIN - 1} (positions in m); demonstration
 scaled down to at most {MAX_SPEED} m/s; joint velocities by damped least squares on the 6-D Jacobian (position
 from the model, orientation held pointing down), joint-limit avoidance in the null space, sent with
 <code>VELOCITY_CONTROL</code> at the Panda's torque limits. <b>Disturbances</b>: a horizontal push of
-{PUSH_FORCE:.0f} N for {1e3 * PUSH_STEPS / 240:.0f} ms on the end effector at a random time; the goal moved by
-{meta['goal_shift_m'] * 100:.0f} cm in a random direction midway. <b>Success</b>: within {TOL * 1e3:.0f} mm of the current
+{PUSH_FORCE:.0f} N for {1e3 * PUSH_STEPS / RATE:.0f} ms on the end effector at a random time ({PUSH_WINDOW[0]:.0%}-{PUSH_WINDOW[1]:.0%} of the demonstrations'
+duration); the goal moved by {meta['goal_shift_m'] * 100:.0f} cm in a random direction at a random time ({GOAL_WINDOW[0]:.0%}-{GOAL_WINDOW[1]:.0%}). <b>Success</b>: within {TOL * 1e3:.0f} mm of the current
 goal at the end of the trial (twice the demonstrations' duration), no joint within 0.5° of a limit.
 Baseline: GMR (no stability guarantee) through the same controller.</p>
 <h2>One trial in the simulator</h2>{''.join(parts)}

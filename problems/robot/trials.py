@@ -25,6 +25,8 @@ MAX_SPEED = 0.25                # end-effector speed limit (m/s)
 PUSH_FORCE = 125.0              # N, horizontal, for PUSH_STEPS steps: a 6.25 N s shove
 PUSH_STEPS = 12                 # 0.05 s at 240 Hz
 GOAL_SHIFT = 0.04               # m
+PUSH_WINDOW = (0.1, 0.3)        # push times: uniform in these fractions of the demos' duration
+GOAL_WINDOW = (0.25, 0.45)      # goal-move times: the same
 PATH_EVERY = 8                  # path samples kept: 30 Hz
 
 
@@ -44,7 +46,7 @@ class TrialSpec:
 def trial_specs(task, demos, test_ids, rng, n_random, duration) -> list[TrialSpec]:
     """The held-out demonstrations' starts cycle through (push and goal moved, neither, push, goal moved);
     ``n_random`` starts drawn uniformly in the box of the task's demos (grown by 5 cm, z >= 0.1 m)
-    get both. Push and goal-move times are random in 10-30 % / 25-45 % of the demos' duration."""
+    get both. Push and goal-move times: uniform in :data:`PUSH_WINDOW` / :data:`GOAL_WINDOW`."""
     X = np.vstack([d.pos for d in demos])
     lo, hi = X.min(axis=0) - 0.05, X.max(axis=0) + 0.05
     lo[2] = max(lo[2], 0.1)
@@ -55,9 +57,9 @@ def trial_specs(task, demos, test_ids, rng, n_random, duration) -> list[TrialSpe
         angle = rng.uniform(0, 2 * np.pi)
         direction = rng.normal(size=3)
         return TrialSpec(task, start, demo,
-                         (rng.uniform(0.1, 0.3) * t_demo, PUSH_FORCE * np.array([np.cos(angle), np.sin(angle), 0.0]))
+                         (rng.uniform(*PUSH_WINDOW) * t_demo, PUSH_FORCE * np.array([np.cos(angle), np.sin(angle), 0.0]))
                          if push else None,
-                         (rng.uniform(0.25, 0.45) * t_demo, GOAL_SHIFT * direction / np.linalg.norm(direction))
+                         (rng.uniform(*GOAL_WINDOW) * t_demo, GOAL_SHIFT * direction / np.linalg.norm(direction))
                          if move else None, duration)
 
     specs = [spec(demos[i].pos[0], i, *conditions[k % 4]) for k, i in enumerate(test_ids)]
