@@ -11,7 +11,7 @@ import numpy as np
 import pybullet as p
 import pybullet_data
 
-from .control import joint_velocities, rotation_error
+from .control import K_ORIENT, joint_velocities, rotation_error
 
 URDF = "franka_panda/panda.urdf"
 EE_LINK = 11                     # panda_grasptarget: between the fingertips
@@ -84,7 +84,7 @@ class PandaSim:
         return bool(np.any((q - self.lo < HIT) | (self.hi - q < HIT)))
 
     # ------------------------------------------------------------------ acting
-    def command(self, v, orientation=DOWN, k_orient=4.0) -> np.ndarray:
+    def command(self, v, orientation=DOWN, k_orient=K_ORIENT) -> np.ndarray:
         """Send the joint velocities that realise the end-effector velocity v (3,) while holding
         ``orientation``; returns them (:func:`.control.joint_velocities`)."""
         q, _ = self.joints()

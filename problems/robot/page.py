@@ -35,7 +35,7 @@ def paths_figure(paths: dict, demos_of: dict, rows: list):
     demonstrations' box grown by :data:`MARGIN`, path points outside it not drawn."""
     tasks = list(demos_of)
     cols = min(2, len(tasks))
-    fig = new_figure(5.2 * cols, 4.6 * ((len(tasks) + cols - 1) // cols))
+    fig = new_figure(5.2 * cols, 5.0 * ((len(tasks) + cols - 1) // cols))
     index = {(r["task"], r["method"]): [] for r in rows}
     for (task, method, _), path in paths.items():
         index[(task, method)].append(path)

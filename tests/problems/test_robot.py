@@ -92,6 +92,7 @@ def test_quick_experiment(tmp_path):
     results = run.run(tmp_path, tasks.DEFAULT_DATA, quick=True)
     saved = json.loads((tmp_path / "results.json").read_text())
     assert saved["meta"]["simulator"].startswith("pybullet") and saved["meta"]["fits"]["openbox/CDSP"]["certified"]
+    assert {r["method"] for r in saved["trials"]} == {"CDSP", "GMR"}            # the baseline beside it
     cdsp = [r for r in results["trials"] if r["method"] == "CDSP"]
     assert len(cdsp) == 2 and all(r["push"] and r["goal_moved"] for r in cdsp)
     for r in cdsp:                                        # within 5 mm of the moved goal, no limit hit
