@@ -1,4 +1,4 @@
-"""``python -m problems robot [--quick] [--out DIR] [--data DIR]``: learned models drive a simulated
+"""``python -m problems robot [--quick] [--out DIR] [--tasks ...]``: learned models drive a simulated
 Franka Panda (the CDSP paper's robot experiment, on a simulator).
 
 Per task of the RoboTasks set (:mod:`.tasks`): ``sd.CDSP()`` and the GMR baseline are fitted on
@@ -26,7 +26,7 @@ from . import arm, trials
 from .arm import PandaSim
 from .frames import FrameRecorder
 from .page import write_page
-from .tasks import DEFAULT_DATA, N_TRAIN, TASKS, WORKSPACE_CENTRE, reachability, read_task, task_demos, \
+from .tasks import N_TRAIN, TASKS, WORKSPACE_CENTRE, reachability, read_task, task_demos, \
     workspace_shift
 
 SUBSAMPLE = 4
@@ -38,8 +38,6 @@ def parse_args(argv) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m problems robot", description=__doc__.split("\n\n")[0])
     p.add_argument("--quick", action="store_true", help="one task, two starts, no GIF (the tests; < 1 min)")
     p.add_argument("--out", type=Path, default=REPORTS / "robot", help="output folder (default reports/robot)")
-    p.add_argument("--data", type=Path, default=DEFAULT_DATA,
-                   help=f"the robottasks folder (default $SOSDYN_ROBOTTASKS or {DEFAULT_DATA})")
     p.add_argument("--tasks", nargs="*", default=None, choices=TASKS, help="tasks (default all four)")
     return p.parse_args(list(argv or []))
 
@@ -58,10 +56,10 @@ def fit(name, train):
     return model, command, dict(record, fit_time_s=time.perf_counter() - t0)
 
 
-def run(out_dir, data_dir, *, quick=False, tasks=None) -> dict:
+def run(out_dir, *, quick=False, tasks=None) -> dict:
     out_dir = Path(out_dir)
     tasks = tasks or (TASKS[:1] if quick else TASKS)
-    raw = {t: read_task(data_dir, t) for t in TASKS}
+    raw = {t: read_task(t) for t in TASKS}
     shift = workspace_shift(raw)
     rng = np.random.default_rng(SEED)
     sim = PandaSim()
@@ -105,7 +103,7 @@ def run(out_dir, data_dir, *, quick=False, tasks=None) -> dict:
             "max_speed_m_s": trials.MAX_SPEED, "success_tol_m": trials.TOL,
             "push": {"force_n": trials.PUSH_FORCE, "duration_s": trials.PUSH_STEPS / arm.RATE},
             "goal_shift_m": trials.GOAL_SHIFT,
-            "data": {"source": "RoboTasks (Auddy et al. 2023), positions in cm", "folder": str(data_dir),
+            "data": {"source": "sd.load_dataset('robottasks/<task>'): RoboTasks (Auddy et al. 2023), positions in cm",
                      "train": f"demos 0-{N_TRAIN - 1}, every {SUBSAMPLE}th sample",
                      "test": f"demos {N_TRAIN}-8 (starts)"},
             "transform": {"formula": "x_sim = x_cm / 100 + shift", "shift_m": shift,
@@ -120,7 +118,7 @@ def run(out_dir, data_dir, *, quick=False, tasks=None) -> dict:
 def main(argv=None):
     args = parse_args(argv)
     t0 = time.perf_counter()
-    results = run(args.out, args.data, quick=args.quick, tasks=args.tasks)
+    results = run(args.out, quick=args.quick, tasks=args.tasks)
     rows = results["trials"]
     for name in METHODS:
         mine = [r for r in rows if r["method"] == name]

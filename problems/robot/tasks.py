@@ -1,9 +1,9 @@
 """The real Franka demonstrations (RoboTasks, Auddy et al. 2023) mapped into the simulated Panda's
 workspace.
 
-Source: ``<data>/<task>/demo_NN.csv`` (header ``t,x,y,z,qw,qx,qy,qz``; 9 demonstrations of 1000
-samples at a nominal 60 Hz per task; positions in cm, see the data's README). Only the positions
-are used (the simulated gripper keeps pointing down). The map into the simulator's base frame is
+Source: the shipped sets ``sd.load_dataset("robottasks/<task>", positions_only=True)`` (9
+demonstrations of 1000 samples at a nominal 60 Hz per task; positions in cm, inferred, see the
+set's README). Only the positions are used (the simulated gripper keeps pointing down). The map into the simulator's base frame is
 one rigid translation for all four tasks, no scaling and no rotation:
 
     x_sim = x_cm / 100 + t,     t = c_ws - (centre of the box around every sample of the four tasks, m)
@@ -14,47 +14,19 @@ with c_ws = :data:`WORKSPACE_CENTRE`, 0.5 m in front of the robot's base, 0.3 m 
 """
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import numpy as np
 
 import sosdyn as sd
-from sosdyn.errors import InputError
-
-from ..settings import REPO
 
 TASKS = ("openbox", "bottle2shelf", "platestandingtolying", "pouring")
-#: Default data folder: $SOSDYN_ROBOTTASKS, else ../shared/data/robottasks next to the repository.
-DEFAULT_DATA = Path(os.environ.get("SOSDYN_ROBOTTASKS", REPO.parent / "shared" / "data" / "robottasks"))
 WORKSPACE_CENTRE = np.array([0.5, 0.0, 0.3])
 CM = 0.01
 N_TRAIN = 5
 
 
-def missing_data(data_dir) -> str | None:
-    """Why the tasks cannot be read from ``data_dir`` (None when they can)."""
-    data_dir = Path(data_dir)
-    missing = [t for t in TASKS if not sorted((data_dir / t).glob("demo_*.csv"))]
-    if missing:
-        return (f"the RoboTasks demonstrations are not in {data_dir} (no {missing[0]}/demo_*.csv); "
-                "pass --data DIR or set SOSDYN_ROBOTTASKS")
-    return None
-
-
-def read_task(data_dir, task: str) -> list[tuple[np.ndarray, np.ndarray]]:
+def read_task(task: str) -> list[tuple[np.ndarray, np.ndarray]]:
     """[(t (T,), positions (T, 3) in cm)] of the task's demonstrations, in file order."""
-    why = missing_data(data_dir)
-    if why:
-        raise InputError(f"{why}. Try: --data /path/to/robottasks.")
-    out = []
-    for path in sorted((Path(data_dir) / task).glob("demo_*.csv")):
-        with open(path) as f:
-            header = f.readline().strip().split(",")
-        cols = [header.index(c) for c in ("t", "x", "y", "z")]
-        a = np.loadtxt(path, delimiter=",", skiprows=1, usecols=cols)
-        out.append((a[:, 0], a[:, 1:]))
-    return out
+    return [(d.t, d.pos) for d in sd.load_dataset(f"robottasks/{task}", positions_only=True)]
 
 
 def workspace_shift(raw: dict) -> np.ndarray:

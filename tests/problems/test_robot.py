@@ -86,10 +86,7 @@ def test_panda_jacobian_and_inverse_kinematics():
 
 
 def test_quick_experiment(tmp_path):
-    why = tasks.missing_data(tasks.DEFAULT_DATA)
-    if why:
-        pytest.skip(why)
-    results = run.run(tmp_path, tasks.DEFAULT_DATA, quick=True)
+    results = run.run(tmp_path, quick=True)
     saved = json.loads((tmp_path / "results.json").read_text())
     assert saved["meta"]["simulator"].startswith("pybullet") and saved["meta"]["fits"]["openbox/CDSP"]["certified"]
     assert {r["method"] for r in saved["trials"]} == {"CDSP", "GMR"}            # the baseline beside it
