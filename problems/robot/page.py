@@ -146,8 +146,9 @@ def write_page(out_dir, results: dict, paths: dict, demos_of: dict, showcase) ->
             parts.append("<figure><img src='figures/trial.gif' alt='animated trial'><figcaption>The same "
                          "trial, one frame per 0.5 s played at 10 frames per second (5x real time)."
                          "</figcaption></figure>")
+    methods = dict.fromkeys(x["method"] for x in rows)
     verdict = "; ".join(f"{m}: {sum(x['success'] for x in rows if x['method'] == m)} of "
-                        f"{sum(x['method'] == m for x in rows)} trials succeeded" for m in dict.fromkeys(x["method"] for x in rows))
+                        f"{sum(x['method'] == m for x in rows)} trials succeeded" for m in methods)
     shift = ", ".join(f"{v:+.3f}" for v in meta["transform"]["shift_m"])
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
@@ -167,8 +168,10 @@ Models learn from demonstrations 0-{N_TRAIN - 1} (positions in m); demonstration
 scaled down to at most {MAX_SPEED} m/s; joint velocities by damped least squares on the 6-D Jacobian (position
 from the model, orientation held pointing down), joint-limit avoidance in the null space, sent with
 <code>VELOCITY_CONTROL</code> at the Panda's torque limits. <b>Disturbances</b>: a horizontal push of
-{PUSH_FORCE:.0f} N for {1e3 * PUSH_STEPS / RATE:.0f} ms on the end effector at a random time ({PUSH_WINDOW[0]:.0%}-{PUSH_WINDOW[1]:.0%} of the demonstrations'
-duration); the goal moved by {meta['goal_shift_m'] * 100:.0f} cm in a random direction at a random time ({GOAL_WINDOW[0]:.0%}-{GOAL_WINDOW[1]:.0%}). <b>Success</b>: within {TOL * 1e3:.0f} mm of the current
+{PUSH_FORCE:.0f} N for {1e3 * PUSH_STEPS / RATE:.0f} ms on the end effector at a random time
+({PUSH_WINDOW[0]:.0%}-{PUSH_WINDOW[1]:.0%} of the demonstrations' duration); the goal moved by
+{meta['goal_shift_m'] * 100:.0f} cm in a random direction at a random time
+({GOAL_WINDOW[0]:.0%}-{GOAL_WINDOW[1]:.0%}). <b>Success</b>: within {TOL * 1e3:.0f} mm of the current
 goal at the end of the trial (twice the demonstrations' duration), no joint within 0.5° of a limit.
 Baseline: GMR (no stability guarantee) through the same controller.</p>
 <h2>One trial in the simulator</h2>{''.join(parts)}

@@ -3,8 +3,9 @@ workspace.
 
 Source: the shipped sets ``sd.load_dataset("robottasks/<task>", positions_only=True)`` (9
 demonstrations of 1000 samples at a nominal 60 Hz per task; positions in cm, inferred, see the
-set's README). Only the positions are used (the simulated gripper keeps pointing down). The map into the simulator's base frame is
-one rigid translation for all four tasks, no scaling and no rotation:
+set's README). Only the positions are used (the simulated gripper keeps pointing down). The map
+into the simulator's base frame is one rigid translation for all four tasks, no scaling and no
+rotation:
 
     x_sim = x_cm / 100 + t,     t = c_ws - (centre of the box around every sample of the four tasks, m)
 

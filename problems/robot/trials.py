@@ -7,7 +7,8 @@ joint velocities of :mod:`.control`. Disturbances: a push (a force on the end ef
 and a goal moved once by a few cm (the red marker moves with it). Measured per trial: the final
 distance to the current goal, the time from which the gripper stays within :data:`TOL` of it,
 whether a joint came within 0.5 deg of a limit, the peak joint speed (measured: a push can spin the
-wrist faster than the controller may; and commanded), the largest displacement the push caused, and for starts from a held-out demonstration the path's mean distance to that demonstration.
+wrist faster than the controller may; and commanded), the largest displacement the push caused,
+and for starts from a held-out demonstration the path's mean distance to that demonstration.
 Success: within :data:`TOL` of the current goal at the end and no joint limit hit.
 """
 from __future__ import annotations
