@@ -60,8 +60,3 @@ def joint_velocities(J, twist, q, lo, hi, qdot_max, *, damping=DAMPING, k_limits
     qdot = np.where(blocked, 0.0, qdot)
     return qdot * min(1.0, float(np.min(qdot_max / np.maximum(np.abs(qdot), 1e-12))))
 
-
-def limit_speed(v, max_speed: float) -> np.ndarray:
-    """v scaled by min(1, max_speed / |v|): same direction, |v| <= max_speed."""
-    speed = float(np.linalg.norm(v))
-    return v if speed <= max_speed else v * (max_speed / speed)

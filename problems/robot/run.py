@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from functools import partial
 from importlib.metadata import version
 from pathlib import Path
 
@@ -19,6 +20,7 @@ import numpy as np
 
 import sosdyn as sd
 from sosdyn.evaluation.baselines import GMR
+from sosdyn.lfd.runtime.states import limit_speed
 
 from ..jsonio import write_json
 from ..settings import REPORTS, SEED
@@ -42,16 +44,22 @@ def parse_args(argv) -> argparse.Namespace:
     return p.parse_args(list(argv or []))
 
 
+def gmr_step(model, max_speed, x, goal):
+    """GMR's xdot at x for the goal (its field translated there), scaled to |xdot| <= max_speed
+    as CDSP's ``predictor(max_speed=...)`` does."""
+    return limit_speed(model.field(x[None], goal), max_speed)[0]
+
+
 def fit(name, train):
     """(fitted model, command (x, goal) -> xdot, fit record) of method ``name``."""
     t0 = time.perf_counter()
     if name == "CDSP":
         model = sd.CDSP(random_state=SEED).fit(train)
-        command = trials.speed_limited(trials.translated(model.predictor(), model.goal_))
+        command = model.predictor(max_speed=trials.MAX_SPEED)             # step(x, goal)
         record = {"certified": bool(model.certified_), "warp": model.warp_ is not None}
     else:
         model = GMR(random_state=SEED).fit(train)
-        command = trials.speed_limited(lambda x, goal: model.field(x[None], goal)[0])   # field takes the goal
+        command = partial(gmr_step, model, trials.MAX_SPEED)
         record = {}
     return model, command, dict(record, fit_time_s=time.perf_counter() - t0)
 

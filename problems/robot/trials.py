@@ -2,8 +2,8 @@
 
 A trial starts the gripper at x0 (inverse kinematics, at rest), then at every simulator step
 (240 Hz) reads the end effector x and the current goal g(t), asks the model for
-xdot = f_g(x) with its speed limited to |xdot| <= v_max (:func:`speed_limited`) and sends the
-joint velocities of :mod:`.control`. Disturbances: a push (a force on the end effector for :data:`PUSH_STEPS` steps)
+xdot = f_g(x) with its speed limited to |xdot| <= v_max (``model.predictor(max_speed=v_max)``,
+``step(x, goal)``) and sends the joint velocities of :mod:`.control`. Disturbances: a push (a force on the end effector for :data:`PUSH_STEPS` steps)
 and a goal moved once by a few cm (the red marker moves with it). Measured per trial: the final
 distance to the current goal, the time from which the gripper stays within :data:`TOL` of it,
 whether a joint came within 0.5 deg of a limit, the peak joint speed (measured: a push can spin the
@@ -19,7 +19,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .arm import DOWN, RATE
-from .control import limit_speed, rotation_error
+from .control import rotation_error
 
 TOL = 0.005                     # success radius (m)
 MAX_SPEED = 0.25                # end-effector speed limit (m/s)
@@ -65,17 +65,6 @@ def trial_specs(task, demos, test_ids, rng, n_random, duration) -> list[TrialSpe
 
     specs = [spec(demos[i].pos[0], i, *conditions[k % 4]) for k, i in enumerate(test_ids)]
     return specs + [spec(rng.uniform(lo, hi), None, True, True) for _ in range(n_random)]
-
-
-def translated(field, trained_goal):
-    """(x, g) -> xdot of a field (x -> xdot) learned for ``trained_goal``, moved to the goal g:
-    f_g(x) = f(x - g + trained_goal) (the models are translation-equivariant in their goal)."""
-    return lambda x, g: field(x - g + trained_goal)
-
-
-def speed_limited(command, max_speed=MAX_SPEED):
-    """(x, g) -> ``command(x, g)`` scaled by min(1, max_speed / |xdot|)."""
-    return lambda x, g: limit_speed(command(x, g), max_speed)
 
 
 def run_trial(sim, command, goal0, spec: TrialSpec, *, on_step=None) -> tuple[dict, dict]:

@@ -48,12 +48,13 @@ def test_joint_velocities_guard_and_speed_cap():
     np.testing.assert_allclose(qdot[:2], [2.0, 1.0])      # scaled by 1/20: direction kept
 
 
-def test_limit_speed_and_goal_translation():
-    np.testing.assert_allclose(control.limit_speed(np.array([3.0, 4.0, 0.0]), 1.0), [0.6, 0.8, 0.0])
-    np.testing.assert_array_equal(control.limit_speed(np.array([0.3, 0.4]), 1.0), [0.3, 0.4])
-    g0, g = np.array([1.0, 2.0, 3.0]), np.array([1.5, 2.0, 2.0])
-    field = trials.translated(lambda x: -(x - g0), g0)
-    np.testing.assert_allclose(field(np.array([0.0, 0.0, 0.0]), g), g)      # -(x - g) at x = 0
+def test_gmr_step_moves_with_the_goal_and_keeps_the_speed_limit():
+    class Field:                                          # xdot = -(x - goal), like a translated field
+        def field(self, X, goal):
+            return -(X - goal)
+    goal = np.array([1.0, 2.0, 3.0])
+    np.testing.assert_allclose(run.gmr_step(Field(), 10.0, np.zeros(3), goal), goal)
+    np.testing.assert_allclose(run.gmr_step(Field(), 0.5, np.array([1.0, 2.0, 1.0]), goal), [0, 0, 0.5])
 
 
 def test_time_to_goal_and_path_deviation():
