@@ -12,8 +12,9 @@ from sosdyn.report.figures import save_figure, streamline_panel
 
 from .lattice import field_panel
 from .plumbing import Context, figure_main, figure_spec
+from .settings import DEFAULT_METHOD
 
-METHODS = ("CDSP",)
+METHODS = (DEFAULT_METHOD,)
 
 
 def figure(entries: dict, ctx: Context, methods=METHODS) -> dict:
@@ -27,7 +28,7 @@ def figure(entries: dict, ctx: Context, methods=METHODS) -> dict:
     shown = [m for m in methods if any(p["title"].endswith(m) for p in panels)]
     cfg = ctx.config
     caption = ("Learned models of the LASA shapes, fitted with "
-               + ", ".join("the default CDSP()" if m == "CDSP" else m for m in shown)
+               + ", ".join("the default CDSP()" if m == DEFAULT_METHOD else m for m in shown)
                + ": streamlines of the field (gray), the demonstrations (solid red), and the "
                "reproductions from the demonstrations' starts (dashed blue), each rolled out until "
                f"it is within {cfg.goal_tol:g} mm of the goal (at most {cfg.max_duration_factor:g}x "

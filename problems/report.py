@@ -16,6 +16,7 @@ from sosdyn.report.html import build_report
 
 from . import fig1, fig2, fig3, fig4
 from .cache import cached_entries
+from .lasa_all import DEFAULT_LABEL
 from .plumbing import Context, context_from_args, parse_args
 from .jsonio import write_json
 from .results import assemble, relpath
@@ -33,8 +34,8 @@ def draw_figures(entries: dict, ctx: Context) -> dict:
     for extra in EXTRA_FIGURES:
         for name in _pages(ctx, extra):
             spec = _existing_figure(ctx, name)
-            if spec:
-                figures[name] = spec
+            if spec and (extra != "lasa_all" or DEFAULT_LABEL in spec["caption"]):
+                figures[name] = spec     # per-shape pages only when they show the default CDSP()
     return figures
 
 

@@ -128,6 +128,8 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            _clfdm, "autonomous"),
 )}
 METHOD_ORDER = tuple(METHODS)
+#: The method the streamline figures show (Fig. 1, the per-shape pages): the default CDSP().
+DEFAULT_METHOD = "CDSP"
 
 #: What the autonomous methods are integrated with (results["methods"][*]["settings"]).
 INTEGRATOR_NOTE = "LSODA, rtol 1e-6, atol 1e-8 (BDF if LSODA exceeds its budget)"
