@@ -59,7 +59,7 @@ def figure(entries: dict, ctx: Context, shapes=SHAPES) -> dict:
     columns = [(kind, s) for kind in ("push", "goal_change") for s in shapes]
     demos = {s.name: load_shape(s, ctx.config)[0].pos for s in shapes}
     # Drawn at print size (one A4 page: ~1.3 in per panel) with 8-pt text, 3 ticks per axis,
-    # one box per column shared by its rows, tick labels on the outer panels only.
+    # one box per column shared by its rows, x tick labels on the bottom row only.
     with mpl.rc_context({**STYLE, "axes.titlesize": 8.5, "axes.labelsize": 8,
                          "xtick.labelsize": 7.5, "ytick.labelsize": 7.5}):
         fig = Figure(figsize=(1.45 * len(columns) + 0.7, 1.3 * len(methods) + 0.9),
@@ -82,7 +82,7 @@ def figure(entries: dict, ctx: Context, shapes=SHAPES) -> dict:
         for r, method in enumerate(methods):
             for c in range(len(columns)):
                 ax = axes[r, c]
-                ax.label_outer()
+                ax.tick_params(labelbottom=r == len(methods) - 1)   # y labels stay: columns differ
                 ax.set_xlabel(ax.get_xlabel() if r == len(methods) - 1 else "")
                 ax.set_ylabel(method if c == 0 else "", color=method_color(method, methods),
                               fontweight="bold")
