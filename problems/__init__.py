@@ -19,6 +19,7 @@ EXPERIMENTS = {
     "lasa-dsopt": "lasa_dsopt",        # CDSP variants on the LPV-DS (ds-opt) LASA protocol
     "real-data": "real_data",          # held-out accuracy on the shipped real demonstration sets
     "real-data-configs": "real_data_configs",   # CDSP configurations on the real sets' training data
+    "lasa-dsopt-report": "lasa_dsopt_report",   # its pages redrawn from results.json (no fits)
     "warp-figure": "warp_figure",      # the pre-warp on DoubleBendedLine (docs/theory.md's figure)
     "demo3d": "demo3d",
     "demo7d": "demo7d",                # a certified CDSP from 5 noisy 7-D joint-space demonstrations

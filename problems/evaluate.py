@@ -15,12 +15,14 @@ import traceback
 import warnings
 from pathlib import Path
 
+import numpy as np
 from threadpoolctl import threadpool_limits
 
 from sosdyn.evaluation.convergence import grid_convergence, grid_convergence_budget
-from sosdyn.evaluation.metrics import velocity_rmse
+from sosdyn.evaluation.metrics import goal_error, velocity_rmse
 from sosdyn.evaluation.perturbations import make_events, robustness
-from sosdyn.evaluation.reproduction import describe, evaluate_reproductions
+from sosdyn.evaluation.reproduction import (describe, evaluate_reproductions, rollout_function,
+                                            rollout_to_goal)
 from sosdyn.lfd.rollout import BudgetRollout
 
 from .cache import cache_key, key_hash, read_cache, write_cache
@@ -97,7 +99,8 @@ def evaluate(shp: Shape, method: Method, config: EvalConfig) -> dict:
                              "rollout_budget_failures": getattr(roll, "failures", 0)}}
     if method.kind == "cdsp":
         _add_certificate(entry, model, fit_s)
-    plot = {"reproductions": [rounded(t.pos[::4]) for t in rep["trajectories"]], "exemplars": exemplars}
+    plot = {"reproductions": _drawn_reproductions(roll, demos, rep["trajectories"], config),
+            "exemplars": exemplars}
     if method.plot_field and autonomous:
         bounds = plot_bounds(demos, [t.pos for t in rep["trajectories"]])
         plot["field"] = field_on_lattice(model, bounds, config.field_grid)
@@ -122,6 +125,24 @@ def _accuracy(model, roll, demos, method: Method, fit_s: float):
     return accuracy, rep, seconds
 
 
+def _drawn_reproductions(roll, demos, trajectories, config: EvalConfig) -> list:
+    """The reproductions the figures draw: each run continued until it ends within
+    ``config.goal_tol`` of the goal (at most ``max_duration_factor`` x its demonstration; the
+    scored runs last the demonstration's duration), cut where it first gets there, every
+    4th sample."""
+    out = []
+    for demo, traj in zip(demos, trajectories):
+        if goal_error(traj, traj.goal_history[-1]) > config.goal_tol:
+            cap = config.max_duration_factor * demo.duration
+            traj = rollout_to_goal(rollout_function(roll), demo.pos[0],
+                                   min(2.0 * demo.duration, cap), dt=demo.duration / (len(demo.t) - 1),
+                                   tol=config.goal_tol, max_duration=cap)
+        near = np.linalg.norm(traj.pos - traj.goal_history[-1], axis=1) <= config.goal_tol
+        end = int(np.argmax(near)) + 1 if near.any() else len(traj.pos)
+        out.append(rounded(traj.pos[:end:4]))
+    return out
+
+
 def _robustness(roll, demos, config: EvalConfig):
     """The same seeded push and goal change for every method: (scores, exemplar runs, seconds)."""
     t0 = time.perf_counter()
@@ -129,7 +150,8 @@ def _robustness(roll, demos, config: EvalConfig):
     for kind, amp in (("push", config.push_amp), ("goal_change", config.goal_amp)):
         events = make_events(demos, kind, n=1, seed=config.seed, amplitude_frac=amp,
                              at_frac=config.at_frac)
-        res = robustness(roll, demos, events, duration_factor=config.duration_factor)
+        res = robustness(roll, demos, events, duration_factor=config.duration_factor,
+                         tol_mm=config.goal_tol, max_duration_factor=config.max_duration_factor)
         rob[kind] = {"dtwd_total": describe(res["dtwd"]), "goal_error": describe(res["goal_error"]),
                      "converged": float(res["fraction_converged"]),
                      "failures": [f["reason"][:300] for f in res["failures"]]}

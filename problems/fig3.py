@@ -26,9 +26,10 @@ def figure(entries: dict, ctx: Context) -> dict:
                f"(top; {100 * cfg.push_amp:.0f} % of the data's bounding-box diagonal) and after a goal "
                f"change (bottom; {100 * cfg.goal_amp:.0f} %, reference shifted with the goal), both at "
                f"{100 * cfg.at_frac:.0f} % of each demonstration, same seeded events for every method; "
-               f"rollouts last {cfg.duration_factor:g}x the demonstration. Point: median over the "
-               "demonstrations; whisker: interquartile range (25th to 75th percentile); hollow "
-               "point: not every run ended within 1 mm of its goal.")
+               f"each run lasts {cfg.duration_factor:g}x its demonstration, doubled until it ends within "
+               f"{cfg.goal_tol:g} mm of its goal, at most {cfg.max_duration_factor:g}x. Point: median "
+               "over the demonstrations; whisker: interquartile range (25th to 75th percentile); "
+               f"hollow point: not every run ended within {cfg.goal_tol:g} mm of its goal.")
     return figure_spec("fig3", paths, ctx.out_dir, caption)
 
 

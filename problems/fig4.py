@@ -11,6 +11,7 @@ import matplotlib as mpl
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 from sosdyn.report.figures import (GOAL_STYLE, STYLE, method_color, perturbation_trajectories,
                                    save_figure)
@@ -32,6 +33,21 @@ def _exemplar(entries, shp, method, kind):
             np.array(ex["goal_history"], dtype=float))
 
 
+def _share_column_boxes(axes) -> None:
+    """Every panel of a column gets the union of the column's limits (the panels share their
+    axes) and at most 3 ticks per axis."""
+    for col in axes.T:
+        drawn = [ax for ax in col if ax.lines]
+        if drawn:
+            lo = np.min([[*ax.get_xlim(), *ax.get_ylim()][::2] for ax in drawn], axis=0)
+            hi = np.max([[*ax.get_xlim(), *ax.get_ylim()][1::2] for ax in drawn], axis=0)
+            col[0].set_xlim(lo[0], hi[0])
+            col[0].set_ylim(lo[1], hi[1])
+        for ax in col:
+            ax.xaxis.set_major_locator(MaxNLocator(3))
+            ax.yaxis.set_major_locator(MaxNLocator(3))
+
+
 def figure(entries: dict, ctx: Context, shapes=SHAPES) -> dict:
     """One row per method, one column per (perturbation, shape): each panel shows one
     method's run on the demonstration, so no two methods' lines hide each other."""
@@ -42,17 +58,18 @@ def figure(entries: dict, ctx: Context, shapes=SHAPES) -> dict:
         return {}
     columns = [(kind, s) for kind in ("push", "goal_change") for s in shapes]
     demos = {s.name: load_shape(s, ctx.config)[0].pos for s in shapes}
-    with mpl.rc_context({**STYLE, "axes.titlesize": 8.5, "axes.labelsize": 7.5,
-                         "xtick.labelsize": 6.5, "ytick.labelsize": 6.5}):
-        fig = Figure(figsize=(1.85 * len(columns) + 0.5, 1.8 * len(methods) + 0.7),
+    # Drawn at print size (one A4 page: ~1.3 in per panel) with 8-pt text, 3 ticks per axis,
+    # one box per column shared by its rows, x tick labels on the bottom row only.
+    with mpl.rc_context({**STYLE, "axes.titlesize": 8.5, "axes.labelsize": 8,
+                         "xtick.labelsize": 7.5, "ytick.labelsize": 7.5}):
+        fig = Figure(figsize=(1.45 * len(columns) + 0.7, 1.3 * len(methods) + 0.9),
                      layout="constrained")
-        axes = fig.subplots(len(methods), len(columns), squeeze=False)
+        axes = fig.subplots(len(methods), len(columns), squeeze=False, sharex="col", sharey="col")
         for r, method in enumerate(methods):
             for c, (kind, shp) in enumerate(columns):
                 ax = axes[r, c]
                 run = _exemplar(entries, shp, method, kind)
                 if run is None:
-                    ax.set_axis_off()
                     ax.text(0.5, 0.5, "not run", ha="center", va="center", transform=ax.transAxes,
                             color="0.5")
                     continue
@@ -61,21 +78,25 @@ def figure(entries: dict, ctx: Context, shapes=SHAPES) -> dict:
                 perturbation_trajectories(ax, demos[shp.name], {method: pos}, events, goal_history,
                                           title=f"({'abcd'[c]}) {shp.name}\n{label}" if r == 0 else None,
                                           methods=methods)
-                ax.set_xlabel("" if r < len(methods) - 1 else ax.get_xlabel())
-                ax.set_ylabel(f"{method}\n{ax.get_ylabel()}" if c == 0 else "")
-                if c == 0:
-                    ax.yaxis.label.set_color(method_color(method, methods))
+        _share_column_boxes(axes)
+        for r, method in enumerate(methods):
+            for c in range(len(columns)):
+                ax = axes[r, c]
+                ax.tick_params(labelbottom=r == len(methods) - 1)   # y labels stay: columns differ
+                ax.set_xlabel(ax.get_xlabel() if r == len(methods) - 1 else "")
+                ax.set_ylabel(method if c == 0 else "", color=method_color(method, methods),
+                              fontweight="bold")
         handles = [Line2D([], [], color="0.75", lw=5, alpha=0.8, label="demonstration"),
                    Line2D([], [], color="0.3", lw=1.6, label="reproduction (row's colour)"),
                    Line2D([], [], color="black", lw=1.4, marker=">", markersize=5, label="push"),
                    Line2D([], [], label="old goal", **{**GOAL_STYLE, "markerfacecolor": "white",
                                                        "markeredgecolor": "black"}),
                    Line2D([], [], label="goal / new goal", **GOAL_STYLE)]
-        fig.legend(handles=handles, loc="outside lower center", ncols=3)
+        fig.legend(handles=handles, loc="outside lower center", ncols=3 if len(columns) > 2 else 2)
     paths = save_figure(fig, Path(ctx.fig_dir) / "fig4_perturbations")
     caption = ("Exemplar reproductions of demonstration 1, one row per method, under a sudden push "
                "(a, b; black arrow from the state before to the state after) and a sudden goal "
-               "change (c, d), same event for every method. The gray band is the demonstration "
+               "change (c, d), same event for every method; the panels of a column share their axes (mm). The gray band is the demonstration "
                "(for c, d: before the change).")
     if all(m in methods for m in ("CDSP (paper)", "SEDS-like")) and coincide(entries, "CDSP (paper)",
                                                                              "SEDS-like"):

@@ -9,6 +9,7 @@ which the main report includes when present.
 """
 from __future__ import annotations
 
+import argparse
 import time
 from pathlib import Path
 
@@ -22,9 +23,11 @@ from .jsonio import write_json
 from .lattice import field_panel
 from .plumbing import Context, parse_args
 from .results import assemble, relpath
-from .settings import METHOD_ORDER, METHODS, REPORTS, EvalConfig, shape
+from .settings import DEFAULT_METHOD, METHOD_ORDER, METHODS, REPORTS, EvalConfig, shape
 
-FIELD_METHOD = "CDSP-cubic"
+FIELD_METHOD = DEFAULT_METHOD
+#: How the captions name the default model (the user report includes only pages drawn with it).
+DEFAULT_LABEL = "the default CDSP()"
 #: Streamline panels per figure (3 columns x 2 rows fills an A4 page width).
 PER_PAGE = 6
 
@@ -54,7 +57,8 @@ def draw_pages(panels: list, out_dir: Path, sub: Path, field_method: str, K: int
         fig = streamline_panel(chunk, ncols=3, panel_size=3.1)
         paths = save_figure(fig, fig_dir / name, dpi=130)
         first, last = k * PER_PAGE + 1, k * PER_PAGE + len(chunk)
-        caption = (f"LASA shapes {first}-{last} of {len(panels)}, {field_method} (K = {K}): "
+        model = DEFAULT_LABEL if field_method == DEFAULT_METHOD else f"{field_method} (K = {K})"
+        caption = (f"LASA shapes {first}-{last} of {len(panels)}, {model}: "
                    "streamlines, demonstrations (red) and reproductions (dashed blue); the panel title gives the mean DTWD over the demonstrations. "
                    "Full table: reports/lasa_all/index.html.")
         (fig_dir / f"{name}.caption.txt").write_text(caption)
@@ -85,12 +89,21 @@ def run(names, methods, config: EvalConfig, out_dir=REPORTS, *, n_jobs=2, K=6,
     return {"html": render_html(results, sub, trusted=True)}
 
 
+def take_methods_argument(argv) -> tuple[tuple, list]:
+    """``(methods, rest of argv)`` from ``--methods NAME ...`` (default: every method)."""
+    parser = argparse.ArgumentParser(add_help=False)
+    parser.add_argument("--methods", nargs="+", choices=METHOD_ORDER, default=METHOD_ORDER)
+    args, rest = parser.parse_known_args(list(argv or []))
+    return tuple(args.methods), rest
+
+
 def main(argv=None):
-    args = parse_args(take_scheduler_argument(argv), "All 30 LASA shapes x methods (slow; --scheduler ADDRESS: "
-                      "on a Dask cluster)")
+    methods, argv = take_methods_argument(take_scheduler_argument(argv))
+    args = parse_args(argv, "All 30 LASA shapes x methods (slow; --scheduler ADDRESS: on a Dask cluster; "
+                      "--methods NAME ...: only these, e.g. --methods CDSP for the per-shape figures)")
     names = args.shapes or sd.lasa_names()
     config = EvalConfig(quick=args.quick, n_grid=5, field_grid=50)
     t0 = time.perf_counter()
-    paths = run(names, METHOD_ORDER, config, args.out, n_jobs=args.jobs, force=args.force)
+    paths = run(names, methods, config, args.out, n_jobs=args.jobs, force=args.force)
     print(f"lasa-all: {paths['html']} ({time.perf_counter() - t0:.1f} s)")
     return 0

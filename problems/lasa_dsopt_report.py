@@ -6,14 +6,19 @@ aggregation) is :mod:`problems.lasa_dsopt`.
 from __future__ import annotations
 
 import html
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 from matplotlib.ticker import FuncFormatter, LogLocator
 
+from sosdyn.errors import InputError
 from sosdyn.report.figures import save_figure
 from sosdyn.report.figures.style import method_color, new_figure, styled
+from sosdyn.report.html import report_css
+
+from .settings import REPORTS
 
 #: 26-shape test-DTWD means (mm) as published for the ds-opt protocol (Figueroa & Billard,
 #: "A Physically-Consistent Bayesian Non-Parametric Mixture Model for Dynamical System
@@ -74,7 +79,7 @@ def figure(per_shape: dict, variants, seds: dict | None, out_dir: Path, test_dem
     offsets = np.linspace(-0.22, 0.22, len(variants)) if len(variants) > 1 else [0.0]
     extra = [v for v in variants if v != "CDSP default"]
     colors = {v: method_color(v, extra) for v in extra}
-    colors["CDSP default"] = "#0072B2"
+    colors["CDSP default"] = method_color("CDSP")
     for v, dx, marker in zip(variants, offsets, MARKERS):
         y = np.array([per_shape[s]["variants"][v]["dtwd_test_mean"] or np.nan for s in shapes], dtype=float)
         err = np.array([per_shape[s]["variants"][v]["dtwd_test_std"] or 0.0 for s in shapes], dtype=float)
@@ -111,54 +116,125 @@ def fmt(value, digits=0) -> str:
     return "—" if value is None or not math.isfinite(value) else f"{value:,.{digits}f}"
 
 
-def write_html(results: dict, out_dir: Path) -> Path:
-    """A self-contained page: summary, per-shape table, figure (all text escaped)."""
-    e = html.escape
-    variants = results["meta"]["variants"]
-    seeds = results["meta"]["seeds"]
-    has_seds = results["meta"]["seds_source"] is not None
+#: At most this many columns in a table of the page (its tables fit a laptop window).
+MAX_COLUMNS = 10
+
+
+def _table(head, rows, sticky=False) -> str:
+    """An HTML table in the report's style (cells already escaped); the first column is the key."""
+    cell = lambda tag, i, c: f'<{tag}{" class=key" if i == 0 else ""}>{c}</{tag}>'   # noqa: E731
+    body = "".join("<tr>" + "".join(cell("td", i, c) for i, c in enumerate(r)) + "</tr>" for r in rows)
+    return (f'<div class="table-wrap{" sticky" if sticky else ""}"><table><thead><tr>'
+            + "".join(cell("th", i, h) for i, h in enumerate(head)) + f"</tr></thead><tbody>{body}</tbody></table></div>")
+
+
+def _dtwd_cell(r: dict, seeds: int) -> str:
+    """Test DTWD (± std over seeds), marked when not certified."""
+    text = fmt(r["dtwd_test_mean"]) + (f" ± {fmt(r['dtwd_test_std'])}" if seeds > 1 and
+                                       r["dtwd_test_std"] is not None else "")
+    return text + ("" if r["certified"] else ' <span class="fail">(not certified)</span>')
+
+
+def summary_table(results: dict) -> str:
+    """One row per variant: 26-shape means, worst ratio to the copy, counts, fit time."""
+    e, has_seds = html.escape, results["meta"]["seds_source"] is not None
+    head = ["variant", "test mean", "test median", "train mean", "worst ÷ copy (shape)",
+            "better than copy"] + (["better than SEDS"] if has_seds else []) + ["certified", "mean fit (s)"]
     rows = []
-    for s, d in results["shapes"].items():
-        cells = [e(s), fmt(d["nearest_demo"])] + ([fmt(d["seds_published"])] if has_seds else [])
-        for v in variants:
-            r = d["variants"][v]
-            text = fmt(r["dtwd_test_mean"]) + (f" ± {fmt(r['dtwd_test_std'])}" if seeds > 1 and
-                                                 r["dtwd_test_std"] is not None else "")
-            cells.append(text + ("" if r["certified"] else " (not certified)"))
-            cells.append(fmt(r["ratio_to_nearest"], 2))
-        rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
-    head = ["shape", "copy"] + (["SEDS (pub.)"] if has_seds else [])
-    for v in variants:
-        head += [e(v), "÷ copy"]
-    summary = []
     for v, sm in results["summary"].items():
-        summary.append(
-            f"<li><b>{e(v)}</b>: {sm['n_shapes']}-shape test mean {fmt(sm.get('dtwd_test_mean'))} "
-            f"(median {fmt(sm.get('dtwd_test_median'))}, train {fmt(sm.get('dtwd_train_mean'))}); "
-            f"worst ratio to copy {fmt(sm.get('worst_ratio_to_nearest'), 2)} ({e(str(sm.get('worst_shape')))}); "
-            f"better than copy on {sm.get('n_better_than_nearest')}/{sm['n_shapes']}"
-            + (f", than SEDS on {sm['n_better_than_seds']}/{sm['n_shapes']}" if 'n_better_than_seds' in sm else "")
-            + f"; certified {sm['n_certified']}/{sm['n_shapes']}; mean fit {fmt(sm.get('fit_s_mean'), 1)} s</li>")
+        n = sm["n_shapes"]
+        rows.append([e(v), fmt(sm.get("dtwd_test_mean")), fmt(sm.get("dtwd_test_median")),
+                     fmt(sm.get("dtwd_train_mean")),
+                     f"{fmt(sm.get('worst_ratio_to_nearest'), 2)} ({e(str(sm.get('worst_shape')))})",
+                     f"{sm.get('n_better_than_nearest', 0)}/{n}"]
+                    + ([f"{sm.get('n_better_than_seds', 0)}/{n}"] if has_seds else [])
+                    + [f"{sm['n_certified']}/{n}", fmt(sm.get("fit_s_mean"), 1)])
+    return _table(head, rows)
+
+
+def shape_table(results: dict, variants) -> str:
+    """One row per shape: the copy, SEDS (published) and the drawn variants' test DTWD (÷ copy)."""
+    e, has_seds, seeds = html.escape, results["meta"]["seds_source"] is not None, results["meta"]["seeds"]
+    head = ["shape", "copy"] + (["SEDS (pub.)"] if has_seds else []) + [e(v) for v in variants]
+    rows = [[e(s), fmt(d["nearest_demo"])] + ([fmt(d["seds_published"])] if has_seds else [])
+            + [f"{_dtwd_cell(d['variants'][v], seeds)} <span class=note>×{fmt(d['variants'][v]['ratio_to_nearest'], 2)}</span>"
+               for v in variants] for s, d in results["shapes"].items()]
+    return _table(head, rows, sticky=True)
+
+
+def variant_details(results: dict) -> str:
+    """Per variant, a folded table: shape, test and train DTWD, ratio to the copy, fit time."""
+    e, seeds = html.escape, results["meta"]["seeds"]
+    out = []
+    for v in results["meta"]["variants"]:
+        rows = [[e(s), _dtwd_cell(d["variants"][v], seeds), fmt(d["variants"][v].get("dtwd_train_mean")),
+                 fmt(d["variants"][v]["ratio_to_nearest"], 2), fmt(d["variants"][v].get("fit_s"), 1)]
+                for s, d in results["shapes"].items()]
+        settings = results["meta"].get("settings", {}).get(v)
+        out.append(f"<details><summary>{e(v)}</summary>"
+                   + (f'<p class="note">settings: <code>{e(str(settings))}</code></p>' if settings else "")
+                   + _table(["shape", "test DTWD", "train DTWD", "÷ copy", "fit (s)"], rows) + "</details>")
+    return "".join(out)
+
+
+def write_html(results: dict, out_dir: Path) -> Path:
+    """A self-contained page in the user report's style (:func:`sosdyn.report.html.report_css`):
+    summary table, figure, per-shape table of the drawn variants, per-variant details (all text
+    escaped; no table wider than :data:`MAX_COLUMNS`)."""
+    e = html.escape
+    seeds = results["meta"]["seeds"]
     refs = ", ".join(f"{e(k)} {v:.0f}" for k, v in results["reference"].items())
     refs = (f"Reference 26-shape means (mm; published, copy measured): {refs}." if refs else
             f"Copy (nearest training demo) mean {fmt(results['nearest_demo_mean'])} mm; no published references "
             "(they are for the standard split).")
     test_demos = demo_names(results["meta"].get("split_demos", [None, (4, 5, 6)])[1])
     fig = results["figures"]["lasa_dsopt"]
+    drawn = figure_variants(results["meta"]["variants"])
     page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>CDSP on the LPV-DS LASA protocol</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto}}table{{border-collapse:collapse;font-size:90%}}
-td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}</style></head>
-<body><h1>CDSP on the LPV-DS (ds-opt) LASA protocol</h1>
-<p>{e(results['meta']['protocol'])} Seeds per fit: {seeds} (random_state 0..{seeds - 1}).
-{refs}</p>
-<ul>{''.join(summary)}</ul>
-<figure><img src="{e(fig['png'])}" alt="per-shape test DTWD" style="max-width:100%">
-<figcaption>{e(fig['caption'])}</figcaption></figure>
-<table><tr>{''.join(f'<th>{h}</th>' for h in head)}</tr>{''.join(rows)}</table>
-<p>Test DTWD in mm (mean over test demos {test_demos}); "÷ copy" = ratio to the nearest-training-demo score.
-Wall time {results['meta']['wall_s']:.0f} s.</p></body></html>
+<html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
+<title>CDSP on the LPV-DS LASA protocol</title>
+<style>
+{report_css()}</style></head>
+<body><header><h1>CDSP on the LPV-DS (ds-opt) LASA protocol</h1>
+<p class="subtitle">{e(results['meta']['protocol'])} Seeds per fit: {seeds} (random_state 0..{seeds - 1}).
+{refs} Wall time {results['meta']['wall_s']:.0f} s.</p></header>
+<h2>Summary</h2>
+<p class="note">Test DTWD in mm, mean over test demos {test_demos}, per variant over the {len(results['shapes'])} shapes;
+"÷ copy" = ratio to the nearest-training-demo score.</p>
+{summary_table(results)}
+<h2>Per shape</h2>
+<figure><img src="{e(fig['png'])}" alt="per-shape test DTWD"><figcaption>{e(fig['caption'])}</figcaption></figure>
+<p class="note">Test DTWD (mm) of the variants drawn in the figure; small: ratio to the copy.
+Every variant, shape by shape, is under <a href="#details">Per-variant details</a>.</p>
+{shape_table(results, drawn)}
+<h2 id="details">Per-variant details</h2>
+{variant_details(results)}
+</body></html>
 """
     path = Path(out_dir) / "index.html"
     path.write_text(page)
     return path
+
+
+def rebuild(out_dir: Path) -> dict:
+    """Redraw the figure and rewrite index.html of a finished run from its ``results.json``
+    (no fitting): ``python -m problems lasa-dsopt-report reports/lasa_dsopt ...``."""
+    out_dir = Path(out_dir)
+    results = json.loads((out_dir / "results.json").read_text())
+    per_shape, meta = results["shapes"], results["meta"]
+    seds = ({s: d["seds_published"] for s, d in per_shape.items() if d.get("seds_published") is not None}
+            if meta.get("seds_source") else None)
+    test_demos = meta.get("split_demos", [None, (4, 5, 6)])[1]
+    paths = figure(per_shape, meta["variants"], seds, out_dir, test_demos, references=bool(results["reference"]))
+    return {"html": write_html(results, out_dir), **paths}
+
+
+def main(argv=None) -> int:
+    """``python -m problems lasa-dsopt-report [DIR ...]``: :func:`rebuild` each folder (default
+    every ``reports/lasa_dsopt*`` with a results.json)."""
+    folders = [Path(a) for a in argv or []] or sorted(p.parent for p in REPORTS.glob("lasa_dsopt*/results.json"))
+    for folder in folders:
+        if not (folder / "results.json").is_file():
+            raise InputError(f"{folder} has no results.json. Try: a folder written by python -m problems lasa-dsopt.")
+        print(f"lasa-dsopt-report: {rebuild(folder)['html']}")
+    return 0

@@ -16,25 +16,30 @@ from sosdyn.report.html import build_report
 
 from . import fig1, fig2, fig3, fig4
 from .cache import cached_entries
+from .lasa_all import DEFAULT_LABEL
 from .plumbing import Context, context_from_args, parse_args
 from .jsonio import write_json
 from .results import assemble, relpath
 
 #: Figures other experiments write (lasa-all, demo3d), included when present; each may
 #: have further pages ``<name>_2``, ``<name>_3``, ...
-EXTRA_FIGURES = ("lasa_all", "demo3d")
+EXTRA_FIGURES = ("demo3d", "lasa_all")
 
 
 def draw_figures(entries: dict, ctx: Context) -> dict:
-    """Figs. 1-4 from the entries, plus the extra figures already on disk."""
+    """Figs. 1-4 from the entries and the extra figures already on disk, in print order: Figs.
+    1-3, the 3-D demo (half a page, next to Fig. 3), Fig. 4 (a full page), the per-shape pages."""
     figures = {}
-    for mod in (fig1, fig2, fig3, fig4):
+    for mod in (fig1, fig2, fig3):
         figures.update(mod.figure(entries, ctx))
+    drawn_fig4 = fig4.figure(entries, ctx)
     for extra in EXTRA_FIGURES:
         for name in _pages(ctx, extra):
             spec = _existing_figure(ctx, name)
-            if spec:
-                figures[name] = spec
+            if spec and (extra != "lasa_all" or DEFAULT_LABEL in spec["caption"]):
+                figures[name] = spec     # per-shape pages only when they show the default CDSP()
+        if extra == "demo3d":
+            figures.update(drawn_fig4)   # after the half-page 3-D figure, which shares Fig. 3's page
     return figures
 
 

@@ -78,6 +78,11 @@ def _cdsp(metric_degree=0, field_degree=1, solver_method="alternating", metric="
     return settings
 
 
+def _default(shp: Shape, quick: bool) -> dict:
+    """``CDSP()`` as a user gets it: every parameter at its default (K = 8, ICA, warp, refits)."""
+    return dict(max_samples=400, max_iter=4, verify_samples=2000) if quick else {}
+
+
 def _gmr(shp: Shape, quick: bool) -> dict:
     return dict(n_components=shp.K, random_state=SEED)
 
@@ -94,6 +99,9 @@ def _clfdm(shp: Shape, quick: bool) -> dict:
 
 
 METHODS: dict[str, Method] = {m.name: m for m in (
+    Method("CDSP", "The default model, CDSP() with no arguments: K = 8 linear sub-systems with a "
+           "constant metric (ICA), a diffeomorphic pre-warp (warp='auto') and corrective refits; "
+           "SOS certificate.", _default, "cdsp", plot_field=True),
     Method("CDSP (paper)",
            "The paper's formulation (linear sub-systems A_k z + b_k, degree-2 polynomial metric "
            "M(z)) fitted with our solver: plain alternation of the convex dynamics and metric "
@@ -120,6 +128,8 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            _clfdm, "autonomous"),
 )}
 METHOD_ORDER = tuple(METHODS)
+#: The method the streamline figures show (Fig. 1, the per-shape pages): the default CDSP().
+DEFAULT_METHOD = "CDSP"
 
 #: What the autonomous methods are integrated with (results["methods"][*]["settings"]).
 INTEGRATOR_NOTE = "LSODA, rtol 1e-6, atol 1e-8 (BDF if LSODA exceeds its budget)"
@@ -134,7 +144,10 @@ class EvalConfig:
     ``n_demos``/``subsample`` shrink the data (tests); ``n_grid`` x ``n_grid`` starts for
     grid convergence (batched for autonomous models); ``push_amp``/``goal_amp``: event
     amplitudes as a fraction of the data's bounding-box diagonal, at ``at_frac`` of each
-    demo; ``field_grid``: lattice of the cached field for streamline plots.
+    demo; a perturbed run (and a reproduction drawn in a figure) lasts ``duration_factor`` x
+    its demonstration, doubled until it ends within ``goal_tol`` (mm) of its goal, at most
+    ``max_duration_factor`` x (:func:`sosdyn.evaluation.reproduction.rollout_to_goal`);
+    ``field_grid``: lattice of the cached field for streamline plots.
     """
 
     quick: bool = False
@@ -145,6 +158,8 @@ class EvalConfig:
     goal_amp: float = 0.1
     at_frac: float = 0.3
     duration_factor: float = 1.5
+    max_duration_factor: float = 20.0
+    goal_tol: float = 1.0
     field_grid: int = 70
     seed: int = SEED
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from sosdyn.errors import InputError, SolverError
 from sosdyn.evaluation.metrics import as_demonstrations, dtwd, goal_error
-from sosdyn.evaluation.reproduction import rollout_function, summarize
+from sosdyn.evaluation.reproduction import rollout_function, rollout_to_goal, summarize
 
 KINDS = ("push", "goal_change")
 
@@ -91,12 +91,15 @@ def shifted_reference(demo, goal_changes, initial_goal) -> np.ndarray:
     return ref
 
 
-def robustness(model, demos, events, *, duration_factor: float = 1.5, tol_mm: float = 1.0) -> dict:
+def robustness(model, demos, events, *, duration_factor: float = 1.5, tol_mm: float = 1.0,
+               max_duration_factor: float | None = None) -> dict:
     """Score perturbed reproductions (scenarios from :func:`make_events`).
 
     Each scenario rolls out the model from its demo's first point for ``duration_factor x``
     the demo's duration (time to recover), dt = the demo's mean step, at the training goal,
-    with the scenario's events. Scores: ``dtwd`` / ``dtwd_per_point`` (L) between the
+    with the scenario's events; with ``max_duration_factor`` the duration is doubled until
+    the run ends within ``tol_mm`` of its goal, at most ``max_duration_factor x`` the demo's
+    duration (:func:`~sosdyn.evaluation.reproduction.rollout_to_goal`). Scores: ``dtwd`` / ``dtwd_per_point`` (L) between the
     reproduction and :func:`shifted_reference` (initial goal ``demos.goal``, the training
     goal); ``goal_error`` (L) to the goal in effect at the end; ``converged`` = goal_error
     <= tol_mm. A rollout raising SolverError scores inf / not converged and is listed in
@@ -107,6 +110,10 @@ def robustness(model, demos, events, *, duration_factor: float = 1.5, tol_mm: fl
     fn = rollout_function(model)
     if not duration_factor > 0:
         raise InputError(f"duration_factor must be > 0, got {duration_factor!r}.")
+    cap = duration_factor if max_duration_factor is None else max_duration_factor
+    if not cap >= duration_factor:
+        raise InputError(f"max_duration_factor must be >= duration_factor ({duration_factor!r}), "
+                         f"got {max_duration_factor!r}.")
     scores = {"dtwd": [], "dtwd_per_point": [], "goal_error": []}
     converged, trajectories, failures = [], [], []
     for k, scenario in enumerate(events):
@@ -115,8 +122,10 @@ def robustness(model, demos, events, *, duration_factor: float = 1.5, tol_mm: fl
                              f"(see make_events), got {scenario!r}.")
         demo = demos[scenario.demo_index]
         try:
-            traj = fn(demo.pos[0], duration_factor * demo.duration, dt=demo.duration / (len(demo.t) - 1),
-                      perturbations=scenario.pushes, goal_changes=scenario.goal_changes)
+            traj = rollout_to_goal(fn, demo.pos[0], duration_factor * demo.duration,
+                                   dt=demo.duration / (len(demo.t) - 1), tol=tol_mm,
+                                   max_duration=cap * demo.duration, perturbations=scenario.pushes,
+                                   goal_changes=scenario.goal_changes)
         except SolverError as exc:
             failures.append({"scenario": k, "reason": str(exc)})
             for values in scores.values():

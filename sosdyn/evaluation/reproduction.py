@@ -37,6 +37,25 @@ def rollout_function(model):
     return fn
 
 
+def rollout_to_goal(fn, x0, duration: float, *, dt: float, tol: float, max_duration: float, **events):
+    """``fn(x0, duration, dt=dt, **events)``, the duration doubled until the run ends within
+    ``tol`` of the goal in effect at its end, at most ``max_duration``.
+
+    A run long enough to reach the goal: a slow but convergent model is not scored as stuck
+    because its rollout was cut early. Same start, step and events each time, so a longer run
+    repeats the shorter one and continues it; the returned run is the first one that ends
+    within ``tol``, or the ``max_duration`` one.
+    """
+    if not 0 < duration <= max_duration or not tol > 0:
+        raise InputError(f"Need 0 < duration <= max_duration and tol > 0, got duration={duration!r}, "
+                         f"max_duration={max_duration!r}, tol={tol!r}.")
+    while True:
+        traj = fn(x0, duration, dt=dt, **events)
+        if duration >= max_duration or goal_error(traj, traj.goal_history[-1]) <= tol:
+            return traj
+        duration = min(2.0 * duration, max_duration)
+
+
 def evaluate_reproductions(model, demos) -> dict:
     """Reproduce each demo from its first point and score it.
 

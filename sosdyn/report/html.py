@@ -333,6 +333,11 @@ def jinja_environment() -> jinja2.Environment:
     return env
 
 
+def report_css() -> str:
+    """The reports' stylesheet (``templates/report.css``), for pages built outside the template."""
+    return jinja_environment().loader.get_source(jinja_environment(), "report.css")[0]
+
+
 def render_html(results: Mapping, out_dir: str | Path, *, base_dir: str | Path | None = None,
                 trusted: bool = False) -> Path:
     """Write ``out_dir/index.html`` for ``results`` (schema: module docstring).

@@ -133,3 +133,20 @@ def test_robustness_bad_inputs(exp_model, exp_demos):
         robustness(exp_model, exp_demos, make_events(exp_demos, "push"), duration_factor=0)
     with pytest.raises(InputError, match="non-empty"):
         robustness(exp_model, Demonstrations([]), [])
+
+
+def test_slow_model_is_rolled_out_until_it_reaches_the_goal(exp_model_cls, exp_demos):
+    """Rate 0.2/s from ~10 mm: after 1.5 x 6 s it is still ~1.7 mm away (not converged); with
+    max_duration_factor the run is doubled to 18 s, where it is ~0.3 mm away (converged)."""
+    slow = exp_model_cls(rate=0.2)
+    events = make_events(exp_demos, "push", amplitude_frac=0.0)
+    cut = robustness(slow, exp_demos, events)
+    assert cut["fraction_converged"] == 0.0 and min(cut["goal_error"]) > 1.0
+    long = robustness(slow, exp_demos, events, max_duration_factor=20)
+    assert long["fraction_converged"] == 1.0 and max(long["goal_error"]) < 0.5
+    assert [t.t[-1] for t in long["trajectories"]] == pytest.approx([18.0] * 3)
+    never = robustness(exp_model_cls(rate=0.01), exp_demos, events, max_duration_factor=4)
+    assert never["fraction_converged"] == 0.0
+    assert [t.t[-1] for t in never["trajectories"]] == pytest.approx([24.0] * 3)   # capped at 4 x 6 s
+    with pytest.raises(InputError, match="max_duration_factor"):
+        robustness(slow, exp_demos, events, max_duration_factor=1.0)

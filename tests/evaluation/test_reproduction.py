@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
-from sosdyn.evaluation.reproduction import describe, evaluate_reproductions, mean_std, summarize
+from sosdyn.errors import InputError
+from sosdyn.evaluation.reproduction import (describe, evaluate_reproductions, mean_std, rollout_to_goal,
+                                            summarize)
 
 
 def test_exact_model_reproduces_its_demos(exp_model, exp_demos, exp_goal):
@@ -28,3 +30,10 @@ def test_mean_std_describe_and_summarize_known_answers():
     assert describe(np.array([2, 4])) == {"mean": 3.0, "std": 1.0, "per_demo": [2.0, 4.0]}
     means, stds = summarize({"a": [1.0, 3.0], "b": [0.0, np.nan]})
     assert means == {"a": 2.0, "b": np.inf} and stds == {"a": 1.0, "b": np.inf}
+
+
+def test_rollout_to_goal_refuses_bad_durations(exp_model):
+    for kwargs in ({"duration": 0.0}, {"duration": 5.0, "max_duration": 4.0}, {"duration": 1.0, "tol": 0.0}):
+        args = {"duration": 1.0, "max_duration": 4.0, "tol": 1.0, **kwargs}
+        with pytest.raises(InputError, match="duration"):
+            rollout_to_goal(exp_model.rollout, [1.0, 1.0], args.pop("duration"), dt=0.1, **args)

@@ -12,7 +12,7 @@ from problems.settings import EvalConfig, shape  # noqa: E402
 
 TOY = EvalConfig(quick=True, n_demos=2, subsample=5, n_grid=3, field_grid=20)
 SHAPE = shape("Leaf_1", K=3)
-FAST_METHODS = ("CDSP (paper)", "CDSP-ICA", "CDSP-cubic", "SEDS-like", "GMR", "DMP")
+FAST_METHODS = ("CDSP", "CDSP (paper)", "CDSP-ICA", "CDSP-cubic", "SEDS-like", "GMR", "DMP")
 
 
 @pytest.fixture(scope="session")

@@ -113,3 +113,34 @@ def test_published_references_only_on_the_standard_split():
     assert "LPV-DS (PC-GMM) 26-shape mean 1749" in figure_caption(1, True)
     swapped = figure_caption(1, False, references=False)
     assert "1749" not in swapped and "3954" not in swapped and "no published references" in swapped
+
+
+def test_committed_pages_rebuild_from_results_styled_and_narrow(tmp_path):
+    """The page is rebuilt from a committed results.json without fitting: it embeds the user
+    report's stylesheet and no table is wider than MAX_COLUMNS (the old page had one table of
+    46 columns for 22 variants)."""
+    import json
+    import re
+    import shutil
+
+    from problems import lasa_dsopt_report as rep
+    from problems.settings import REPORTS
+    from sosdyn.report.html import report_css
+
+    shutil.copy(REPORTS / "lasa_dsopt" / "results.json", tmp_path / "results.json")
+    page = rep.rebuild(tmp_path)["html"].read_text()
+    assert report_css() in page and "<style>" in page
+    tables = re.findall(r"<table>.*?</table>", page, flags=re.S)
+    n_variants = len(json.loads((tmp_path / "results.json").read_text())["meta"]["variants"])
+    assert len(tables) == 2 + n_variants == 24           # summary, per shape, one per variant
+    widths = [len(re.findall(r"<th", re.search(r"<thead>.*?</thead>", t, flags=re.S).group())) for t in tables]
+    assert max(widths) <= rep.MAX_COLUMNS
+    assert (tmp_path / "figures" / "lasa_dsopt.png").stat().st_size > 10_000
+
+
+def test_rebuild_refuses_a_folder_without_results(tmp_path):
+    from problems import lasa_dsopt_report as rep
+    from sosdyn.errors import InputError
+
+    with pytest.raises(InputError, match="no results.json"):
+        rep.main([str(tmp_path)])

@@ -175,9 +175,9 @@ def test_perturbation_trajectories_colour_follows_the_full_method_list(demos_fac
 
     demo = demos_factory(1)[0]
     ax = Figure().add_subplot()
-    F.perturbation_trajectories(ax, demo, {"SEDS-like": demo}, methods=("CDSP-ICA", "SEDS-like"))
-    assert ax.lines[-1].get_color() == F.method_color("SEDS-like", ("CDSP-ICA", "SEDS-like"))
-    assert ax.lines[-1].get_color() != F.method_color("SEDS-like", ("SEDS-like",))
+    F.perturbation_trajectories(ax, demo, {"variant B": demo}, methods=("variant A", "variant B"))
+    assert ax.lines[-1].get_color() == F.method_color("variant B", ("variant A", "variant B"))
+    assert ax.lines[-1].get_color() != F.method_color("variant B", ("variant B",))
 
 
 def test_scaling_plot_reports_log_log_slope(tmp_path):

@@ -6,11 +6,13 @@ conventions.
 """
 from .bars import accuracy_bars, robustness_bars, scaling_plot
 from .streamlines import streamline_panel, streamlines
-from .style import GOAL_STYLE, METRIC_LABELS, STYLE, data_bounds, median_iqr, method_color, save_figure
+from .style import (GOAL_STYLE, METHOD_COLORS, METRIC_LABELS, STYLE, data_bounds, median_iqr, method_color,
+                    save_figure)
 from .trajectories import perturbation_trajectories, time_series, trajectories_3d
 
 __all__ = [
     "GOAL_STYLE",
+    "METHOD_COLORS",
     "METRIC_LABELS",
     "STYLE",
     "accuracy_bars",

@@ -8,8 +8,8 @@ leaks between calls and no GUI backend is ever needed.
 
 Conventions shared by all figures:
 
-* each method has one colour everywhere (:func:`method_color`), so CDSP is the same
-  blue in the bar charts, the perturbation plots and the scaling plots;
+* each method has one colour everywhere (:func:`method_color`, :data:`METHOD_COLORS`), so
+  CDSP is the same blue in the bar charts, the perturbation plots and the scaling plots;
 * 2-D state-space plots use an equal aspect ratio and axes labelled in ``units``;
 * legends sit outside the data (under or above the axes), never on top of it;
 * layout is matplotlib's constrained layout.
@@ -42,17 +42,25 @@ STYLE = {
     "savefig.facecolor": "white",
 }
 
-# Colour-blind safe (Okabe & Ito). Known methods keep a fixed colour; any other name
-# takes the unused ones in sorted order (see method_color).
-_KNOWN_METHOD_COLORS = {
-    "cdsp": "#0072B2",
-    "dmp": "#D55E00",
-    "clf-dm": "#E69F00",
-    "gmr": "#009E73",
-    "seds": "#CC79A7",
+#: The one home of the method colours (every figure calls :func:`method_color`): one hue per
+#: method, colour-blind safe -- Okabe & Ito's blue and vermillion with Paul Tol's teal, indigo,
+#: magenta, green and yellow, and black. Pairwise CIELAB distance >= 33 for normal vision and
+#: >= 17 under simulated deuteranopia and protanopia (Machado et al. 2009; checked in
+#: tests/report/test_figures.py). Keys are lower-case method names.
+METHOD_COLORS = {
+    "cdsp": "#0072B2",          # blue: the default CDSP()
+    "cdsp-ica": "#009988",      # teal
+    "cdsp-cubic": "#332288",    # indigo
+    "cdsp (paper)": "#000000",  # black
+    "seds-like": "#EE3377",     # magenta
+    "gmr": "#117733",           # green
+    "dmp": "#D55E00",           # vermillion
+    "clf-dm": "#CCBB44",        # yellow
 }
-_SPARE_COLORS = ("#56B4E9", "#882255", "#117733", "#999933", "#332288", "#666666", "#CC6677",
-                 "#44AA99", "#AA4499", "#DDCC77")
+METHOD_COLORS["seds"] = METHOD_COLORS["seds-like"]
+#: Colours of other names (variants, solvers), taken in sorted-name order (see method_color).
+_SPARE_COLORS = ("#56B4E9", "#882255", "#E69F00", "#999933", "#CC79A7", "#777777", "#44AA99",
+                 "#AA4499", "#DDCC77", "#CC6677")
 
 DEMO_COLOR = "#C0282D"        # paper Fig. 1: demonstrations solid red
 REPRO_COLOR = "#1F5FBF"       # paper Fig. 1: reproductions dashed blue
@@ -84,14 +92,14 @@ def styled(func):
 def method_color(name: str, methods: Sequence[str] = ()) -> str:
     """Colour of method ``name``; the same in every figure of a report.
 
-    CDSP, DMP, CLF-DM, GMR and SEDS have fixed colours. Any other name gets a spare
+    The methods of :data:`METHOD_COLORS` have fixed colours. Any other name gets a spare
     colour by its rank among the unknown names of ``methods`` (sorted), so the figures
     of one report, which share their method list, agree with each other.
     """
-    known = _KNOWN_METHOD_COLORS.get(name.lower())
+    known = METHOD_COLORS.get(name.lower())
     if known is not None:
         return known
-    unknown = sorted({m for m in (*methods, name) if m.lower() not in _KNOWN_METHOD_COLORS})
+    unknown = sorted({m for m in (*methods, name) if m.lower() not in METHOD_COLORS})
     return _SPARE_COLORS[unknown.index(name) % len(_SPARE_COLORS)]
 
 
