@@ -4,7 +4,7 @@
 The module is the 6-D chart model's own export (:func:`~sosdyn.lfd.runtime.export.to_python`:
 ``predict(S)`` on s = (x, c r)) followed by the chart: r = log(R_g^T R) (scipy's ``Rotation``),
 s = (x - x_g' + x_g, c r) for the goal pose (x_g', R_g'), and (v, omega) = (sdot_x,
-R J_r(r) sdot_r / c) with :func:`~.pose.right_jacobian` (its source copied verbatim). It needs numpy
+R J_r(r) sdot_r / c) with :func:`~.pose.body_velocity` (its source copied verbatim). It needs numpy
 and scipy, never sosdyn. States within CHART_MARGIN of the cut locus raise ValueError.
 
 The C++ header is the chart model's :func:`~sosdyn.lfd.runtime.export.to_cpp` (namespace NS) and a
@@ -19,7 +19,7 @@ import inspect
 
 from ..data.poses import CHART_MARGIN
 from ..runtime.export import _flat, _literal, to_cpp, to_python
-from .pose import SMALL_ANGLE, PoseCDSP, right_jacobian
+from .pose import SMALL_ANGLE, PoseCDSP, body_velocity
 
 
 def pose_to_python(model: PoseCDSP) -> str:
@@ -36,7 +36,7 @@ CHART_LIMIT = {float(3.141592653589793 - CHART_MARGIN)!r}   # |r| below this (ra
 SMALL_ANGLE = {SMALL_ANGLE!r}
 
 
-{inspect.getsource(right_jacobian)}
+{inspect.getsource(body_velocity)}
 
 def predict_pose(x, quat, goal=None):
     """(v, omega): linear velocity (3,) and world angular velocity (3,) at the position x (3,) and the
@@ -50,7 +50,7 @@ def predict_pose(x, quat, goal=None):
     if np.linalg.norm(r) >= CHART_LIMIT:
         raise ValueError("the orientation is too near a half turn from the goal (the chart's cut locus)")
     sdot = predict(np.concatenate([x - goal[:3] + GOAL[:3], ROT_FACTOR * r]))
-    return sdot[:3], (Rg * Rotation.from_rotvec(r)).apply(right_jacobian(r) @ (sdot[3:] / ROT_FACTOR))
+    return sdot[:3], (Rg * Rotation.from_rotvec(r)).apply(body_velocity(r, sdot[3:] / ROT_FACTOR)[0])
 '''
 
 
