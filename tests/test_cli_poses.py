@@ -1,5 +1,5 @@
-"""``sosdyn fit-pose`` / ``export-pose``: pose CSVs (either quaternion order) to a certified model and a
-standalone evaluator whose (v, omega) equal the model's."""
+"""``sosdyn fit`` / ``export`` / ``plot`` on pose CSVs (either quaternion order): a certified pose model
+and a standalone evaluator whose (v, omega) equal the model's."""
 from __future__ import annotations
 
 import importlib.util
@@ -9,7 +9,7 @@ import pytest
 from cli_support import assert_one_error_line, run
 from scipy.spatial.transform import Rotation
 
-from sosdyn.lfd.model.pose import load_pose_model
+from sosdyn.lfd.model.files import load_model
 
 
 def write_pose_csvs(folder, n=8, scalar_last=True):
@@ -29,31 +29,52 @@ def write_pose_csvs(folder, n=8, scalar_last=True):
 def test_ambiguous_header_is_one_error_line(tmp_path, capsys):
     folder = tmp_path / "demos"
     folder.mkdir()
-    (folder / "a.csv").write_text("t,x,y,z,q1,q2,q3,q4\n0,0,0,0,1,0,0,0\n")
-    code, _, err = run(capsys, "fit-pose", folder, "--out", tmp_path / "m.json")
-    assert_one_error_line(code, err, "q1", need_try=True)
+    (folder / "a.csv").write_text("t,x,y,z,qy,qx,qz,qw\n0,0,0,0,0,0,0,1\n")
+    code, _, err = run(capsys, "fit", folder, "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "neither w x y z nor x y z w", need_try=True)
+
+
+def test_position_only_options_refused_for_pose_files(tmp_path, capsys):
+    demos = write_pose_csvs(tmp_path / "demos", n=2)
+    code, _, err = run(capsys, "fit", demos, "--smooth", "off", "--goal-tol", "0.1", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "--goal-tol, --smooth apply to position files", "--columns x,y,z",
+                          need_try=True)
+    code, _, err = run(capsys, "fit", "lasa:Leaf_1", "--goal-tol-deg", "5", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "--goal-tol-deg applies to pose files", need_try=True)
+    assert not (tmp_path / "m.json").exists()
 
 
 @pytest.mark.slow
-def test_fit_and_export_pose(tmp_path, capsys):
-    demos = write_pose_csvs(tmp_path / "demos")
-    code, out, err = run(capsys, "fit-pose", demos, "--units", "m", "--out", tmp_path / "pose.json")
+def test_fit_export_and_plot_pose(tmp_path, capsys):
+    demos = write_pose_csvs(tmp_path / "demos", scalar_last=False)
+    code, out, err = run(capsys, "fit", demos, "--units", "m", "--out", tmp_path / "pose.json")
     assert code == 0, err
-    assert "certificate (6-D chart model): passed" in out
-    code, _, err = run(capsys, "export-pose", tmp_path / "pose.json", "--out", tmp_path / "pose_model.py")
-    assert code == 0, err
+    assert "fitting PoseCDSP to 8 pose demonstrations" in out and "certificate: passed" in out
+    model = load_model(tmp_path / "pose.json")
+    assert model.certified_ and model.cdsp_.units_ == "m"
+    for target, name in (("python", "pose_model.py"), ("cpp", "pose.hpp")):
+        code, _, err = run(capsys, "export", tmp_path / "pose.json", "--to", target, "--out", tmp_path / name)
+        assert code == 0, err
+    assert "pose_model_pose" in (tmp_path / "pose.hpp").read_text()
     spec = importlib.util.spec_from_file_location("pose_model", tmp_path / "pose_model.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    model = load_pose_model(tmp_path / "pose.json")
     x, q = np.array([0.3, -0.2, 0.5]), Rotation.from_rotvec([0.2, 0.1, -0.3]).as_quat(scalar_first=True)
     v, w = module.predict_pose(x, q)
     np.testing.assert_allclose(np.concatenate([v, w]), np.concatenate(model.predictor()(x, q)), rtol=1e-12)
     row = np.loadtxt(demos / "d0.csv", delimiter=",", skiprows=1)[10]      # on the data: the known xdot = -x
-    v, w = module.predict_pose(row[1:4], np.roll(row[4:], 1))
+    v, w = module.predict_pose(row[1:4], row[4:])
     np.testing.assert_allclose(v, -row[1:4], atol=0.02 * np.abs(row[1:4]).max())
-    code, out, err = run(capsys, "plot-pose", tmp_path / "pose.json", "--demos", demos, "--out", tmp_path / "p.png")
+    code, _, err = run(capsys, "export", tmp_path / "pose.json", "--to", "python", "--max-speed", "1",
+                       "--out", tmp_path / "p2.py")
+    assert_one_error_line(code, err, "--max-speed is not written into pose exports", need_try=True)
+    code, out, err = run(capsys, "plot", tmp_path / "pose.json", "--demos", demos, "--out", tmp_path / "p.png")
     assert code == 0 and "8 demonstrations and rollouts" in out, err
     assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
-    code, _, err = run(capsys, "plot-pose", tmp_path / "pose.json", "--demos", demos, "--out", tmp_path / "p.pdf")
-    assert_one_error_line(code, err, ".png or .svg", need_try=True)
+    code, _, err = run(capsys, "plot", tmp_path / "pose.json", "--out", tmp_path / "p.png")
+    assert_one_error_line(code, err, "pose model is drawn with the pose demonstrations", need_try=True)
+    code, _, err = run(capsys, "rollout", tmp_path / "pose.json", "--start", "0,0,0")
+    assert_one_error_line(code, err, "is a pose model", need_try=True)
+    code, out, err = run(capsys, "fit", demos, "--columns", "x,y,z", "--out", tmp_path / "pos.json")
+    assert code == 0 and "fitting CDSP to 8 demonstrations" in out, err     # positions selected
+    assert load_model(tmp_path / "pos.json").dim_ == 3

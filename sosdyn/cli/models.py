@@ -1,4 +1,5 @@
-"""The commands on a saved model: ``sosdyn rollout``, ``sosdyn export`` and ``sosdyn plot``."""
+"""The commands on a saved model: ``sosdyn rollout``, ``sosdyn export`` and ``sosdyn plot``; a pose
+model file (``sosdyn-pose``) is exported and drawn by :mod:`.poses`."""
 from __future__ import annotations
 
 import enum
@@ -10,8 +11,10 @@ import typer
 from rich.markup import escape
 
 from ..errors import InputError
+from ..lfd.model.pose import PoseCDSP
 from .base import ColumnsOption, TimeUnitsOption, app, info, out, parse_point, positive, read_options, status
 from .paths import check_folder, check_output, demo_inputs, existing
+from .poses import export_pose, plot_pose
 
 
 def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[float, np.ndarray]]:
@@ -68,6 +71,9 @@ def rollout(
         check_output(out_path, [model_path], "model file")
         check_folder(out_path.parent)
     model = sd.load_model(model_path)
+    if isinstance(model, PoseCDSP):
+        raise InputError(f"{model_path} is a pose model; sosdyn rollout integrates position models. Try: "
+                         "sosdyn plot MODEL --demos DEMOS, or model.rollout(p0) in Python (p0 = x, y, z, qw, qx, qy, qz).")
     x0 = _dimension(x0, model.dim_, "--start")
     for option, events in (("--push", pushes), ("--goal-change", goals)):
         for when, vector in events:
@@ -108,7 +114,8 @@ def export_model(
 
     No sosdyn is needed to run it: Python `predict(X, goal=None) -> Xdot` with numpy only, or
     C++17 `bool predict(const double* x, double* xdot, const double* goal = nullptr)`; the goal
-    can move at run time."""
+    can move at run time. A pose model adds `predict_pose(x, quat, goal=None) -> (v, omega)`
+    (Python: numpy + scipy) or `pose_model_pose::predict_pose(x, quat, v, omega, goal)` (C++)."""
     import sosdyn as sd
 
     from ..lfd.runtime.export import export as generate
@@ -117,7 +124,8 @@ def export_model(
     existing(model_path, "model file")
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
-    source = generate(sd.load_model(model_path), target.value, max_speed)
+    model = sd.load_model(model_path)
+    source = (export_pose if isinstance(model, PoseCDSP) else generate)(model, target.value, max_speed)
     replace_atomically(out_path, source.encode("utf-8"))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
 
@@ -160,7 +168,8 @@ def plot(
 
     Streamlines for n = 2, 3-D trajectories with their projections on the box's walls for
     n = 3, each dimension of the reproductions over time for n > 3. Without --demos the
-    reproductions start at the mixture's means."""
+    reproductions start at the mixture's means. A pose model needs --demos (pose CSVs): 3-D
+    paths with orientation frames, each rollout 3x its demo's duration unless --duration."""
     import matplotlib as mpl
 
     import sosdyn as sd
@@ -178,6 +187,12 @@ def plot(
     model = sd.load_model(model_path)
     data = (sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa
             else sd.load_demos(paths, **read_options(dt, time_units, columns))) if demos else None
+    if isinstance(model, PoseCDSP):
+        with status(f"rolling out {len(data or ())} reproductions ..."), mpl.rc_context(STYLE):
+            plot_pose(model, data, duration, model_path.stem).savefig(
+                out_path, format=out_path.suffix.lower()[1:], dpi=150, metadata=_no_date(out_path))
+        info(f"[green]wrote[/] {escape(str(out_path))}  (pose model, {len(data)} demonstrations and rollouts)")
+        return
     if data is not None and data.dim != model.dim_:
         raise InputError(f"the demonstrations are {data.dim}-D but the model is {model.dim_}-D. "
                          "Try: the demonstrations the model was fitted to.")

@@ -128,6 +128,7 @@ class PoseCDSP:
         if unknown:
             raise InputError(f"PoseCDSP: unknown parameters {unknown}. Try: goal_tol_deg or a CDSP parameter "
                              f"({', '.join(DEFAULTS)}).")
+        self.progress = cdsp_params.pop("progress", None)     # as CDSP's: called with each history row
         self.cdsp_params = cdsp_params
         CDSP(**cdsp_params).check_params()
 
@@ -143,7 +144,7 @@ class PoseCDSP:
         pos_scale, rot_scale = np.abs(X - aligned.goal_pos).max(), np.abs(R).max()
         self.rot_factor_ = float(pos_scale / rot_scale) if rot_scale > 0 and pos_scale > 0 else 1.0
         self.goal_quat_ = goal_quat
-        self.cdsp_ = CDSP(**self.cdsp_params).fit(chart_demonstrations(aligned, goal_quat, self.rot_factor_))
+        self.cdsp_ = CDSP(**self.cdsp_params, progress=self.progress).fit(chart_demonstrations(aligned, goal_quat, self.rot_factor_))
         return self
 
     # ------------------------------------------------------------------ state and chart
