@@ -251,8 +251,10 @@ def fit(
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value}
     given = {k: v for k, v in options.items() if v is not None}
-    params = {**(preset_params(preset.value) if preset else {}), **given}
-    model = PoseCDSP(goal_tol_deg, **params) if pose else sd.CDSP(**params)
+    if pose:
+        model = PoseCDSP(goal_tol_deg, **{**(preset_params(preset.value) if preset else {}), **given})
+    else:
+        model = sd.CDSP.preset(preset.value, **given) if preset else sd.CDSP(**given)
     with FitProgress(f"fitting {model.__class__.__name__} to {len(data)} {'pose ' * pose}demonstrations of "
                      f"{data.name}") as progress:
         model.progress = progress.row
