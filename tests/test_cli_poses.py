@@ -65,9 +65,16 @@ def test_fit_export_and_plot_pose(tmp_path, capsys):
     row = np.loadtxt(demos / "d0.csv", delimiter=",", skiprows=1)[10]      # on the data: the known xdot = -x
     v, w = module.predict_pose(row[1:4], row[4:])
     np.testing.assert_allclose(v, -row[1:4], atol=0.02 * np.abs(row[1:4]).max())
-    code, _, err = run(capsys, "export", tmp_path / "pose.json", "--to", "python", "--max-speed", "1",
-                       "--out", tmp_path / "p2.py")
-    assert_one_error_line(code, err, "--max-speed is not written into pose exports", need_try=True)
+    code, _, err = run(capsys, "export", tmp_path / "pose.json", "--to", "python", "--max-speed", "0.1",
+                       "--max-angular-speed", "0.2", "--out", tmp_path / "limited.py")
+    assert code == 0, err
+    spec = importlib.util.spec_from_file_location("limited", tmp_path / "limited.py")
+    limited = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(limited)
+    v, w = limited.predict_pose(x, q)                       # free |v| ~ 0.6, |omega| ~ 0.4: both limits bind
+    np.testing.assert_allclose(np.concatenate([v, w]), np.concatenate(
+        model.predictor(max_speed=0.1, max_angular_speed=0.2)(x, q)), rtol=1e-12)
+    assert np.linalg.norm(v) <= 0.1 * (1 + 1e-12) and np.linalg.norm(w) <= 0.2 * (1 + 1e-12)
     code, out, err = run(capsys, "plot", tmp_path / "pose.json", "--demos", demos, "--out", tmp_path / "p.png")
     assert code == 0 and "8 demonstrations and rollouts" in out, err
     assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"

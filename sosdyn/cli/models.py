@@ -109,6 +109,9 @@ def export_model(
     max_speed: Annotated[float | None, typer.Option(
         "--max-speed", callback=positive, help="Largest speed (units/s) of the exported field: the velocity is "
                                                "scaled down, same direction, path and goal.", show_default="none")] = None,
+    max_angular_speed: Annotated[float | None, typer.Option(
+        "--max-angular-speed", callback=positive, help="Pose models: largest angular speed |omega| (rad/s); v and "
+                                                       "omega are scaled by one factor.", show_default="none")] = None,
 ) -> None:
     """Write a standalone evaluator of a saved model (Python + numpy, or C++17).
 
@@ -125,7 +128,13 @@ def export_model(
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
     model = sd.load_model(model_path)
-    source = (export_pose if isinstance(model, PoseCDSP) else generate)(model, target.value, max_speed)
+    if isinstance(model, PoseCDSP):
+        source = export_pose(model, target.value, max_speed, max_angular_speed)
+    elif max_angular_speed is not None:
+        raise InputError(f"--max-angular-speed applies to pose models; {model_path} is a position model. "
+                         "Try: drop it (--max-speed limits the speed).")
+    else:
+        source = generate(model, target.value, max_speed)
     replace_atomically(out_path, source.encode("utf-8"))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
 

@@ -59,12 +59,11 @@ def pose_fit_summary(model: PoseCDSP) -> None:
          f"{model.goal_tol_deg:g}); certificate on the 6-D chart state (position, rotation vector)")
 
 
-def export_pose(model: PoseCDSP, target: str, max_speed: float | None) -> str:
-    """The standalone source of a pose model for ``target`` ("python" or "cpp")."""
-    if max_speed is not None:
-        raise InputError("--max-speed is not written into pose exports yet. Try: export without it, or "
-                         "model.predictor(max_speed=..., max_angular_speed=...) in Python.")
-    return pose_to_python(model) if target == "python" else pose_to_cpp(model)
+def export_pose(model: PoseCDSP, target: str, max_speed: float | None, max_angular_speed: float | None) -> str:
+    """The standalone source of a pose model for ``target`` ("python" or "cpp"), with the limits on
+    |v| and |omega| written into it."""
+    return pose_to_python(model, max_speed, max_angular_speed) if target == "python" else \
+        pose_to_cpp(model, max_speed=max_speed, max_angular_speed=max_angular_speed)
 
 
 def plot_pose(model: PoseCDSP, data: PoseDemonstrations | None, duration: float | None, title: str):

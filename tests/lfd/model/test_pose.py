@@ -163,16 +163,18 @@ def test_speed_limited_rollout_keeps_the_path_and_the_goal(fitted):
         free.t[np.argmax(np.linalg.norm(free.pos - X_GOAL, axis=1) < 0.05)] + 2.0     # arrives later
 
 
-def test_python_export_returns_the_same_velocities(fitted):
+@pytest.mark.parametrize("limits", [(None, None), (V_MAX, W_MAX), (None, W_MAX)])
+def test_python_export_returns_the_same_velocities(fitted, limits):
     namespace = {}
-    exec(compile(pose_to_python(fitted), "pose_model.py", "exec"), namespace)
+    exec(compile(pose_to_python(fitted, *limits), "pose_model.py", "exec"), namespace)
     rng = np.random.default_rng(1)
+    step = fitted.predictor(max_speed=limits[0], max_angular_speed=limits[1])
     for goal in (None, np.concatenate([fitted.goal_pos_ - 0.3, Rotation.from_rotvec([0.2, 0, 0.4]).as_quat(
             scalar_first=True)])):
         for _ in range(3):
             x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1, 1, 3)).as_quat(scalar_first=True)
             np.testing.assert_allclose(np.concatenate(namespace["predict_pose"](x, q, goal)),
-                                       np.concatenate(fitted.predictor()(x, q, goal)), rtol=1e-12, atol=1e-14)
+                                       np.concatenate(step(x, q, goal)), rtol=1e-12, atol=1e-14)
 
 
 def test_cdsp_points_pose_demos_to_posecdsp():
@@ -196,8 +198,9 @@ int main() {
 
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
-def test_cpp_export_returns_the_same_velocities(fitted, tmp_path):
-    (tmp_path / "pose.hpp").write_text(pose_to_cpp(fitted))
+@pytest.mark.parametrize("limits", [(None, None), (V_MAX, W_MAX)])
+def test_cpp_export_returns_the_same_velocities(fitted, tmp_path, limits):
+    (tmp_path / "pose.hpp").write_text(pose_to_cpp(fitted, max_speed=limits[0], max_angular_speed=limits[1]))
     (tmp_path / "main.cpp").write_text(CPP_MAIN)
     subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(tmp_path / "main"),
                     str(tmp_path / "main.cpp")], check=True, capture_output=True, text=True)
@@ -209,7 +212,7 @@ def test_cpp_export_returns_the_same_velocities(fitted, tmp_path):
             x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1.5, 1.5, 3)).as_quat(scalar_first=True)
             q = q if rng.random() < 0.5 else -q                        # either sign of the same rotation
             rows.append(np.concatenate([x, q, np.zeros(7) if g is None else g]))
-            expected.append(np.concatenate(fitted.predictor()(x, q, g)))
+            expected.append(np.concatenate(fitted.predictor(max_speed=limits[0], max_angular_speed=limits[1])(x, q, g)))
     far = (Rotation.from_quat(fitted.goal_quat_, scalar_first=True) * Rotation.from_rotvec([np.deg2rad(175), 0, 0]))
     rows.append(np.concatenate([np.zeros(3), far.as_quat(scalar_first=True), np.zeros(7)]))    # near the cut locus
     res = subprocess.run([str(tmp_path / "main")], input="\n".join(" ".join(repr(float(v)) for v in r) for r in rows),
