@@ -255,7 +255,7 @@ def fit(
         model = PoseCDSP(goal_tol_deg, **{**(preset_params(preset.value) if preset else {}), **given})
     else:
         model = sd.CDSP.preset(preset.value, **given) if preset else sd.CDSP(**given)
-    with FitProgress(f"fitting {model.__class__.__name__} to {len(data)} {'pose ' * pose}demonstrations of "
+    with FitProgress(f"fitting {'PoseCDSP' if pose else 'CDSP'} to {len(data)} {'pose ' * pose}demonstrations of "
                      f"{data.name}") as progress:
         model.progress = progress.row
         model.fit(data)
