@@ -9,6 +9,9 @@ import pytest
 from cli_support import assert_one_error_line, run
 from scipy.spatial.transform import Rotation
 
+from sosdyn.evaluation.poses import angles_deg
+from sosdyn.lfd.data.files import load_demos
+from sosdyn.lfd.data.poses import PoseDemonstrations
 from sosdyn.lfd.model.files import load_model
 
 
@@ -81,7 +84,24 @@ def test_fit_export_and_plot_pose(tmp_path, capsys):
     code, _, err = run(capsys, "plot", tmp_path / "pose.json", "--out", tmp_path / "p.png")
     assert_one_error_line(code, err, "pose model is drawn with the pose demonstrations", need_try=True)
     code, _, err = run(capsys, "rollout", tmp_path / "pose.json", "--start", "0,0,0")
-    assert_one_error_line(code, err, "is a pose model", need_try=True)
+    assert_one_error_line(code, err, "--start has 3 numbers but a pose model takes 7: x,y,z,qw,qx,qy,qz",
+                          need_try=True)
+    turned = Rotation.from_rotvec([0.0, 0.0, 0.5]).as_quat(scalar_first=True)     # a rotated goal at t = 4
+    goal = ",".join(f"{v:.17g}" for v in [0.2, -0.1, 0.1, *turned])
+    code, out, err = run(capsys, "rollout", tmp_path / "pose.json", "--start", "0.5,0.3,-0.4,1,0,0,0",
+                         "--push", "2:0.1,0,0,0,0.3,0", "--goal-change", f"4:{goal}", "--duration", "20",
+                         "--max-speed", "0.2", "--max-angular-speed", "0.25", "--out", tmp_path / "run.csv")
+    assert code == 0, err
+    run_back = load_demos(tmp_path / "run.csv")                 # the CSV is a pose demonstration again
+    assert isinstance(run_back, PoseDemonstrations)
+    d = run_back[0]
+    np.testing.assert_allclose(d.pos[-1], [0.2, -0.1, 0.1], atol=1e-3)
+    assert angles_deg(d.quat[-1], turned)[0] < 0.1
+    speed = np.linalg.norm(np.diff(d.pos, axis=0), axis=1) / np.diff(d.t)
+    turn = np.deg2rad(angles_deg(d.quat[1:], d.quat[:-1])) / np.diff(d.t)
+    jump = int(np.argmax(speed))                                 # the push: a jump, not a speed
+    assert d.t[jump] == pytest.approx(2.0) and np.argmax(turn) == jump
+    assert np.delete(speed, jump).max() <= 0.2 * 1.01 and np.delete(turn, jump).max() <= 0.25 * 1.01
     code, out, err = run(capsys, "fit", demos, "--columns", "x,y,z", "--out", tmp_path / "pos.json")
     assert code == 0 and "fitting CDSP to 8 demonstrations" in out, err     # positions selected
     assert load_model(tmp_path / "pos.json").dim_ == 3

@@ -75,7 +75,7 @@ def test_walkthrough_pose_commands(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     write_pose_csvs(tmp_path / "poses")
     commands = [c for c in readme_commands(WALK) if is_pose_command(c)]
-    assert [c[0] for c in commands] == ["fit", "export", "plot"]
+    assert [c[0] for c in commands] == ["fit", "export", "plot", "rollout"]
     for argv in commands:
         code, _, err = run(capsys, *argv)
         assert code == 0, (argv, err)
@@ -83,6 +83,8 @@ def test_walkthrough_pose_commands(capsys, tmp_path, monkeypatch):
     assert isinstance(model, sd.PoseCDSP) and model.certified_ and model.cdsp_.units_ == "m"
     assert "def predict_pose(" in (tmp_path / "pose_model.py").read_text()
     assert (tmp_path / "pose.png").read_bytes()[:4] == b"\x89PNG"
+    run_pose = sd.load_demos(tmp_path / "run_pose.csv")[0]
+    np.testing.assert_allclose(run_pose.pos[-1], model.goal_pos_, atol=1e-2)     # heading to the goal pose
 
 
 def test_shipped_example_data_is_what_its_generator_writes(tmp_path):

@@ -14,7 +14,7 @@ from ..errors import InputError
 from ..lfd.model.pose import PoseCDSP
 from .base import ColumnsOption, TimeUnitsOption, app, info, out, parse_point, positive, read_options, status
 from .paths import check_folder, check_output, demo_inputs, existing
-from .poses import export_pose, plot_pose
+from .poses import POSE_HEADER, POSE_SIZES, MaxAngularSpeedOption, check_angular, export_pose, plot_pose
 
 
 def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[float, np.ndarray]]:
@@ -33,9 +33,11 @@ def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[fl
     return events
 
 
-def _dimension(point: np.ndarray, dim: int, option: str) -> np.ndarray:
+def _dimension(point: np.ndarray, dim: int, option: str, layout: str | None = None) -> np.ndarray:
+    """``point`` if it has ``dim`` numbers; else InputError (``layout``: what they are, for a pose model)."""
     if point.shape != (dim,):
-        raise InputError(f"{option} has {point.size} numbers but the model is {dim}-D. Try: {dim} "
+        what = f"the model is {dim}-D" if layout is None else f"a pose model takes {dim}: {layout}"
+        raise InputError(f"{option} has {point.size} numbers but {what}. Try: {dim} "
                          f"comma-separated numbers, e.g. {','.join(['0'] * dim)}.")
     return point
 
@@ -56,12 +58,15 @@ def rollout(
     max_speed: Annotated[float | None, typer.Option(
         "--max-speed", callback=positive, help="Largest speed (units/s): the velocity is scaled down, same "
                                                "direction and path.", show_default="none")] = None,
+    max_angular_speed: MaxAngularSpeedOption = None,
     out_path: Annotated[Path | None, typer.Option("--out", "-o", help="Write t and positions as CSV.")] = None,
 ) -> None:
     """Integrate a saved model from a start state and print the end point.
 
     Pushes and goal changes happen at the given times; with --out also write the trajectory
-    as CSV (columns t,x1..xn: loadable again as a demonstration)."""
+    as CSV (columns t,x1..xn: loadable again as a demonstration). A pose model starts from
+    x,y,z,qw,qx,qy,qz, is pushed by dx,dy,dz,wx,wy,wz (a world rotation vector), takes goal poses,
+    and writes t,x,y,z,qw,qx,qy,qz."""
     import sosdyn as sd
 
     x0 = parse_point(start, "--start")
@@ -71,25 +76,32 @@ def rollout(
         check_output(out_path, [model_path], "model file")
         check_folder(out_path.parent)
     model = sd.load_model(model_path)
-    if isinstance(model, PoseCDSP):
-        raise InputError(f"{model_path} is a pose model; sosdyn rollout integrates position models. Try: "
-                         "sosdyn plot MODEL --demos DEMOS, or model.rollout(p0) in Python (p0 = x, y, z, qw, qx, qy, qz).")
-    x0 = _dimension(x0, model.dim_, "--start")
+    pose = isinstance(model, PoseCDSP)
+    check_angular(pose, max_angular_speed)
+    sizes = POSE_SIZES if pose else {option: (model.dim_, None) for option in POSE_SIZES}
+    x0 = _dimension(x0, sizes["--start"][0], "--start", sizes["--start"][1])
     for option, events in (("--push", pushes), ("--goal-change", goals)):
         for when, vector in events:
-            _dimension(vector, model.dim_, option)
+            _dimension(vector, sizes[option][0], option, sizes[option][1])
             if not 0 <= when <= duration:
                 raise InputError(f"{option} time {when:g} is outside [0, --duration {duration:g}]. Try: a "
                                  "time within the rollout, or a longer --duration.")
-    traj = model.rollout(x0, duration, perturbations=pushes, goal_changes=goals, max_speed=max_speed,
-                         **({} if dt is None else {"dt": dt}))
-    t, pos = np.asarray(traj.t), np.asarray(traj.pos)
+    step = {} if dt is None else {"dt": dt}
+    if pose:
+        traj = model.rollout(x0, duration, pushes=pushes, goal_changes=goals, max_speed=max_speed,
+                             max_angular_speed=max_angular_speed, **step)
+        pos, names = np.hstack([traj.pos, traj.quat]), POSE_HEADER
+        goal_end = max(goals, key=lambda e: e[0])[1] if goals else np.concatenate([model.goal_pos_, model.goal_quat_])
+    else:
+        traj = model.rollout(x0, duration, perturbations=pushes, goal_changes=goals, max_speed=max_speed, **step)
+        pos, goal_end = np.asarray(traj.pos), traj.goal_history[-1]
+        names = ["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]
+    t = np.asarray(traj.t)
     if out_path is not None:                     # the layout load_demos reads
-        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="",
-                   header=",".join(["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]))
+        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="", header=",".join(names))
         info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
     end = ", ".join(f"{v:.4g}" for v in pos[-1])
-    goal = ", ".join(f"{v:.4g}" for v in traj.goal_history[-1])
+    goal = ", ".join(f"{v:.4g}" for v in goal_end)
     out.print(f"t = {t[-1]:.3g} s: x = ({end}), goal ({goal})")
 
 
@@ -109,9 +121,7 @@ def export_model(
     max_speed: Annotated[float | None, typer.Option(
         "--max-speed", callback=positive, help="Largest speed (units/s) of the exported field: the velocity is "
                                                "scaled down, same direction, path and goal.", show_default="none")] = None,
-    max_angular_speed: Annotated[float | None, typer.Option(
-        "--max-angular-speed", callback=positive, help="Pose models: largest angular speed |omega| (rad/s); v and "
-                                                       "omega are scaled by one factor.", show_default="none")] = None,
+    max_angular_speed: MaxAngularSpeedOption = None,
 ) -> None:
     """Write a standalone evaluator of a saved model (Python + numpy, or C++17).
 
@@ -128,13 +138,9 @@ def export_model(
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
     model = sd.load_model(model_path)
-    if isinstance(model, PoseCDSP):
-        source = export_pose(model, target.value, max_speed, max_angular_speed)
-    elif max_angular_speed is not None:
-        raise InputError(f"--max-angular-speed applies to pose models; {model_path} is a position model. "
-                         "Try: drop it (--max-speed limits the speed).")
-    else:
-        source = generate(model, target.value, max_speed)
+    check_angular(isinstance(model, PoseCDSP), max_angular_speed)
+    source = export_pose(model, target.value, max_speed, max_angular_speed) if isinstance(model, PoseCDSP) \
+        else generate(model, target.value, max_speed)
     replace_atomically(out_path, source.encode("utf-8"))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
 

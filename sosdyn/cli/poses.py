@@ -6,6 +6,7 @@ files (format ``sosdyn-pose``; :func:`sosdyn.load_model` reads either kind).
     sosdyn export pose.json --to python --out pose_model.py   # predict_pose(x, quat, goal=None) -> (v, omega)
     sosdyn export pose.json --to cpp --out pose.hpp     # pose_model_pose::predict_pose(x, quat, v, omega, goal)
     sosdyn plot pose.json --demos demos/ --out paths.png   # rollouts from the demos' starts, with frames
+    sosdyn rollout pose.json --start 40,-20,20,0.7,0.7,0,0 --goal-change 5:30,0,20,1,0,0,0 --max-angular-speed 0.5
 
 A pose fit reads no position-only option (``--goal-tol``, ``--smooth``, ``--trim-rest``,
 ``--align-ends``: refused when given); scattered end orientations are aligned up to
@@ -14,8 +15,10 @@ A pose fit reads no position-only option (``--goal-tol``, ``--smooth``, ``--trim
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
 import numpy as np
+import typer
 from rich.markup import escape
 
 from ..errors import InputError
@@ -23,10 +26,25 @@ from ..lfd.data.poses import GOAL_TOL_DEG, PoseDemonstrations
 from ..lfd.model.pose import PoseCDSP
 from ..lfd.model.pose_export import pose_to_cpp, pose_to_python
 from ..report.figures.poses import pose_paths
-from .base import info
+from .base import info, positive
 
 #: ``sosdyn plot`` of a pose model without --duration: each rollout lasts this many times its demo.
 DURATION_FACTOR = 3.0
+#: ``sosdyn rollout`` of a pose model: the numbers each option takes, and the CSV it writes.
+POSE_SIZES = {"--start": (7, "x,y,z,qw,qx,qy,qz"), "--push": (6, "dx,dy,dz,wx,wy,wz (a world rotation vector)"),
+              "--goal-change": (7, "x,y,z,qw,qx,qy,qz")}
+POSE_HEADER = ["t", "x", "y", "z", "qw", "qx", "qy", "qz"]
+
+MaxAngularSpeedOption = Annotated[float | None, typer.Option(
+    "--max-angular-speed", callback=positive, help="Pose models: largest angular speed |omega| (rad/s); v and omega "
+                                                   "are scaled by one factor (same path and goal).", show_default="none")]
+
+
+def check_angular(pose: bool, max_angular_speed: float | None) -> None:
+    """InputError for --max-angular-speed on a position model."""
+    if max_angular_speed is not None and not pose:
+        raise InputError("--max-angular-speed applies to pose models; this is a position model. Try: drop it "
+                         "(--max-speed limits the speed).")
 
 
 def check_pose_options(pose: bool, goal_tol_deg: float | None, position_only: dict) -> float:
