@@ -79,6 +79,13 @@ def test_export_unknown_target_is_a_usage_error(capsys, saved, tmp_path):
     assert code == 2 and "rust" in err
 
 
+def test_export_angular_speed_is_for_pose_models(capsys, saved, tmp_path):
+    code, _, err = run(capsys, "export", str(saved[2][0]), "--to", "python", "--max-angular-speed", "1",
+                       "--out", str(tmp_path / "x.py"))
+    assert code == 1 and "--max-angular-speed applies to pose models" in err and "Try:" in err
+    assert not (tmp_path / "x.py").exists()
+
+
 @pytest.mark.parametrize("n", [2, 3, 4])
 def test_plot_writes_a_png(capsys, saved, tmp_path, n):
     model_path, csvs = saved[n]

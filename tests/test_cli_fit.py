@@ -181,11 +181,16 @@ def write_ms_reach(path, header="time,x,y,z,qx,qy,qz,qw"):
 
 
 def test_ms_stamps_and_orientation_columns_need_options(capsys, tmp_path, captured):
-    """Time in ms and orientation columns: refused with the CLI options to use (no Python names)."""
+    """Time in ms and orientation columns: refused with the CLI options to use (no Python names); the
+    quaternion columns make a pose file, read by the same time rules, Euler angles are refused."""
     path = write_ms_reach(tmp_path / "reach.csv")
     out = ["--out", tmp_path / "m.json"]
-    code, _, err = run(capsys, "fit", path, *out)
-    assert_one_error_line(code, err, "orientation columns ['qx', 'qy', 'qz', 'qw']", "--columns x,y,z")
+    code, _, err = run(capsys, "fit", path, *out)                            # a pose file: the same time check
+    assert_one_error_line(code, err, "lasts 2000 s", "--time-units", need_try=True)
+    euler = write_ms_reach(tmp_path / "rpy.csv", "time,x,y,z,roll,pitch,yaw,w")
+    code, _, err = run(capsys, "fit", euler, *out)
+    assert_one_error_line(code, err, "orientation columns ['roll', 'pitch', 'yaw']", "qw,qx,qy,qz",
+                          "--columns x,y,z")
     code, _, err = run(capsys, "fit", path, "--columns", "x,y,z", *out)
     assert_one_error_line(code, err, "lasts 2000 s", "--time-units", need_try=True)
     assert "time_column=" not in err

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_support import run
+from test_cli_poses import write_pose_csvs
 
 import sosdyn as sd
 
@@ -63,6 +64,29 @@ def readme_commands(text):
     return [shlex.split(ln)[1:] for ln in lines if ln.startswith("sosdyn ")]
 
 
+def is_pose_command(argv) -> bool:
+    """The walk-through's pose paragraph: commands on poses/ or pose.json (run by their own test)."""
+    return any(a.startswith(("poses/", "pose.json")) for a in argv)
+
+
+@pytest.mark.slow
+def test_walkthrough_pose_commands(capsys, tmp_path, monkeypatch):
+    """The pose paragraph as written, on pose CSVs of a known rotation system (tests/test_cli_poses.py)."""
+    monkeypatch.chdir(tmp_path)
+    write_pose_csvs(tmp_path / "poses")
+    commands = [c for c in readme_commands(WALK) if is_pose_command(c)]
+    assert [c[0] for c in commands] == ["fit", "export", "plot", "rollout"]
+    for argv in commands:
+        code, _, err = run(capsys, *argv)
+        assert code == 0, (argv, err)
+    model = sd.load_model("pose.json")
+    assert isinstance(model, sd.PoseCDSP) and model.certified_ and model.cdsp_.units_ == "m"
+    assert "def predict_pose(" in (tmp_path / "pose_model.py").read_text()
+    assert (tmp_path / "pose.png").read_bytes()[:4] == b"\x89PNG"
+    run_pose = sd.load_demos(tmp_path / "run_pose.csv")[0]
+    np.testing.assert_allclose(run_pose.pos[-1], model.goal_pos_, atol=1e-2)     # heading to the goal pose
+
+
 def test_shipped_example_data_is_what_its_generator_writes(tmp_path):
     spec = importlib.util.spec_from_file_location("make_reach", ROOT / "examples/data/make_reach.py")
     module = importlib.util.module_from_spec(spec)
@@ -77,7 +101,7 @@ def test_walkthrough_runs_on_the_shipped_data(capsys, tmp_path, monkeypatch):
     data.mkdir(parents=True)
     shutil.copytree(ROOT / "examples/data/reach", data / "reach")
     monkeypatch.chdir(tmp_path)
-    commands = readme_commands(WALK)
+    commands = [c for c in readme_commands(WALK) if not is_pose_command(c)]
     assert [c[0] for c in commands] == ["fit", "fit", "plot", "rollout", "export", "export"]
     for argv in commands:
         code, _, err = run(capsys, *argv)

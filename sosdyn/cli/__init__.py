@@ -12,7 +12,7 @@
     sosdyn experiment fig1 [--repo DIR] [--quick ...]   # python -m problems fig1, in DIR
     sosdyn report [--results reports/results.json --out reports]   # render a results file
     sosdyn lasa list
-    sosdyn fit-pose demos/ --out pose.json; sosdyn export-pose pose.json --out pose.py   # in .poses
+    sosdyn fit poses/ --out pose.json     # t,x,y,z,qw,qx,qy,qz CSVs: a pose model; export / plot take it (.poses)
 
 Global options ``--quiet`` (no progress or summaries) and ``--debug`` (full
 tracebacks, debug logging; also ``SOSDYN_DEBUG=1``) go before the command;
@@ -44,7 +44,7 @@ from rich.logging import RichHandler
 from rich.markup import escape
 
 from ..errors import InputError, SosdynError
-from . import fit, models, poses  # noqa: F401 -- registers their commands on the app
+from . import fit, models  # noqa: F401 -- registers their commands on the app
 from .base import State, app, err, info, lasa_app, out, status
 from .paths import check_folder, check_output, existing
 

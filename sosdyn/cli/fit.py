@@ -3,7 +3,8 @@
 Inputs: files, folders (their ``*.csv`` / ``*.npy``), quoted patterns (``'demos/*.csv'``),
 ``lasa:NAME`` or ``dataset:NAME`` (a shipped real set, :func:`sosdyn.load_dataset`); read by
 :func:`sosdyn.load_demos` (headers ``t,x,y[,z]``, ``t,x1..xn``, optional velocities, or no header
-with time in column 0; ``--dt`` for files without time, ``--time-units ms`` or a ``t_ms`` column
+with time in column 0; pose CSVs ``t,x,y,z,qw,qx,qy,qz`` or ``...,qx,qy,qz,qw`` give a pose model,
+:mod:`.poses`; ``--dt`` for files without time, ``--time-units ms`` or a ``t_ms`` column
 for millisecond stamps, ``--columns`` to name the position columns, e.g. joint names; a column
 with no role is refused, never dropped).
 ``--units`` is recorded, not applied: it names the units of the positions in the model file
@@ -30,10 +31,13 @@ from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.learner import COST_FLOOR, stalled
-from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
+from ..lfd.data.poses import GOAL_TOL_DEG, is_pose_file
+from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS, preset_params
+from ..lfd.model.pose import PoseCDSP
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
 from .paths import check_folder, check_output, demo_inputs
+from .poses import check_pose_options, pose_fit_summary, pose_notes
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
 
@@ -199,12 +203,18 @@ def fit(
         help="Blend each demonstration onto the mean end point over its last half and print the shifts: auto = "
              "when the ends spread more than 1% of the data's diagonal; on; off; or a number = on, accepting "
              "shifts up to it (data units; default limit 25% of the diagonal).")] = "auto",
+    goal_tol_deg: Annotated[float | None, typer.Option(
+        "--goal-tol-deg", min=0.0, max=180.0, help="Pose files: refuse end orientations farther than this (deg) "
+                                                   "from their chordal mean; nearer ones are aligned to it.",
+        show_default=f"{GOAL_TOL_DEG:g}")] = None,
     time_units: TimeUnitsOption = None,
     columns: ColumnsOption = None,
 ) -> None:
     """Learn a certified CDSP model from demonstrations and save it.
 
-    Options left out use CDSP()'s defaults (shown), or the preset's.
+    Pose CSVs (a header t,x,y,z,qw,qx,qy,qz or t,x,y,z,qx,qy,qz,qw) give a pose model (PoseCDSP:
+    position and orientation), unless --columns selects positions. Options left out use CDSP()'s
+    defaults (shown), or the preset's.
     """
     import sosdyn as sd
 
@@ -220,7 +230,12 @@ def fit(
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
-    raw_tol = goal_tol if goal_tol is not None or align_ends is False else np.inf
+    pose = columns is None and any(map(is_pose_file, paths))
+    goal_tol_deg = check_pose_options(pose, goal_tol_deg, {
+        "--goal-tol": goal_tol, "--smooth": None if smooth == "auto" else smooth,
+        "--trim-rest": None if trim_rest is Switch.on else "off",
+        "--align-ends": None if align_ends == "auto" else align_ends})
+    raw_tol = goal_tol if goal_tol is not None or align_ends is False or pose else np.inf
     read = {"units": units, "goal_tol": raw_tol, "name": Path(demos[0]).resolve().name if folder else None}
     if shipped:
         data = load_dataset_input(demos[0], dt)
@@ -228,28 +243,39 @@ def fit(
         data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
             paths, **{k: v for k, v in read.items() if v is not None},   # aligning: --align-ends refuses
             **read_options(dt, time_units, columns))
-    data = sd.check_demonstrations(prepare(data, smooth, trim_rest is Switch.on, align_ends))
+    if pose:
+        pose_notes(data)
+    else:
+        data = sd.check_demonstrations(prepare(data, smooth, trim_rest is Switch.on, align_ends))
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value}
     given = {k: v for k, v in options.items() if v is not None}
-    model = sd.CDSP.preset(preset.value, **given) if preset else sd.CDSP(**given)
-    with FitProgress(f"fitting CDSP to {len(data)} demonstrations of {data.name}") as progress:
+    if pose:
+        model = PoseCDSP(goal_tol_deg, **{**(preset_params(preset.value) if preset else {}), **given})
+    else:
+        model = sd.CDSP.preset(preset.value, **given) if preset else sd.CDSP(**given)
+    with FitProgress(f"fitting {'PoseCDSP' if pose else 'CDSP'} to {len(data)} {'pose ' * pose}demonstrations of "
+                     f"{data.name}") as progress:
         model.progress = progress.row
         model.fit(data)
     model.progress = None
     model.save(out_path)
-    report = model.verification_
-    info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} demonstrations, "
-         f"fit in {time.perf_counter() - progress.start:.1f} s, {len(model.history_)} convex steps)")
+    chart = model.cdsp_ if pose else model          # the certified model (of the 6-D chart state for poses)
+    report = chart.verification_
+    info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} {'pose ' * pose}demonstrations, "
+         f"fit in {time.perf_counter() - progress.start:.1f} s, {len(chart.history_)} convex steps)")
     info(f"certificate: {'[green]passed[/]' if report.passed else '[red]FAILED[/]'} — min Gram eigenvalue "
          f"{report.min_gram_eig:.2e}, max sampled generalised eigenvalue {report.max_sampled_eig:.2e} "
          f"over {report.n_samples} states")
-    if model.warp_ is not None:
+    if chart.warp_ is not None:
         info(f"warp: {report.warp['n_maps']} maps, max Lipschitz number {report.warp['max_lipschitz']:.3f} (< 1)")
-    chosen = warp_line(getattr(model, "warp_scores_", {}))
+    chosen = warp_line(getattr(chart, "warp_scores_", {}))
     if chosen:
         info(chosen)
-    for line in progress.caps(model.max_iter, model.tol):
+    for line in progress.caps(chart.max_iter, chart.tol):
         info(f"[yellow]iteration cap[/]: {escape(line)}")
-    print_score(model, data)
+    if pose:
+        pose_fit_summary(model)
+    else:
+        print_score(model, data)

@@ -1,4 +1,5 @@
-"""The commands on a saved model: ``sosdyn rollout``, ``sosdyn export`` and ``sosdyn plot``."""
+"""The commands on a saved model: ``sosdyn rollout``, ``sosdyn export`` and ``sosdyn plot``; a pose
+model file (``sosdyn-pose``) is exported and drawn by :mod:`.poses`."""
 from __future__ import annotations
 
 import enum
@@ -10,8 +11,10 @@ import typer
 from rich.markup import escape
 
 from ..errors import InputError
+from ..lfd.model.pose import PoseCDSP
 from .base import ColumnsOption, TimeUnitsOption, app, info, out, parse_point, positive, read_options, status
 from .paths import check_folder, check_output, demo_inputs, existing
+from .poses import POSE_HEADER, POSE_SIZES, MaxAngularSpeedOption, check_angular, export_pose, plot_pose
 
 
 def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[float, np.ndarray]]:
@@ -30,9 +33,11 @@ def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[fl
     return events
 
 
-def _dimension(point: np.ndarray, dim: int, option: str) -> np.ndarray:
+def _dimension(point: np.ndarray, dim: int, option: str, layout: str | None = None) -> np.ndarray:
+    """``point`` if it has ``dim`` numbers; else InputError (``layout``: what they are, for a pose model)."""
     if point.shape != (dim,):
-        raise InputError(f"{option} has {point.size} numbers but the model is {dim}-D. Try: {dim} "
+        what = f"the model is {dim}-D" if layout is None else f"a pose model takes {dim}: {layout}"
+        raise InputError(f"{option} has {point.size} numbers but {what}. Try: {dim} "
                          f"comma-separated numbers, e.g. {','.join(['0'] * dim)}.")
     return point
 
@@ -53,12 +58,15 @@ def rollout(
     max_speed: Annotated[float | None, typer.Option(
         "--max-speed", callback=positive, help="Largest speed (units/s): the velocity is scaled down, same "
                                                "direction and path.", show_default="none")] = None,
+    max_angular_speed: MaxAngularSpeedOption = None,
     out_path: Annotated[Path | None, typer.Option("--out", "-o", help="Write t and positions as CSV.")] = None,
 ) -> None:
     """Integrate a saved model from a start state and print the end point.
 
     Pushes and goal changes happen at the given times; with --out also write the trajectory
-    as CSV (columns t,x1..xn: loadable again as a demonstration)."""
+    as CSV (columns t,x1..xn: loadable again as a demonstration). A pose model starts from
+    x,y,z,qw,qx,qy,qz, is pushed by dx,dy,dz,wx,wy,wz (a world rotation vector), takes goal poses,
+    and writes t,x,y,z,qw,qx,qy,qz."""
     import sosdyn as sd
 
     x0 = parse_point(start, "--start")
@@ -68,22 +76,32 @@ def rollout(
         check_output(out_path, [model_path], "model file")
         check_folder(out_path.parent)
     model = sd.load_model(model_path)
-    x0 = _dimension(x0, model.dim_, "--start")
+    pose = isinstance(model, PoseCDSP)
+    check_angular(pose, max_angular_speed)
+    sizes = POSE_SIZES if pose else {option: (model.dim_, None) for option in POSE_SIZES}
+    x0 = _dimension(x0, sizes["--start"][0], "--start", sizes["--start"][1])
     for option, events in (("--push", pushes), ("--goal-change", goals)):
         for when, vector in events:
-            _dimension(vector, model.dim_, option)
+            _dimension(vector, sizes[option][0], option, sizes[option][1])
             if not 0 <= when <= duration:
                 raise InputError(f"{option} time {when:g} is outside [0, --duration {duration:g}]. Try: a "
                                  "time within the rollout, or a longer --duration.")
-    traj = model.rollout(x0, duration, perturbations=pushes, goal_changes=goals, max_speed=max_speed,
-                         **({} if dt is None else {"dt": dt}))
-    t, pos = np.asarray(traj.t), np.asarray(traj.pos)
+    step = {} if dt is None else {"dt": dt}
+    if pose:
+        traj = model.rollout(x0, duration, pushes=pushes, goal_changes=goals, max_speed=max_speed,
+                             max_angular_speed=max_angular_speed, **step)
+        pos, names = np.hstack([traj.pos, traj.quat]), POSE_HEADER
+        goal_end = max(goals, key=lambda e: e[0])[1] if goals else np.concatenate([model.goal_pos_, model.goal_quat_])
+    else:
+        traj = model.rollout(x0, duration, perturbations=pushes, goal_changes=goals, max_speed=max_speed, **step)
+        pos, goal_end = np.asarray(traj.pos), traj.goal_history[-1]
+        names = ["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]
+    t = np.asarray(traj.t)
     if out_path is not None:                     # the layout load_demos reads
-        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="",
-                   header=",".join(["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]))
+        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="", header=",".join(names))
         info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
     end = ", ".join(f"{v:.4g}" for v in pos[-1])
-    goal = ", ".join(f"{v:.4g}" for v in traj.goal_history[-1])
+    goal = ", ".join(f"{v:.4g}" for v in goal_end)
     out.print(f"t = {t[-1]:.3g} s: x = ({end}), goal ({goal})")
 
 
@@ -103,12 +121,14 @@ def export_model(
     max_speed: Annotated[float | None, typer.Option(
         "--max-speed", callback=positive, help="Largest speed (units/s) of the exported field: the velocity is "
                                                "scaled down, same direction, path and goal.", show_default="none")] = None,
+    max_angular_speed: MaxAngularSpeedOption = None,
 ) -> None:
     """Write a standalone evaluator of a saved model (Python + numpy, or C++17).
 
     No sosdyn is needed to run it: Python `predict(X, goal=None) -> Xdot` with numpy only, or
     C++17 `bool predict(const double* x, double* xdot, const double* goal = nullptr)`; the goal
-    can move at run time."""
+    can move at run time. A pose model adds `predict_pose(x, quat, goal=None) -> (v, omega)`
+    (Python: numpy + scipy) or `pose_model_pose::predict_pose(x, quat, v, omega, goal)` (C++)."""
     import sosdyn as sd
 
     from ..lfd.runtime.export import export as generate
@@ -117,7 +137,10 @@ def export_model(
     existing(model_path, "model file")
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
-    source = generate(sd.load_model(model_path), target.value, max_speed)
+    model = sd.load_model(model_path)
+    check_angular(isinstance(model, PoseCDSP), max_angular_speed)
+    source = export_pose(model, target.value, max_speed, max_angular_speed) if isinstance(model, PoseCDSP) \
+        else generate(model, target.value, max_speed)
     replace_atomically(out_path, source.encode("utf-8"))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
 
@@ -160,7 +183,8 @@ def plot(
 
     Streamlines for n = 2, 3-D trajectories with their projections on the box's walls for
     n = 3, each dimension of the reproductions over time for n > 3. Without --demos the
-    reproductions start at the mixture's means."""
+    reproductions start at the mixture's means. A pose model needs --demos (pose CSVs): 3-D
+    paths with orientation frames, each rollout 3x its demo's duration unless --duration."""
     import matplotlib as mpl
 
     import sosdyn as sd
@@ -178,6 +202,12 @@ def plot(
     model = sd.load_model(model_path)
     data = (sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa
             else sd.load_demos(paths, **read_options(dt, time_units, columns))) if demos else None
+    if isinstance(model, PoseCDSP):
+        with status(f"rolling out {len(data or ())} reproductions ..."), mpl.rc_context(STYLE):
+            plot_pose(model, data, duration, model_path.stem).savefig(
+                out_path, format=out_path.suffix.lower()[1:], dpi=150, metadata=_no_date(out_path))
+        info(f"[green]wrote[/] {escape(str(out_path))}  (pose model, {len(data)} demonstrations and rollouts)")
+        return
     if data is not None and data.dim != model.dim_:
         raise InputError(f"the demonstrations are {data.dim}-D but the model is {model.dim_}-D. "
                          "Try: the demonstrations the model was fitted to.")

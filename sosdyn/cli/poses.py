@@ -1,103 +1,95 @@
-"""``sosdyn fit-pose`` and ``sosdyn export-pose``: pose CSVs (t,x,y,z + a quaternion) to a certified
-:class:`~sosdyn.lfd.model.pose.PoseCDSP` file, and that file to a standalone Python evaluator.
+"""Pose models in the ``sosdyn`` commands: what ``fit``, ``export`` and ``plot`` do differently for
+pose CSVs (a header naming qw, qx, qy, qz: :func:`~sosdyn.lfd.data.poses.is_pose_file`) and pose model
+files (format ``sosdyn-pose``; :func:`sosdyn.load_model` reads either kind).
 
-    sosdyn fit-pose demos/ --units cm --out pose.json        # headers t,x,y,z,qw,qx,qy,qz or ...,qx,qy,qz,qw
-    sosdyn export-pose pose.json --out pose_model.py         # predict_pose(x, quat, goal=None) -> (v, omega)
-    sosdyn plot-pose pose.json --demos demos/ --out paths.png   # rollouts from the demos' starts, with frames
-    sosdyn export-pose pose.json --cpp --out pose.hpp     # pose_model_pose::predict_pose(x, quat, v, omega, goal)
+    sosdyn fit demos/ --units cm --out pose.json        # headers t,x,y,z,qw,qx,qy,qz or ...,qx,qy,qz,qw
+    sosdyn export pose.json --to python --out pose_model.py   # predict_pose(x, quat, goal=None) -> (v, omega)
+    sosdyn export pose.json --to cpp --out pose.hpp     # pose_model_pose::predict_pose(x, quat, v, omega, goal)
+    sosdyn plot pose.json --demos demos/ --out paths.png   # rollouts from the demos' starts, with frames
+    sosdyn rollout pose.json --start 40,-20,20,0.7,0.7,0,0 --goal-change 5:30,0,20,1,0,0,0 --max-angular-speed 0.5
+
+A pose fit reads no position-only option (``--goal-tol``, ``--smooth``, ``--trim-rest``,
+``--align-ends``: refused when given); scattered end orientations are aligned up to
+``--goal-tol-deg``. ``--columns`` selects positions and so makes a position fit of the same files.
 """
 from __future__ import annotations
 
-import time
 from pathlib import Path
-
-import numpy as np
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.markup import escape
 
 from ..errors import InputError
-
-from ..lfd.data.poses import GOAL_TOL_DEG, load_pose_demos
-from ..lfd.model.fileformat import replace_atomically
-from ..lfd.model.pose import PoseCDSP, load_pose_model
+from ..lfd.data.poses import GOAL_TOL_DEG, PoseDemonstrations
+from ..lfd.model.pose import PoseCDSP
 from ..lfd.model.pose_export import pose_to_cpp, pose_to_python
 from ..report.figures.poses import pose_paths
-from .base import app, info, positive
-from .paths import check_folder, check_output, demo_inputs, existing
+from .base import info, positive
+
+#: ``sosdyn plot`` of a pose model without --duration: each rollout lasts this many times its demo.
+DURATION_FACTOR = 3.0
+#: ``sosdyn rollout`` of a pose model: the numbers each option takes, and the CSV it writes.
+POSE_SIZES = {"--start": (7, "x,y,z,qw,qx,qy,qz"), "--push": (6, "dx,dy,dz,wx,wy,wz (a world rotation vector)"),
+              "--goal-change": (7, "x,y,z,qw,qx,qy,qz")}
+POSE_HEADER = ["t", "x", "y", "z", "qw", "qx", "qy", "qz"]
+
+MaxAngularSpeedOption = Annotated[float | None, typer.Option(
+    "--max-angular-speed", callback=positive, help="Pose models: largest angular speed |omega| (rad/s); v and omega "
+                                                   "are scaled by one factor (same path and goal).", show_default="none")]
 
 
-@app.command("fit-pose")
-def fit_pose(
-    demos: Annotated[list[str], typer.Argument(help="Pose CSV files (header t,x,y,z,qw,qx,qy,qz or "
-                                                    "t,x,y,z,qx,qy,qz,qw), folders or quoted patterns.",
-                                               show_default=False)],
-    out_path: Annotated[Path, typer.Option("--out", "-o", help="Where to save the pose model (JSON).")] = Path(
-        "pose.json"),
-    units: Annotated[str, typer.Option(help="Units of the positions (recorded, not applied).")] = "",
-    dt: Annotated[float | None, typer.Option(callback=positive, help="Sampling step (s) of files without a "
-                                                                     "time column.")] = None,
-    goal_tol_deg: Annotated[float, typer.Option(help="Refuse end orientations farther than this (deg) from "
-                                                     "their mean; nearer ones are aligned to it.")] = GOAL_TOL_DEG,
-) -> None:
-    """Learn a certified pose model (position + orientation) from pose CSVs and save it."""
-    paths = demo_inputs(demos)
-    check_output(out_path, paths, "demonstration file")
-    check_folder(out_path.parent)
-    data = load_pose_demos(paths, units=units, dt=dt)
+def check_angular(pose: bool, max_angular_speed: float | None) -> None:
+    """InputError for --max-angular-speed on a position model."""
+    if max_angular_speed is not None and not pose:
+        raise InputError("--max-angular-speed applies to pose models; this is a position model. Try: drop it "
+                         "(--max-speed limits the speed).")
+
+
+def check_pose_options(pose: bool, goal_tol_deg: float | None, position_only: dict) -> float:
+    """The end-orientation tolerance of a pose fit (default GOAL_TOL_DEG); InputError for
+    ``--goal-tol-deg`` with position files, or for a position-only option given (not None) with pose files."""
+    if not pose:
+        if goal_tol_deg is not None:
+            raise InputError("--goal-tol-deg applies to pose files (quaternion columns qw,qx,qy,qz). "
+                             "Try: drop it, or --goal-tol for the end positions.")
+        return GOAL_TOL_DEG
+    given = [name for name, value in position_only.items() if value is not None]
+    if given:
+        raise InputError(f"{', '.join(given)} apply to position files; these are pose files (quaternion "
+                         "columns), fitted without preprocessing. Try: drop them (--goal-tol-deg bounds the "
+                         "end orientations), or --columns x,y,z for a position model.")
+    return GOAL_TOL_DEG if goal_tol_deg is None else goal_tol_deg
+
+
+def pose_notes(data: PoseDemonstrations) -> None:
+    """What reading changed (renormalised quaternions, sign flips), one line each."""
     for note in data.notes:
         if "renormalised" in note or "sign-flipped" in note:
-            info(escape(note))
-    start = time.perf_counter()
-    model = PoseCDSP(goal_tol_deg=goal_tol_deg).fit(data)
-    model.save(out_path)
-    report = model.cdsp_.verification_
-    moved = ", ".join(f"{a:.1f}" for a in model.orientation_moved_deg_)
-    info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} pose demonstrations, fit in "
-         f"{time.perf_counter() - start:.1f} s); end orientations aligned by {moved} deg")
-    info(f"certificate (6-D chart model): {'[green]passed[/]' if report.passed else '[red]FAILED[/]'} — min Gram "
-         f"eigenvalue {report.min_gram_eig:.2e}, max sampled generalised eigenvalue {report.max_sampled_eig:.2e}")
+            info(f"read: {escape(note)}")
 
 
-@app.command("export-pose")
-def export_pose(
-    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit-pose`.", show_default=False)],
-    out_path: Annotated[Path, typer.Option("--out", "-o", help="The file to write (.py or .hpp).",
-                                           show_default=False)],
-    cpp: Annotated[bool, typer.Option("--cpp", help="A header-only C++17 evaluator instead of Python.")] = False,
-) -> None:
-    """Write a standalone evaluator of a pose model, predict_pose -> (v, omega): Python (numpy + scipy)
-    or, with --cpp, header-only C++17 (namespace pose_model_pose)."""
-    existing(model_path, "model file")
-    check_output(out_path, [model_path], "model file")
-    check_folder(out_path.parent)
-    source = (pose_to_cpp if cpp else pose_to_python)(load_pose_model(model_path))
-    replace_atomically(out_path, source.encode("utf-8"))
-    info(f"[green]wrote[/] {escape(str(out_path))}  ({'cpp' if cpp else 'python'}, {len(source.splitlines())} lines)")
+def pose_fit_summary(model: PoseCDSP) -> None:
+    """How far each demo's end orientation was turned onto the goal orientation."""
+    moved = ", ".join(f"{a:.2g}" for a in model.orientation_moved_deg_)
+    info(f"end orientations aligned onto their chordal mean by {moved} deg (refused beyond --goal-tol-deg "
+         f"{model.goal_tol_deg:g}); certificate on the 6-D chart state (position, rotation vector)")
 
 
-@app.command("plot-pose")
-def plot_pose(
-    model_path: Annotated[Path, typer.Argument(help="A model saved by `sosdyn fit-pose`.", show_default=False)],
-    demos: Annotated[list[str], typer.Option(help="Pose CSVs (files, folders, patterns): drawn, and the model "
-                                                  "rolled out from each one's start.", show_default=False)],
-    out_path: Annotated[Path, typer.Option("--out", "-o", help="The figure (.png or .svg).")] = Path("pose.png"),
-    duration_factor: Annotated[float, typer.Option(callback=positive, help="Rollout duration over each "
-                                                                           "demo's duration.")] = 3.0,
-) -> None:
-    """Draw the demos and the model's rollouts from their starts in 3-D, with orientation frames."""
-    existing(model_path, "model file")
-    paths = demo_inputs(demos)
-    check_output(out_path, [model_path, *paths], "input")
-    check_folder(out_path.parent)
-    if out_path.suffix.lower() not in (".png", ".svg"):
-        raise InputError(f"--out {out_path.name}: the figure is written as .png or .svg. Try: --out pose.png")
-    model = load_pose_model(model_path)
-    data = load_pose_demos(paths)
-    trajs = [model.rollout(np.concatenate([d.pos[0], d.quat[0]]), duration_factor * (d.t[-1] - d.t[0]))
+def export_pose(model: PoseCDSP, target: str, max_speed: float | None, max_angular_speed: float | None) -> str:
+    """The standalone source of a pose model for ``target`` ("python" or "cpp"), with the limits on
+    |v| and |omega| written into it."""
+    return pose_to_python(model, max_speed, max_angular_speed) if target == "python" else \
+        pose_to_cpp(model, max_speed=max_speed, max_angular_speed=max_angular_speed)
+
+
+def plot_pose(model: PoseCDSP, data: PoseDemonstrations | None, duration: float | None, title: str):
+    """The figure of a pose model: each demo and the model's rollout from its start, with frames."""
+    if not isinstance(data, PoseDemonstrations):
+        raise InputError("a pose model is drawn with the pose demonstrations it starts from. Try: --demos "
+                         "with pose CSVs (t,x,y,z,qw,qx,qy,qz), e.g. the files it was fitted to.")
+    trajs = [model.rollout(np.concatenate([d.pos[0], d.quat[0]]), duration or DURATION_FACTOR * (d.t[-1] - d.t[0]))
              for d in data]
-    fig = pose_paths(model_path.stem, [], list(data), trajs, model.goal_pos_, model.cdsp_.units_,
-                     [Path(d.source).stem for d in data])
-    fig.savefig(out_path, dpi=130)
-    info(f"[green]wrote[/] {escape(str(out_path))}  ({len(data)} demonstrations and rollouts)")
+    return pose_paths(title, [], list(data), trajs, model.goal_pos_, model.cdsp_.units_,
+                      [Path(d.source).stem for d in data])

@@ -19,9 +19,9 @@ from sosdyn.errors import DemonstrationError, InputError
 TIME_NAMES = ("t", "time", "timestamp")
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 MAX_DEMO_SECONDS = 600.0
-#: Names of orientation columns (quaternions, Euler angles, rotation vectors): position models refuse
-#: files with them, naming the pose path (``sosdyn fit-pose`` / ``load_pose_demos``) and the option
-#: that selects the positions.
+#: Names of orientation columns (quaternions, Euler angles, rotation vectors). Files whose header
+#: names qw, qx, qy or qz are pose files (:func:`~.poses.is_pose_file`); any other orientation column
+#: is refused, naming the quaternion header a pose model reads and the option that selects the positions.
 ORIENTATION = re.compile(r"(q|quat|quaternion|orientation|rot|o)_?[wxyz]|roll|pitch|yaw|r[xyz]")
 TIME_UNITS_HINT = "--time-units (sosdyn fit / plot) or time_units= (load_demos)"
 COLUMNS_HINT = "--columns (sosdyn fit / plot) or columns= (load_demos)"
@@ -80,7 +80,7 @@ def parse_columns(columns) -> list | None:
 
 def refuse_unclaimed(header: list[str], used: set[int], positions: list[int], where: str) -> None:
     """InputError when header columns besides ``used`` exist: never a silent drop. Orientation
-    columns get their own message (no pose model yet); the hint selects the ``positions``."""
+    columns get their own message (the pose header to use); the hint selects the ``positions``."""
     extra = [h for i, h in enumerate(header) if i not in used]
     if not extra:
         return
@@ -88,9 +88,10 @@ def refuse_unclaimed(header: list[str], used: set[int], positions: list[int], wh
     orientation = [h for h in extra if ORIENTATION.fullmatch(h)]
     if orientation:
         raise InputError(
-            f"{where}: orientation columns {orientation} in a position model. Try: a pose model from "
-            f"quaternion columns (sosdyn fit-pose, or sd.load_pose_demos + sd.PoseCDSP), or select the "
-            f"position columns to ignore them, {COLUMNS_HINT}, e.g. --columns {positions or 'x,y,z'}.")
+            f"{where}: orientation columns {orientation} in a position model. Try: for a pose model, "
+            f"quaternion columns named qw,qx,qy,qz (a header t,x,y,z,qw,qx,qy,qz: sosdyn fit and load_demos "
+            f"then fit / read poses), or select the position columns to ignore them, {COLUMNS_HINT}, e.g. "
+            f"--columns {positions or 'x,y,z'}.")
     raise InputError(
         f"{where}: columns {extra} are neither time, demo id, positions nor velocities, and would be "
         f"ignored. Try: select the position columns explicitly, {COLUMNS_HINT}, e.g. --columns "

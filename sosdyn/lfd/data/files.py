@@ -16,6 +16,7 @@ from sosdyn.errors import DemonstrationError, InputError
 from sosdyn.lfd.data.columns import (COLUMNS_HINT, TIME_UNITS, check_duration, check_time_units, parse_columns,
                                     refuse_unclaimed, time_header_names, time_unit)
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_demonstrations, time_problem
+from sosdyn.lfd.data.poses import PoseDemonstrations, is_pose_file, load_pose_demos
 
 _AXES = ("x", "y", "z")
 _DEFAULT_DEMO_NAME = "demo"
@@ -304,8 +305,13 @@ def _check_dt(dt) -> float | None:
 def load_demos(paths, *, dim: int | None = None, time_column: int | str | None = None,
                demo_column: int | str | None = None, dt: float | None = None, name: str | None = None,
                units: str = "", goal_tol: float | None = None, time_units: str | None = None,
-               columns=None) -> Demonstrations:
+               columns=None) -> Demonstrations | PoseDemonstrations:
     """Load demonstrations from CSV or NPY files and check them (:func:`check_demonstrations`).
+
+    Pose files (a header naming quaternion columns qw, qx, qy, qz, e.g. ``t,x,y,z,qw,qx,qy,qz``
+    or ``t,x,y,z,qx,qy,qz,qw``) give :class:`~sosdyn.lfd.data.poses.PoseDemonstrations` (read by
+    :func:`~sosdyn.lfd.data.poses.load_pose_demos`, for :class:`~sosdyn.PoseCDSP`) unless
+    ``columns`` selects positions; then only ``dt``, ``time_units``, ``units`` and ``name`` apply.
 
     ``paths`` is one path or a sequence of paths. Each file holds one demonstration, except a
     file with a demo-id column, which holds several (split by id, in order of first appearance).
@@ -317,8 +323,8 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
     * ``.csv`` with a header row (a first row none of whose cells is a number): a time column
       named ``t``, ``time`` or ``timestamp`` (any case; ``t_ms``, ``time_us``, ... in that unit),
       positions ``x1..xn`` or ``x, y, z``, optionally velocities ``v1..vn`` or ``vx, vy, vz``
-      and a ``demo`` column, in any order. Any other column (orientation ``qx,qy,qz,qw``, joint
-      names, ...) is an InputError naming it: ``columns`` selects the positions explicitly
+      and a ``demo`` column, in any order. Any other column (Euler angles, joint names, ...; quaternion
+      columns make a pose file, above) is an InputError naming it: ``columns`` selects the positions explicitly
       (names like ``["panda_joint1", ..., "panda_joint7"]`` or ``"x,y,z"``, or indices) and
       then the other columns are ignored and velocities are estimated.
 
@@ -349,6 +355,8 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
     if dt is not None and time_units is not None:
         raise InputError("time_units applies to a time column, dt is in s and says there is none. "
                          "Try: drop one of them.")
+    if columns is None and any(map(is_pose_file, paths)):
+        return _pose_demos(paths, dim, time_column, demo_column, dt, name, units, goal_tol, time_units)
     demos = []
     for path in map(Path, paths):
         if path.suffix.lower() not in (".csv", ".npy"):
@@ -358,3 +366,18 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
         demos.extend(_demos_from_file(path, dim, time_column, demo_column, dt, time_units, columns))
     name = Path(paths[0]).stem if name is None else name
     return check_demonstrations(Demonstrations(demos, name, units), goal_tol=goal_tol)
+
+
+def _pose_demos(paths, dim, time_column, demo_column, dt, name, units, goal_tol, time_units) -> PoseDemonstrations:
+    """:func:`load_demos` of pose files: every file one, and no option that only position files have."""
+    plain = [str(p) for p in paths if not is_pose_file(p)]
+    if plain:
+        raise InputError(f"{plain[0]} has no quaternion columns but other files do: one set of demonstrations is all pose files or all position files. Try: "
+                         f"load them separately, or select the position columns ({COLUMNS_HINT}).")
+    given = [k for k, v in {"dim": dim if dim != 3 else None, "time_column": time_column, "demo_column": demo_column,
+                            "goal_tol": goal_tol}.items() if v is not None]
+    if given:
+        raise InputError(f"{', '.join(given)} apply to position files; these are pose files (quaternion "
+                         "columns; end orientations: PoseCDSP(goal_tol_deg=...)). Try: drop them, or select "
+                         f"the position columns ({COLUMNS_HINT}).")
+    return load_pose_demos(paths, units, Path(paths[0]).stem if name is None else name, dt, time_units)

@@ -1,9 +1,12 @@
 """Pose demonstrations: position x (T, 3) and orientation q (T, 4, unit quaternion, w x y z).
 
+A file is a pose file (:func:`is_pose_file`) when its header names any of qw, qx, qy, qz; then
+:func:`sosdyn.load_demos` and ``sosdyn fit`` read it here (unless position columns are selected).
 Reading (:func:`pose_columns`, :func:`read_pose_csv`): the header decides the quaternion's order,
 ``qw,qx,qy,qz`` (scalar first) or ``qx,qy,qz,qw`` (scalar last) by the column names; a header whose
-quaternion columns are not four distinct names among qw/qx/qy/qz (or w/x/y/z after the position)
-is refused with a hint. Each row's norm is checked (refused outside [1 - NORM_REFUSE, 1 +
+quaternion columns are not four distinct names among qw/qx/qy/qz is refused with a hint. The time
+column and its units follow the position files' rules (:mod:`.columns`: t, time, timestamp, t_ms, ...;
+times from the first stamp, in s; an implausibly long demonstration refused). Each row's norm is checked (refused outside [1 - NORM_REFUSE, 1 +
 NORM_REFUSE]: not a rotation) and the row divided by it (the largest deviation is reported).
 
 Sign continuity (:func:`sign_continuous`): q and -q are one rotation; each sample is flipped to
@@ -31,10 +34,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import DemonstrationError, InputError
+from .columns import TIME_UNITS, check_duration, check_time_units, time_header_names, time_unit
 from .demonstrations import Demonstration, Demonstrations, time_problem
 
 POSITION_COLUMNS = ("x", "y", "z")
-TIME_COLUMNS = ("t", "time")
 SCALAR_FIRST, SCALAR_LAST = ("qw", "qx", "qy", "qz"), ("qx", "qy", "qz", "qw")
 NORM_REPORT = 1e-6            # row norms further than this from 1 are reported after renormalising
 NORM_REFUSE = 0.1             # ... and further than this are refused (not a unit quaternion)
@@ -138,20 +141,37 @@ def pose_columns(header) -> tuple[list[int], list[int], int | None, str]:
     if order not in (list(SCALAR_FIRST), list(SCALAR_LAST)):
         raise InputError(f"pose CSV header {header}: quaternion columns in the order {order}, neither w x y z "
                          f"nor x y z w; refusing to guess. {hint}")
-    time = next((names.index(c) for c in TIME_COLUMNS if c in names), None)
+    time = next((names.index(c) for c in time_header_names() if c in names), None)
     return [names.index(c) for c in POSITION_COLUMNS], q, time, \
         "scalar first" if order == list(SCALAR_FIRST) else "scalar last"
 
 
-def read_pose_csv(path, dt: float | None = None) -> tuple[PoseDemonstration, list[str]]:
+def _csv_rows(path: Path) -> list[list[str]]:
+    try:
+        with path.open(newline="") as fh:
+            return list(csv.reader(fh))
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror}.") from exc
+
+
+def is_pose_file(path) -> bool:
+    """Does the CSV at ``path`` have a header naming a quaternion column (qw, qx, qy or qz, any case)?"""
+    path = Path(path)
+    if path.suffix.lower() != ".csv" or not path.is_file():
+        return False
+    try:
+        with path.open(newline="") as fh:
+            header = next(csv.reader(fh), [])
+    except (OSError, UnicodeDecodeError):
+        return False                 # the position loader reports it
+    return any(h.strip().lower() in SCALAR_FIRST for h in header)
+
+
+def read_pose_csv(path, dt: float | None = None, time_units: str | None = None) -> tuple[PoseDemonstration, list[str]]:
     """One pose demonstration from a CSV with a header (:func:`pose_columns`); without a time column
     the samples are ``dt`` s apart. Returns it and notes (order read, renormalisation, flips)."""
     path = Path(path)
-    try:
-        with path.open(newline="") as fh:
-            rows = list(csv.reader(fh))
-    except OSError as exc:
-        raise InputError(f"cannot read {path}: {exc.strerror}.") from exc
+    rows = _csv_rows(path)
     if len(rows) < 2:
         raise DemonstrationError(f"{path}: no data rows under the header.")
     pos_i, q_i, t_i, order = pose_columns(rows[0])
@@ -159,9 +179,16 @@ def read_pose_csv(path, dt: float | None = None) -> tuple[PoseDemonstration, lis
         data = np.array([[float(v) for v in row] for row in rows[1:] if row], dtype=float)
     except ValueError as exc:
         raise DemonstrationError(f"{path}: a value is not a number ({exc}).") from exc
-    if t_i is None and dt is None:
-        raise InputError(f"{path} has no time column (t or time); pass dt= (seconds between samples).")
-    t = data[:, t_i] if t_i is not None else dt * np.arange(len(data))
+    if (t_i is None) == (dt is None):
+        raise InputError(f"{path}: {'no' if t_i is None else 'both dt and a'} time column. Try: "
+                         + ("dt= (seconds between samples; --dt in sosdyn fit)." if t_i is None else "drop dt."))
+    if t_i is None:
+        t = dt * np.arange(len(data))
+    else:
+        column = rows[0][t_i].strip().lower()
+        unit = time_unit(column, check_time_units(time_units), str(path))
+        t = (data[:, t_i] - data[0, t_i]) * TIME_UNITS[unit]
+        check_duration(t, unit, str(path), f"time column {column!r}")
     quat, dev = unit_quaternions(data[:, q_i], str(path))
     quat, flips = sign_continuous(quat)
     notes = [f"{path.name}: quaternion read {order} (w x y z from columns {[rows[0][i] for i in q_i]})"]
@@ -172,11 +199,13 @@ def read_pose_csv(path, dt: float | None = None) -> tuple[PoseDemonstration, lis
     return PoseDemonstration(t, data[:, pos_i], quat, str(path)), notes
 
 
-def load_pose_demos(paths, units: str = "", name: str = "", dt: float | None = None) -> PoseDemonstrations:
+def load_pose_demos(paths, units: str = "", name: str = "", dt: float | None = None,
+                    time_units: str | None = None) -> PoseDemonstrations:
     """Pose demonstrations from CSV files (:func:`read_pose_csv`), notes collected."""
+    paths = [paths] if isinstance(paths, (str, Path)) else list(paths)
     demos, notes = [], []
     for p in paths:
-        d, n = read_pose_csv(p, dt)
+        d, n = read_pose_csv(p, dt, time_units)
         demos.append(d)
         notes += n
     return PoseDemonstrations(demos, name or (Path(paths[0]).parent.name if paths else ""), units, tuple(notes))

@@ -3,7 +3,7 @@ its state record (``state``), the signed JSON file format (``fileformat``) and l
 saving model files (``files``); the pose model :class:`PoseCDSP` (``pose``, ``pose_export``).
 """
 from .cdsp import CDSP
-from .files import load_model, save_model
-from .pose import PoseCDSP, load_pose_model
+from .files import load_model, load_pose_model, save_model
+from .pose import PoseCDSP
 
 __all__ = ["CDSP", "PoseCDSP", "load_model", "load_pose_model", "save_model"]

@@ -224,6 +224,13 @@ def parse_json(data: bytes, path: Path):
                              f"{REFIT_HINT}") from None
 
 
+def model_format(path):
+    """The ``format`` field of the JSON file at ``path`` (None when there is none), read with the
+    same size, type and depth checks as :func:`read_model_file`: what the loaders dispatch on."""
+    doc = parse_json(read_bytes_capped(Path(path)), Path(path))
+    return doc.get("format") if isinstance(doc, dict) else None
+
+
 def read_model_file(path, key=None, fmt: str = FORMAT, fmt_version: int = VERSION) -> dict:
     """The content (format, version, params, state) of a model file, after every check that
     does not need the estimator: size, type, JSON, format ``fmt`` and version ``fmt_version``, finite

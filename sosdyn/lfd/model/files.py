@@ -1,4 +1,5 @@
-"""Reading CDSP model files: :func:`load_model` (every field validated, certificate re-checked).
+"""Reading model files: :func:`load_model` (every field validated, certificate re-checked), a CDSP
+or, for a file whose format field is ``sosdyn-pose``, a :class:`~.pose.PoseCDSP` (:func:`load_pose_model`).
 
 The file itself (JSON, checksum, signature, atomic writes) is :mod:`.model_io`; its state, field by
 field, :mod:`.model_state`; writing is :meth:`~sosdyn.lfd.model.cdsp.CDSP.save` (:func:`save_model`).
@@ -13,7 +14,8 @@ from sosdyn.errors import InputError, ModelFileError, SosdynError
 from .cdsp import CDSP, DEFAULTS
 from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.learner import Settings
-from .fileformat import REFIT_HINT, read_model_file
+from .fileformat import REFIT_HINT, model_format, read_model_file
+from .pose import GOAL_TOL_DEG, POSE_FORMAT, POSE_VERSION, PoseCDSP
 from .state import check_param_names, need, validate_state
 from ..fit.params import LEGACY_PARAMS, PARAMS, check_params, resolve_seed
 
@@ -25,9 +27,10 @@ def save_model(model: CDSP, path, key=None) -> Path:
     return model.save(path, key)
 
 
-def load_model(path, key=None) -> CDSP:
+def load_model(path, key=None) -> CDSP | PoseCDSP:
     """Read a model written by :meth:`~sosdyn.lfd.model.cdsp.CDSP.save`: every field validated,
-    certificate re-checked.
+    certificate re-checked; a pose model file (format ``sosdyn-pose``, written by
+    :meth:`~.pose.PoseCDSP.save`) is read by :func:`load_pose_model`.
 
     With ``key`` (bytes or str; default $SOSDYN_MODEL_KEY) the file must carry a matching HMAC.
     The certificate is re-checked from the model's own coefficients (Gram matrices, and
@@ -36,12 +39,23 @@ def load_model(path, key=None) -> CDSP:
     make this check weaker. Every failure is a ModelFileError.
     """
     path = Path(path)
-    content = read_model_file(path, key)
+    if model_format(path) == POSE_FORMAT:
+        return load_pose_model(path, key)
+    return checked_model(path, model_from_content_at(path, read_model_file(path, key)))
+
+
+def model_from_content_at(path: Path, content: dict) -> CDSP:
+    """:func:`model_from_content`, its ModelFileError naming ``path`` (with the refit hint)."""
     try:
-        model = model_from_content(content)
+        return model_from_content(content)
     except ModelFileError as exc:
         text = str(exc).rstrip(".")
         raise ModelFileError(f"{path}: {text}." + ("" if "Try:" in text else f" {REFIT_HINT}")) from None
+
+
+def checked_model(path: Path, model: CDSP) -> CDSP:
+    """``model`` with its certificate re-checked from its coefficients (DEFAULT_SAMPLES states, seed
+    LOAD_SEED): ``verification_`` set and ``certified_`` True, or ModelFileError."""
     try:
         report = model.verify(DEFAULT_SAMPLES, LOAD_SEED)
     except (SosdynError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -51,6 +65,20 @@ def load_model(path, key=None) -> CDSP:
         raise ModelFileError(f"{path}: the stored certificate does not check out; refusing to load.\n"
                              f"{report}\n{REFIT_HINT}")
     model.verification_, model.certified_ = report, True
+    return model
+
+
+def load_pose_model(path, key=None) -> PoseCDSP:
+    """Read a file written by :meth:`PoseCDSP.save`: every CDSP field validated (as :func:`load_model`),
+    the goal orientation a unit quaternion, c > 0, and the 6-D certificate re-checked."""
+    path = Path(path)
+    content = read_model_file(path, key, POSE_FORMAT, POSE_VERSION)
+    q, c = np.asarray(content.get("goal_quat", []), dtype=float), content.get("rot_factor")
+    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-9 or not isinstance(c, (int, float)) or not c > 0:
+        raise ModelFileError(f"{path}: goal_quat must be a unit 4-vector and rot_factor > 0. {REFIT_HINT}")
+    model = PoseCDSP(content.get("goal_tol_deg", GOAL_TOL_DEG))
+    model.cdsp_ = checked_model(path, model_from_content_at(path, content))
+    model.goal_quat_, model.rot_factor_ = q, float(c)
     return model
 
 
@@ -72,4 +100,4 @@ def model_from_content(content: dict) -> CDSP:
     return model
 
 
-__all__ = ["LOAD_SEED", "load_model", "model_from_content", "save_model"]
+__all__ = ["LOAD_SEED", "load_model", "load_pose_model", "model_from_content", "save_model"]

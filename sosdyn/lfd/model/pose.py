@@ -17,8 +17,13 @@ pi - CHART_MARGIN is checked sample by sample and refused (InputError) if it wou
 
 Rollout: the chart state is integrated (the CDSP's integrator) and mapped by R = R_g exp(r):
 unit quaternions by construction, no drift off the sphere. Velocities: v = xdot, and the world
-angular velocity omega = R J_r(r) rdot (:func:`right_jacobian`, the right Jacobian of SO(3):
+angular velocity omega = R J_r(r) rdot (:func:`body_velocity`, the right Jacobian of SO(3):
 R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r)).
+
+Speed limits (``max_speed`` on |v|, data units / s; ``max_angular_speed`` on |omega|, rad / s): the
+chart velocity is scaled by lambda = min(1, v_max / |v|, w_max / |omega|) (:func:`pose_speed_factor`);
+omega is linear in rdot, so both are scaled by lambda, and one positive factor on the 6-D field
+keeps its paths and its goal (the limited system is a time change of the certified one).
 """
 from __future__ import annotations
 
@@ -27,30 +32,42 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from sosdyn.errors import InputError, ModelFileError, NotFittedError
+from sosdyn.errors import InputError, NotFittedError
 from ..data.poses import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart,
                           chart_demonstrations, goal_orientation)
-from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.contraction import constant_index, eval_metric
 from ..fit.pipeline import maps_of
 from ..fit.warp import apply as warp_apply, check_warp
+from ..rollout import rollout as integrate
+from ..runtime.states import check_max_speed, speed_factor
 from .cdsp import CDSP, DEFAULTS
-from .fileformat import read_model_file, write_model_file
-from .files import LOAD_SEED, model_from_content
+from .fileformat import write_model_file
 from .state import STATE_FIELDS, state_record
 
 POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 1
 SMALL_ANGLE = 1e-4               # below this |r| the right Jacobian's series is used
 
 
-def right_jacobian(r) -> np.ndarray:
-    """J_r(r) = I - (1 - cos t)/t^2 [r]_x + (t - sin t)/t^3 [r]_x^2, t = |r| (series below SMALL_ANGLE)."""
-    r = np.asarray(r, dtype=float)
-    t = float(np.linalg.norm(r))
-    K = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
-    a, b = ((0.5 - t * t / 24.0, 1.0 / 6.0 - t * t / 120.0) if t < SMALL_ANGLE
-            else ((1.0 - np.cos(t)) / t**2, (t - np.sin(t)) / t**3))
-    return np.eye(3) - a * K + b * K @ K
+def body_velocity(r, rdot) -> np.ndarray:
+    """J_r(r) rdot row by row (m, 3): rdot - a r x rdot + b r x (r x rdot), t = |r|, a = (1 - cos t)/t^2,
+    b = (t - sin t)/t^3 (series below SMALL_ANGLE); J_r is the right Jacobian of SO(3), so
+    R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r): the body angular velocity."""
+    r, d = np.atleast_2d(np.asarray(r, dtype=float)), np.atleast_2d(np.asarray(rdot, dtype=float))
+    t = np.linalg.norm(r, axis=1, keepdims=True)
+    small = t < SMALL_ANGLE
+    ts = np.where(small, 1.0, t)
+    a = np.where(small, 0.5 - t * t / 24.0, (1.0 - np.cos(ts)) / ts**2)
+    b = np.where(small, 1.0 / 6.0 - t * t / 120.0, (ts - np.sin(ts)) / ts**3)
+    rxd = np.cross(r, d)
+    return d - a * rxd + b * np.cross(r, rxd)
+
+
+def pose_speed_factor(S, Sdot, rot_factor: float, max_speed, max_angular_speed) -> np.ndarray:
+    """lambda = min(1, v_max / |v|, w_max / |omega|) of each chart state S (m, 6) (goal at r = 0) and
+    velocity Sdot: v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| with r = s_r / c, rdot = sdot_r / c.
+    One positive factor on the whole 6-D velocity keeps the chart paths and the goal (docs/theory.md)."""
+    w = body_velocity(S[:, 3:] / rot_factor, Sdot[:, 3:] / rot_factor)
+    return np.minimum(speed_factor(Sdot[:, :3], max_speed), speed_factor(w, max_angular_speed))
 
 
 def metric_matrix(model: CDSP) -> np.ndarray | None:
@@ -111,6 +128,7 @@ class PoseCDSP:
         if unknown:
             raise InputError(f"PoseCDSP: unknown parameters {unknown}. Try: goal_tol_deg or a CDSP parameter "
                              f"({', '.join(DEFAULTS)}).")
+        self.progress = cdsp_params.pop("progress", None)     # as CDSP's: called with each history row
         self.cdsp_params = cdsp_params
         CDSP(**cdsp_params).check_params()
 
@@ -126,7 +144,7 @@ class PoseCDSP:
         pos_scale, rot_scale = np.abs(X - aligned.goal_pos).max(), np.abs(R).max()
         self.rot_factor_ = float(pos_scale / rot_scale) if rot_scale > 0 and pos_scale > 0 else 1.0
         self.goal_quat_ = goal_quat
-        self.cdsp_ = CDSP(**self.cdsp_params).fit(chart_demonstrations(aligned, goal_quat, self.rot_factor_))
+        self.cdsp_ = CDSP(**self.cdsp_params, progress=self.progress).fit(chart_demonstrations(aligned, goal_quat, self.rot_factor_))
         return self
 
     # ------------------------------------------------------------------ state and chart
@@ -163,12 +181,14 @@ class PoseCDSP:
         return (Rg * Rotation.from_rotvec(S[:, 3:] / self.rot_factor_)).as_quat(scalar_first=True)
 
     # ------------------------------------------------------------------ motion
-    def predictor(self, goal=None):
+    def predictor(self, goal=None, max_speed=None, max_angular_speed=None):
         """``step(x, quat, goal=None) -> (v, omega)``: linear velocity (3,) and world angular velocity
         (3,) at the position x and orientation quat (w x y z), for the goal pose (7-vector; default
-        the model's, fixed here or per call)."""
+        the model's, fixed here or per call); both scaled by :func:`pose_speed_factor` so that
+        |v| <= max_speed and |omega| <= max_angular_speed (rad/s) when given."""
         self._check_fitted()
         fixed = self._goal(goal)
+        limits = self._limits(max_speed, max_angular_speed)
         step6 = self.cdsp_.predictor()
         g6 = self.cdsp_.goal_
 
@@ -177,18 +197,26 @@ class PoseCDSP:
             x = np.asarray(x, dtype=float)
             s = self.state(x, np.asarray(quat, dtype=float), gq)
             sdot = step6(s - np.concatenate([gx, np.zeros(3)]) + g6)
+            sdot = sdot * pose_speed_factor(s[None], sdot[None], self.rot_factor_, *limits)[0]
             r, rdot = s[3:] / self.rot_factor_, sdot[3:] / self.rot_factor_
             R = Rotation.from_quat(gq, scalar_first=True) * Rotation.from_rotvec(r)
-            return sdot[:3], R.apply(right_jacobian(r) @ rdot)
+            return sdot[:3], R.apply(body_velocity(r, rdot)[0])
         return step
 
-    def rollout(self, p0, duration, dt=None, goal=None, pushes=(), goal_changes=()) -> PoseTrajectory:
+    @staticmethod
+    def _limits(max_speed, max_angular_speed) -> tuple:
+        return (check_max_speed(max_speed), check_max_speed(max_angular_speed, "max_angular_speed", "rad/s"))
+
+    def rollout(self, p0, duration, dt=None, goal=None, pushes=(), goal_changes=(), max_speed=None,
+                max_angular_speed=None) -> PoseTrajectory:
         """Integrate from the pose p0 = (x, y, z, qw, qx, qy, qz) for ``duration`` s; ``pushes``
         [(t, (dx, dy, dz, wx, wy, wz))]: x += dx and R <- exp(w) R (world rotation vector);
         ``goal_changes`` [(t, goal pose)]. Between events the chart state at the goal in effect is
         integrated and mapped back (module docstring); a segment whose a-priori bound is not below
-        pi - CHART_MARGIN and whose samples leave it is refused."""
+        pi - CHART_MARGIN and whose samples leave it is refused. ``max_speed`` / ``max_angular_speed``:
+        as :meth:`predictor` (the same paths, traversed more slowly)."""
         self._check_fitted()
+        limits = self._limits(max_speed, max_angular_speed)
         x, q = self._pose(p0, "p0")
         gx, gq = self._goal(goal)
         events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in pushes] +
@@ -198,7 +226,7 @@ class PoseCDSP:
         ts, P, Q, bounds, t0 = [], [], [], [], 0.0
         for t_end, kind, data in events + [(float(duration), -1, None)]:
             if t_end > t0:
-                traj = self._segment(x, q, gx, gq, t_end - t0, dt, bounds)
+                traj = self._segment(x, q, gx, gq, t_end - t0, dt, bounds, limits)
                 keep = slice(1 if ts else 0, None)
                 ts.append(t0 + traj.t[keep])
                 P.append(traj.pos[keep, :3])
@@ -212,12 +240,18 @@ class PoseCDSP:
                 gx, gq = self._pose(data, "goal change")
         return PoseTrajectory(np.concatenate(ts), np.vstack(P), np.vstack(Q), bounds)
 
-    def _segment(self, x, q, gx, gq, duration, dt, bounds):
+    def _segment(self, x, q, gx, gq, duration, dt, bounds, limits):
         s0 = self.state(x, q, gq)
         g6 = np.concatenate([gx, np.zeros(3)])
         bound = chart_bound(self.cdsp_, (s0 - g6) / self.cdsp_.scale_, self.rot_factor_)
         bounds.append(bound)
-        traj = self.cdsp_.rollout(s0, duration, dt=dt, goal=g6)
+        model, c = self.cdsp_, self.rot_factor_
+
+        def field(S, g):            # g = g6: the chart goal, r = 0
+            Sdot = model.field(S, g)
+            return Sdot * pose_speed_factor(S, Sdot, c, *limits)
+        traj = integrate(field, s0, duration=duration, dt=model.dt_ if dt is None else dt, goal=g6,
+                         scale=model.scale_)
         angle = np.linalg.norm(traj.pos[:, 3:], axis=1) / self.rot_factor_
         if bound >= np.pi - CHART_MARGIN and angle.max() >= np.pi - CHART_MARGIN:
             raise InputError(f"the rollout turns {np.rad2deg(angle.max()):.0f} deg from the goal orientation, "
@@ -240,19 +274,3 @@ class PoseCDSP:
                    "state": state_record({k: getattr(from_state, k) for k in STATE_FIELDS})}
         return write_model_file(content, path, key)
 
-
-def load_pose_model(path, key=None) -> PoseCDSP:
-    """Read a file written by :meth:`PoseCDSP.save`: every CDSP field validated, the goal orientation
-    a unit quaternion, c > 0, and the certificate re-checked (as :func:`~.files.load_model`)."""
-    content = read_model_file(path, key, POSE_FORMAT, POSE_VERSION)
-    q, c = np.asarray(content.get("goal_quat", []), dtype=float), content.get("rot_factor")
-    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-9 or not isinstance(c, (int, float)) or not c > 0:
-        raise ModelFileError(f"{path}: goal_quat must be a unit 4-vector and rot_factor > 0. Try: refit and save.")
-    model = PoseCDSP(content.get("goal_tol_deg", GOAL_TOL_DEG))
-    model.cdsp_ = model_from_content(content)
-    report = model.cdsp_.verify(DEFAULT_SAMPLES, LOAD_SEED)
-    if not report.passed:
-        raise ModelFileError(f"{path}: the stored certificate does not check out; refusing to load.\n{report}")
-    model.cdsp_.verification_, model.cdsp_.certified_ = report, True
-    model.goal_quat_, model.rot_factor_ = q, float(c)
-    return model

@@ -4,8 +4,10 @@
 The module is the 6-D chart model's own export (:func:`~sosdyn.lfd.runtime.export.to_python`:
 ``predict(S)`` on s = (x, c r)) followed by the chart: r = log(R_g^T R) (scipy's ``Rotation``),
 s = (x - x_g' + x_g, c r) for the goal pose (x_g', R_g'), and (v, omega) = (sdot_x,
-R J_r(r) sdot_r / c) with :func:`~.pose.right_jacobian` (its source copied verbatim). It needs numpy
-and scipy, never sosdyn. States within CHART_MARGIN of the cut locus raise ValueError.
+R J_r(r) sdot_r / c) with :func:`~.pose.body_velocity` (its source copied verbatim). It needs numpy
+and scipy, never sosdyn. States within CHART_MARGIN of the cut locus raise ValueError. Speed limits
+(``max_speed`` on |v|, ``max_angular_speed`` on |omega|, written into the code): (v, omega) scaled by
+lambda = min(1, v_max / |v|, w_max / |omega|), as :meth:`~.pose.PoseCDSP.predictor`.
 
 The C++ header is the chart model's :func:`~sosdyn.lfd.runtime.export.to_cpp` (namespace NS) and a
 namespace NS_pose with the same chart in plain arithmetic (<cmath> only): quaternion product and
@@ -19,12 +21,13 @@ import inspect
 
 from ..data.poses import CHART_MARGIN
 from ..runtime.export import _flat, _literal, to_cpp, to_python
-from .pose import SMALL_ANGLE, PoseCDSP, right_jacobian
+from .pose import SMALL_ANGLE, PoseCDSP, body_velocity
 
 
-def pose_to_python(model: PoseCDSP) -> str:
+def pose_to_python(model: PoseCDSP, max_speed: float | None = None, max_angular_speed: float | None = None) -> str:
     """Source of the standalone pose module (module docstring)."""
     model._check_fitted()
+    max_speed, max_angular_speed = model._limits(max_speed, max_angular_speed)
     return to_python(model.cdsp_) + f'''
 
 # ---------------------------------------------------------------- the pose chart (PoseCDSP)
@@ -34,9 +37,11 @@ GOAL_QUAT = np.array({_literal(model.goal_quat_)})   # w x y z
 ROT_FACTOR = {float(model.rot_factor_)!r}            # s = (x, ROT_FACTOR * r)
 CHART_LIMIT = {float(3.141592653589793 - CHART_MARGIN)!r}   # |r| below this (rad): away from the cut locus
 SMALL_ANGLE = {SMALL_ANGLE!r}
+POSE_MAX_SPEED = {max_speed!r}                  # None, or the largest |v| (units/s)
+POSE_MAX_ANGULAR_SPEED = {max_angular_speed!r}  # None, or the largest |omega| (rad/s): (v, omega) scaled by one factor
 
 
-{inspect.getsource(right_jacobian)}
+{inspect.getsource(body_velocity)}
 
 def predict_pose(x, quat, goal=None):
     """(v, omega): linear velocity (3,) and world angular velocity (3,) at the position x (3,) and the
@@ -50,13 +55,27 @@ def predict_pose(x, quat, goal=None):
     if np.linalg.norm(r) >= CHART_LIMIT:
         raise ValueError("the orientation is too near a half turn from the goal (the chart's cut locus)")
     sdot = predict(np.concatenate([x - goal[:3] + GOAL[:3], ROT_FACTOR * r]))
-    return sdot[:3], (Rg * Rotation.from_rotvec(r)).apply(right_jacobian(r) @ (sdot[3:] / ROT_FACTOR))
+    v, omega = sdot[:3], (Rg * Rotation.from_rotvec(r)).apply(body_velocity(r, sdot[3:] / ROT_FACTOR)[0])
+    with np.errstate(divide="ignore"):
+        scale = min([1.0, *(limit / np.linalg.norm(u) for limit, u in
+                            ((POSE_MAX_SPEED, v), (POSE_MAX_ANGULAR_SPEED, omega)) if limit is not None)])
+    return scale * v, scale * omega
 '''
 
 
-def pose_to_cpp(model: PoseCDSP, namespace: str = "pose_model") -> str:
+def _cpp_limit(name: str, limit: float | None, vector: str) -> str:
+    """C++ lines lowering ``scale`` to limit / |vector| when that is smaller (nothing without a limit)."""
+    return "" if limit is None else (
+        f"  const double {name}2 = {vector}[0] * {vector}[0] + {vector}[1] * {vector}[1] + {vector}[2] * {vector}[2];\n"
+        f"  if ({name}2 * scale * scale > {limit!r} * {limit!r}) scale = {limit!r} / std::sqrt({name}2);\n")
+
+
+def pose_to_cpp(model: PoseCDSP, namespace: str = "pose_model", max_speed: float | None = None,
+                max_angular_speed: float | None = None) -> str:
     """Source of the header-only C++17 pose evaluator (module docstring)."""
     model._check_fitted()
+    max_speed, max_angular_speed = model._limits(max_speed, max_angular_speed)
+    limits = _cpp_limit("speed", max_speed, "sdot") + _cpp_limit("turn", max_angular_speed, "w_out")
     return to_cpp(model.cdsp_, namespace) + f"""
 namespace {namespace}_pose {{
 
@@ -110,10 +129,12 @@ inline bool predict_pose(const double* x, const double* quat, double* v, double*
   const std::array<double, 4> qc = {{q[0], -q[1], -q[2], -q[3]}};
   const std::array<double, 4> qw = qmul(q.data(), wb.data());
   const std::array<double, 4> w = qmul(qw.data(), qc.data());     // omega = R omega_b = q omega_b q*
-  bool finite = true;
+  const std::array<double, 3> w_out = {{w[1], w[2], w[3]}};
+  double scale = 1.0;   // speed limits (|v| <= max_speed, |omega| <= max_angular_speed): one factor on both
+{limits}  bool finite = true;
   for (int i = 0; i < 3; ++i) {{
-    v[i] = sdot[i];
-    omega[i] = w[1 + i];
+    v[i] = scale * sdot[i];
+    omega[i] = scale * w_out[i];
     finite = finite && std::isfinite(v[i]) && std::isfinite(omega[i]);
   }}
   return finite;

@@ -64,21 +64,25 @@ def as_state(value, dim: int, what: str = "x") -> np.ndarray:
     return arr[0]
 
 
-def check_max_speed(max_speed) -> float | None:
-    """``max_speed``: None (no limit) or a finite number > 0 (data units per second)."""
+def check_max_speed(max_speed, what: str = "max_speed", unit: str = "data units per second") -> float | None:
+    """``max_speed``: None (no limit) or a finite number > 0 (``unit``); InputError naming ``what``."""
     if max_speed is None:
         return None
     real = isinstance(max_speed, (int, float, np.integer, np.floating)) and not isinstance(max_speed, bool)
     if not real or not 0 < max_speed < np.inf:
-        raise InputError(f"max_speed must be a finite number > 0 (data units per second) or None, got "
-                         f"{max_speed!r}.")
+        raise InputError(f"{what} must be a finite number > 0 ({unit}) or None, got {max_speed!r}.")
     return float(max_speed)
+
+
+def speed_factor(V: np.ndarray, max_speed: float | None) -> np.ndarray:
+    """min(1, max_speed / |v|) of each row v of V (shape V.shape[:-1] + (1,)); 1 without a limit."""
+    speed = np.linalg.norm(V, axis=-1, keepdims=True)
+    if max_speed is None:
+        return np.ones_like(speed)
+    with np.errstate(divide="ignore"):
+        return np.minimum(1.0, max_speed / speed)
 
 
 def limit_speed(V: np.ndarray, max_speed: float | None) -> np.ndarray:
     """The rows of V scaled by min(1, max_speed / |v|): same directions, |v| <= max_speed."""
-    if max_speed is None:
-        return V
-    speed = np.linalg.norm(V, axis=-1, keepdims=True)
-    with np.errstate(divide="ignore"):
-        return V * np.minimum(1.0, max_speed / speed)
+    return V if max_speed is None else V * speed_factor(V, max_speed)

@@ -5,6 +5,7 @@ import pytest
 
 from sosdyn.errors import DemonstrationError, InputError
 from sosdyn.lfd.data.files import load_demos
+from sosdyn.lfd.data.poses import PoseDemonstrations
 
 # ---------------------------------------------------------------- files
 
@@ -235,15 +236,25 @@ def test_milliseconds_read_as_seconds_are_refused_with_the_option_to_use(tmp_pat
         load_demos(path, time_units="min")
 
 
-def test_orientation_columns_are_refused_never_dropped(tmp_path):
-    path = write(tmp_path, "pose.csv", reach(1.0, ["t", "x", "y", "z", "qx", "qy", "qz", "qw"], (0, 0, 0, 1)))
-    with pytest.raises(InputError, match=r"orientation columns \['qx', 'qy', 'qz', 'qw'\].*--columns x,y,z"):
-        load_demos(path)
-    demo = load_demos(path, columns="x,y,z")[0]
+def test_quaternion_columns_give_pose_demos_other_orientations_are_refused(tmp_path):
+    half = np.sqrt(0.5)                              # 90 deg about z, written in either order
+    path = write(tmp_path, "pose.csv", reach(1.0, ["t", "x", "y", "z", "qx", "qy", "qz", "qw"], (0, 0, half, half)))
+    qw_first = write(tmp_path, "wxyz.csv", reach(1.0, ["t", "x", "y", "z", "qw", "qx", "qy", "qz"], (half, 0, 0, half)))
+    poses = load_demos([path, qw_first], units="m")
+    assert isinstance(poses, PoseDemonstrations) and len(poses) == 2 and poses.units == "m"
+    for d in poses:
+        np.testing.assert_allclose(d.quat, np.tile([half, 0, 0, half], (len(d.t), 1)), atol=1e-12)   # w x y z
+        np.testing.assert_allclose(d.pos[:, :2], POS, atol=1e-6)
+    demo = load_demos(path, columns="x,y,z")[0]       # positions selected: a position demonstration
     np.testing.assert_allclose(demo.pos[:, :2], POS, atol=1e-6)
-    qw_first = write(tmp_path, "wxyz.csv", reach(1.0, ["t", "x", "y", "z", "qw", "qx", "qy", "qz"], (1, 0, 0, 0)))
-    with pytest.raises(InputError, match="orientation columns"):
-        load_demos(qw_first)
+    with pytest.raises(InputError, match="goal_tol apply to position files; these are pose files"):
+        load_demos(path, goal_tol=0.1)
+    plain = write(tmp_path, "plain.csv", reach(1.0, ["t", "x", "y", "z"]))
+    with pytest.raises(InputError, match="plain.csv has no quaternion columns but other files do"):
+        load_demos([path, plain])
+    euler = write(tmp_path, "rpy.csv", reach(1.0, ["t", "x", "y", "z", "roll", "pitch", "yaw"], (0, 0, 0)))
+    with pytest.raises(InputError, match=r"orientation columns \['roll', 'pitch', 'yaw'\].*qw,qx,qy,qz.*--columns x,y,z"):
+        load_demos(euler)
     other = write(tmp_path, "grip.csv", reach(1.0, ["t", "x", "y", "z", "gripper"], (0.5,)))
     with pytest.raises(InputError, match=r"columns \['gripper'\] are neither.*columns="):
         load_demos(other)

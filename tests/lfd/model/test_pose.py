@@ -11,11 +11,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from sosdyn.errors import InputError
+from sosdyn.errors import InputError, ModelFileError
 from sosdyn.evaluation.poses import angles_deg
-from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
+from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations, chart
 from sosdyn.lfd.model.cdsp import CDSP
-from sosdyn.lfd.model.pose import PoseCDSP, chart_bound, load_pose_model, right_jacobian
+from sosdyn.lfd.model import pose as pose_module
+from sosdyn.lfd.model.files import load_model, load_pose_model
+from sosdyn.lfd.model.pose import PoseCDSP, body_velocity, chart_bound
 from sosdyn.lfd.model.pose_export import pose_to_cpp, pose_to_python
 
 K_RATE = 0.8
@@ -80,12 +82,12 @@ def test_predictor_gives_world_angular_velocity(fitted):
     np.testing.assert_allclose(np.concatenate([v2, w2]), np.concatenate([v, w]), atol=1e-12)
 
 
-def test_right_jacobian_matches_the_exponential():
+def test_body_velocity_matches_the_exponential():
     rng = np.random.default_rng(0)
-    for r in (rng.normal(size=3), 1e-6 * rng.normal(size=3), 2.9 * np.array([0.0, 0.6, 0.8])):
-        d, h = rng.normal(size=3), 1e-6
-        body = (Rotation.from_rotvec(r).inv() * Rotation.from_rotvec(r + h * d)).as_rotvec() / h
-        np.testing.assert_allclose(right_jacobian(r) @ d, body, atol=1e-5)
+    rs = np.array([rng.normal(size=3), 1e-6 * rng.normal(size=3), 2.9 * np.array([0.0, 0.6, 0.8])])
+    ds, h = rng.normal(size=(3, 3)), 1e-6
+    body = (Rotation.from_rotvec(rs).inv() * Rotation.from_rotvec(rs + h * ds)).as_rotvec() / h
+    np.testing.assert_allclose(body_velocity(rs, ds), body, atol=1e-5)       # all rows at once
 
 
 def test_goal_change_and_push(fitted):
@@ -113,22 +115,66 @@ def test_bad_poses_refused(fitted):
 
 def test_save_load_round_trip(fitted, tmp_path):
     path = fitted.save(tmp_path / "pose.json")
-    loaded = load_pose_model(path)
     x, q = np.array([0.5, 0.1, 0.2]), Rotation.from_rotvec([0.1, 0.2, 0.3]).as_quat(scalar_first=True)
-    np.testing.assert_allclose(np.concatenate(loaded.predictor()(x, q)), np.concatenate(fitted.predictor()(x, q)),
-                               rtol=1e-12, atol=1e-14)
+    for loaded in (load_pose_model(path), load_model(path)):        # load_model dispatches on the format
+        assert isinstance(loaded, PoseCDSP) and loaded.certified_
+        np.testing.assert_allclose(np.concatenate(loaded.predictor()(x, q)),
+                                   np.concatenate(fitted.predictor()(x, q)), rtol=1e-12, atol=1e-14)
+    fitted.cdsp_.save(tmp_path / "chart.json")                     # a position model file is not a pose file
+    with pytest.raises(ModelFileError, match="not a sosdyn-pose file"):
+        load_pose_model(tmp_path / "chart.json")
+    assert isinstance(load_model(tmp_path / "chart.json"), CDSP)
 
 
-def test_python_export_returns_the_same_velocities(fitted):
+V_MAX, W_MAX = 0.1, 0.3          # m/s and rad/s: both active at the start below (|v| ~ 0.4, |omega| ~ 1)
+
+
+def test_speed_limits_scale_v_and_omega_by_one_factor(fitted):
+    x0, r0 = X_GOAL + np.array([0.4, -0.3, 0.2]), np.array([0.9, -0.6, 0.5])
+    q0 = (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)
+    free, limited = fitted.predictor(), fitted.predictor(max_speed=V_MAX, max_angular_speed=W_MAX)
+    for scale in (1.0, 0.3, 0.02):                 # both limits active, one, none (near the goal)
+        x, q = X_GOAL + scale * (x0 - X_GOAL), (R_GOAL * Rotation.from_rotvec(scale * r0)).as_quat(scalar_first=True)
+        v, w = free(x, q)
+        lam = min(1.0, V_MAX / np.linalg.norm(v), W_MAX / np.linalg.norm(w))
+        vl, wl = limited(x, q)
+        np.testing.assert_allclose(np.concatenate([vl, wl]), lam * np.concatenate([v, w]), rtol=1e-12, atol=1e-15)
+        assert np.linalg.norm(vl) <= V_MAX * (1 + 1e-12) and np.linalg.norm(wl) <= W_MAX * (1 + 1e-12)
+    assert min(V_MAX / np.linalg.norm(free(x0, q0)[0]), W_MAX / np.linalg.norm(free(x0, q0)[1])) < 0.5
+    with pytest.raises(InputError, match="max_angular_speed must be a finite number > 0 \\(rad/s\\)"):
+        fitted.predictor(max_angular_speed=-1.0)
+
+
+def test_speed_limited_rollout_keeps_the_path_and_the_goal(fitted):
+    x0, r0 = X_GOAL + np.array([0.4, -0.3, 0.2]), np.array([0.9, -0.6, 0.5])
+    p0 = np.concatenate([x0, (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)])
+    free = fitted.rollout(p0, 12.0, dt=0.002)                  # dense: the gap below is not its sampling
+    slow = fitted.rollout(p0, 40.0, dt=0.02, max_speed=V_MAX, max_angular_speed=W_MAX)
+    dt = np.diff(slow.t)
+    speed = np.linalg.norm(np.diff(slow.pos, axis=0), axis=1) / dt
+    turn = np.deg2rad(angles_deg(slow.quat[1:], slow.quat[:-1])) / dt
+    assert speed.max() <= V_MAX * 1.01 and turn.max() <= W_MAX * 1.01
+    assert speed[:10].min() > 0.5 * V_MAX or turn[:10].min() > 0.9 * W_MAX          # a limit is active
+    s_free, s_slow = (np.hstack([tr.pos, fitted.rot_factor_ * chart(tr.quat, Q_GOAL)]) for tr in (free, slow))
+    gap = np.min(np.linalg.norm(s_slow[::20, None] - s_free[None], axis=2), axis=1)   # distance to the free path
+    assert gap.max() < 0.002 * np.linalg.norm(s_free[0] - s_free[-1])     # per-block limits: 0.07
+    assert np.linalg.norm(slow.pos[-1] - X_GOAL) < 1e-3 and angles_deg(slow.quat[-1], Q_GOAL)[0] < 0.1
+    assert slow.t[np.argmax(np.linalg.norm(slow.pos - X_GOAL, axis=1) < 0.05)] > \
+        free.t[np.argmax(np.linalg.norm(free.pos - X_GOAL, axis=1) < 0.05)] + 2.0     # arrives later
+
+
+@pytest.mark.parametrize("limits", [(None, None), (V_MAX, W_MAX), (None, W_MAX)])
+def test_python_export_returns_the_same_velocities(fitted, limits):
     namespace = {}
-    exec(compile(pose_to_python(fitted), "pose_model.py", "exec"), namespace)
+    exec(compile(pose_to_python(fitted, *limits), "pose_model.py", "exec"), namespace)
     rng = np.random.default_rng(1)
+    step = fitted.predictor(max_speed=limits[0], max_angular_speed=limits[1])
     for goal in (None, np.concatenate([fitted.goal_pos_ - 0.3, Rotation.from_rotvec([0.2, 0, 0.4]).as_quat(
             scalar_first=True)])):
         for _ in range(3):
             x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1, 1, 3)).as_quat(scalar_first=True)
             np.testing.assert_allclose(np.concatenate(namespace["predict_pose"](x, q, goal)),
-                                       np.concatenate(fitted.predictor()(x, q, goal)), rtol=1e-12, atol=1e-14)
+                                       np.concatenate(step(x, q, goal)), rtol=1e-12, atol=1e-14)
 
 
 def test_cdsp_points_pose_demos_to_posecdsp():
@@ -152,8 +198,9 @@ int main() {
 
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
-def test_cpp_export_returns_the_same_velocities(fitted, tmp_path):
-    (tmp_path / "pose.hpp").write_text(pose_to_cpp(fitted))
+@pytest.mark.parametrize("limits", [(None, None), (V_MAX, W_MAX)])
+def test_cpp_export_returns_the_same_velocities(fitted, tmp_path, limits):
+    (tmp_path / "pose.hpp").write_text(pose_to_cpp(fitted, max_speed=limits[0], max_angular_speed=limits[1]))
     (tmp_path / "main.cpp").write_text(CPP_MAIN)
     subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(tmp_path / "main"),
                     str(tmp_path / "main.cpp")], check=True, capture_output=True, text=True)
@@ -165,7 +212,7 @@ def test_cpp_export_returns_the_same_velocities(fitted, tmp_path):
             x, q = rng.normal(size=3), Rotation.from_rotvec(rng.uniform(-1.5, 1.5, 3)).as_quat(scalar_first=True)
             q = q if rng.random() < 0.5 else -q                        # either sign of the same rotation
             rows.append(np.concatenate([x, q, np.zeros(7) if g is None else g]))
-            expected.append(np.concatenate(fitted.predictor()(x, q, g)))
+            expected.append(np.concatenate(fitted.predictor(max_speed=limits[0], max_angular_speed=limits[1])(x, q, g)))
     far = (Rotation.from_quat(fitted.goal_quat_, scalar_first=True) * Rotation.from_rotvec([np.deg2rad(175), 0, 0]))
     rows.append(np.concatenate([np.zeros(3), far.as_quat(scalar_first=True), np.zeros(7)]))    # near the cut locus
     res = subprocess.run([str(tmp_path / "main")], input="\n".join(" ".join(repr(float(v)) for v in r) for r in rows),
@@ -177,14 +224,14 @@ def test_cpp_export_returns_the_same_velocities(fitted, tmp_path):
 
 def test_rollout_leaving_the_chart_is_refused(fitted, monkeypatch):
     """Where the a-priori bound says nothing (inf), a chart trajectory reaching 175 deg is refused."""
-    real = fitted.cdsp_.rollout
+    real = pose_module.integrate
 
-    def turning_away(s0, duration, dt=None, goal=None):
-        traj = real(s0, duration, dt=dt, goal=goal)
+    def turning_away(field, s0, **options):
+        traj = real(field, s0, **options)
         angle = np.linspace(0.5, np.deg2rad(175), len(traj.t))          # |r| growing towards the cut locus
         traj.pos[:, 3:] = fitted.rot_factor_ * angle[:, None] * np.array([0.0, 0.6, 0.8])
         return traj
-    monkeypatch.setattr(fitted.cdsp_, "rollout", turning_away)
+    monkeypatch.setattr(pose_module, "integrate", turning_away)
     monkeypatch.setattr("sosdyn.lfd.model.pose.chart_bound", lambda *args: np.inf)
     with pytest.raises(InputError, match="out of the chart"):
         fitted.rollout(np.concatenate([fitted.goal_pos_, fitted.goal_quat_]), 1.0, dt=0.05)
