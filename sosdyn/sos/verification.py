@@ -199,14 +199,24 @@ def check_gram_values(name, kind, p_coef, structure: GramStructure, Q, eig_tol=1
     if cone_ok and not margin_ok:
         reason = (f"min eigenvalue {min_eig:.3e} does not survive the residual (margin {margin:.3e} "
                   f"below -{floor:.1e}; a feasibility claim needs margin >= 0)")
-    res_ok = res <= rel_tol * scale
-    if not res_ok:
-        reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
-                                       f"{rel_tol:.0e} x {scale:.3g}") if r)
-    rel = res / scale if scale > 0 else (0.0 if res == 0 else math.inf)
+    res_ok, reason = _residual_verdict(res, rel_tol, scale, reason)
+    rel = relative_residual(res, scale)
     return CertificateCheck(name, kind, Q.shape[0], min_eig, res, rel, bool(representable and margin >= 0),
                             bool(cone_ok and margin_ok and res_ok), cone, dd, reason,
                             bool(strict and cone_ok and res_ok and not margin_ok))
+
+
+def _residual_verdict(res: float, rel_tol: float, scale: float, reason: str) -> tuple[bool, str]:
+    """Whether the coefficient residual ``res`` is within ``rel_tol`` x ``scale``, and ``reason``
+    extended by the residual's verdict when it is not."""
+    if res <= rel_tol * scale:
+        return True, reason
+    return False, "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above {rel_tol:.0e} x {scale:.3g}") if r)
+
+
+def relative_residual(res: float, scale: float) -> float:
+    """res / scale, with 0 / 0 = 0 and res / 0 = inf."""
+    return res / scale if scale > 0 else (0.0 if res == 0 else math.inf)
 
 
 def check_blocks_values(name, kind, p_coef, structure: GramStructure, Qs, cones, eig_tol=1e-7,
@@ -235,12 +245,9 @@ def check_blocks_values(name, kind, p_coef, structure: GramStructure, Qs, cones,
         k = int(np.argmin([m + f for m, f in zip(margins, floors)]))
         reason = (f"block {k}: min eigenvalue {parts[k][0]:.3e} does not survive the residual (margin "
                   f"{margins[k]:.3e} below -{floors[k]:.1e}; a feasibility claim needs margin >= 0)")
-    res_ok = res <= rel_tol * scale
-    if not res_ok:
-        reason = "; ".join(r for r in (reason, f"coefficient residual {res:.2e} above "
-                                       f"{rel_tol:.0e} x {scale:.3g}") if r)
+    res_ok, reason = _residual_verdict(res, rel_tol, scale, reason)
     worst = min(range(len(Qs)), key=lambda k: parts[k][0], default=None)
-    rel = res / scale if scale > 0 else (0.0 if res == 0 else math.inf)
+    rel = relative_residual(res, scale)
     return CertificateCheck(name, kind, sum(Q.shape[0] for Q in Qs), parts[worst][0] if Qs else 0.0, res,
                             rel, bool(representable and min(margins, default=0.0) >= 0),
                             bool(cone_ok and margin_ok and res_ok), cones[0] if cones else "psd",
