@@ -73,6 +73,12 @@ class StatePredictor:
              math.exp(-float(np.dot(c, c)) / float(s) ** 2)) for c, v, s in zip(*warp)]
         self._forward, self._back = (warp_forward2, warp_back2) if n == 2 else (warp_forward, warp_back)
         self.max_speed = check_max_speed(max_speed)
+        # plain-float copies for the scalar path (small n: no numpy call per state)
+        self._rows = tuple(tuple(tuple(map(float, r)) for r in inv[k]) for k in range(K))
+        self._bt = tuple(tuple(map(float, r)) for r in self._b.reshape(K, n))
+        self._ct = tuple(map(float, self._c))
+        self._Ct = tuple(tuple(map(float, r)) for r in self._C.T)     # (n m, K)
+        self._et = tuple(tuple(int(e) for e in r) for r in self._exps)
 
     def __call__(self, x, goal=None) -> np.ndarray:
         """xdot (n,) at the state x (n,), in the data's units, for the goal ``goal`` (None: the
@@ -81,34 +87,48 @@ class StatePredictor:
         a state so far away that the field overflows float."""
         x = self._state(x, "x")
         goal = self._goal if goal is None else self._state(goal, "goal")
-        z = (x - goal) / self._scale
+        z = ((x - goal) / self._scale).tolist()
         grads = None
         if self._maps is not None:                   # u = phi(z) and the gradients g_j
-            u, grads = self._forward(self._maps, z.tolist())
-            z = np.array(u)
-        with np.errstate(over="ignore", invalid="ignore"):
-            d = self._A @ z - self._b
-            lj = self._c - 0.5 * (d * d).reshape(self._K, self.dim).sum(axis=1)
-            top = lj.max()
-            if math.isfinite(top):                   # no NaN, at least one finite l_k
-                e = np.exp(lj - top)
-                h = e / e.sum()
-            else:
-                h = self._mixture.responsibilities(z[None])[0]
-            mono = z if self._linear else np.prod(z ** self._exps, axis=1)
-            v = (h @ self._C).reshape(self._nm) @ mono
-            if grads is not None:                    # J_phi^-1 v
-                v = np.array(self._back(self._maps, grads, v.tolist()))
-            v = v * self._scale
-        if not math.isfinite(v.sum()):
+            z, grads = self._forward(self._maps, z)
+        v = self._field(z)
+        if grads is not None:                        # J_phi^-1 v
+            v = self._back(self._maps, grads, v)
+        s = self._scale
+        v = [s * a for a in v]
+        if not math.isfinite(sum(v)):
             raise InputError(f"x = {x} is so far from the data (scale {self._scale:.3g}) that the field "
                              "overflows float. Try: states within a few orders of magnitude of the "
                              "demonstrations.")
         if self.max_speed is not None:
-            speed = math.sqrt(float(v @ v))
+            speed = math.sqrt(sum(a * a for a in v))
             if speed > self.max_speed:
-                v = v * (self.max_speed / speed)
-        return v
+                v = [a * (self.max_speed / speed) for a in v]
+        return np.array(v)
+
+    def _field(self, z: list) -> list:
+        """(h(z)^T C) z^E in plain floats (module docstring); the mixture's own responsibilities
+        where every l_k under- or overflows."""
+        try:
+            lj = [c - 0.5 * sum((sum(map(mul, r, z)) - bi) ** 2 for r, bi in zip(rows, b))
+                  for rows, b, c in zip(self._rows, self._bt, self._ct)]
+            top = max(lj)
+        except OverflowError:
+            top = math.inf
+        if math.isfinite(top):                       # no NaN, at least one finite l_k
+            e = [math.exp(a - top) for a in lj]
+            t = sum(e)
+            h = [a / t for a in e]
+        else:
+            with np.errstate(over="ignore", invalid="ignore"):
+                h = self._mixture.responsibilities(np.array(z)[None])[0].tolist()
+        g = [sum(map(mul, col, h)) for col in self._Ct]           # h^T C, (n m,)
+        n, m = self._nm
+        try:
+            mono = z if self._linear else [_monomial(z, e) for e in self._et]
+            return [sum(map(mul, g[i * m:(i + 1) * m], mono)) for i in range(n)]
+        except OverflowError:
+            return [math.inf] * n
 
     def _state(self, value, what: str) -> np.ndarray:
         """``value`` as a finite float (n,): a finite float array of shape (n,) as it is (the
@@ -117,6 +137,14 @@ class StatePredictor:
                 and math.isfinite(value.sum())):
             return value
         return as_state(value, self.dim, what)     # lists, tuples, integers, anything wrong
+
+
+def _monomial(z: list, e: tuple) -> float:
+    """prod_i z_i^e_i."""
+    p = 1.0
+    for a, k in zip(z, e):
+        p *= a ** k if k else 1.0
+    return p
 
 
 def warp_forward(maps, z: list) -> tuple[list, list]:
