@@ -79,6 +79,8 @@ class StatePredictor:
         self._ct = tuple(map(float, self._c))
         self._Ct = tuple(tuple(map(float, r)) for r in self._C.T)     # (n m, K)
         self._et = tuple(tuple(int(e) for e in r) for r in self._exps)
+        self._mix2 = tuple(tuple(map(float, (*inv[k].ravel(), *self._bt[k], self._c[k]))) for k in range(K))
+        self._field = self._field2 if n == 2 else self._fieldn
 
     def __call__(self, x, goal=None) -> np.ndarray:
         """xdot (n,) at the state x (n,), in the data's units, for the goal ``goal`` (None: the
@@ -106,7 +108,33 @@ class StatePredictor:
                 v = [a * (self.max_speed / speed) for a in v]
         return np.array(v)
 
-    def _field(self, z: list) -> list:
+    def _field2(self, z: list) -> list:
+        """:meth:`_fieldn` for n = 2, unrolled."""
+        z0, z1 = z
+        try:
+            lj = []
+            for a00, a01, a10, a11, b0, b1, c in self._mix2:
+                d0, d1 = a00 * z0 + a01 * z1 - b0, a10 * z0 + a11 * z1 - b1
+                lj.append(c - 0.5 * (d0 * d0 + d1 * d1))
+            top = max(lj)
+        except OverflowError:
+            top = math.inf
+        if not math.isfinite(top):
+            return self._fieldn(z)
+        e = [math.exp(a - top) for a in lj]
+        t = sum(e)
+        h = [a / t for a in e]
+        g = [sum(map(mul, col, h)) for col in self._Ct]           # h^T C, (2 m,)
+        try:
+            if self._linear:
+                return [g[0] * z0 + g[1] * z1, g[2] * z0 + g[3] * z1]
+            m = self._nm[1]
+            mono = [_monomial(z, e) for e in self._et]
+            return [sum(map(mul, g[:m], mono)), sum(map(mul, g[m:], mono))]
+        except OverflowError:
+            return [math.inf, math.inf]
+
+    def _fieldn(self, z: list) -> list:
         """(h(z)^T C) z^E in plain floats (module docstring); the mixture's own responsibilities
         where every l_k under- or overflows."""
         try:
