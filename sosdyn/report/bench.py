@@ -27,8 +27,8 @@ from .html import jinja_environment, markdown_html
 BENCH_PAGES = (("summary.md", "Learner benchmarks", "make bench"),
                ("sos.md", "SOS layer benchmarks", "make bench-sos"))
 PREDICT_FILE = "predict.json"
-PREDICT_COLUMNS = ("model", "model.predict, one row", "model.predictor()", "speed-up", "max. relative difference",
-                   "within 50 µs")
+PREDICT_COLUMNS = ("model", "model.predict, one row", "model.predictor()", "speed-up", "Python export, one row",
+                   "max. relative difference", "predictor within target")
 
 
 def _micro(seconds) -> str:
@@ -41,6 +41,7 @@ def predict_rows(data: dict) -> list[list[str]]:
              + (f", warp of {r['warp_bumps']} bumps" if r.get("warp_bumps") else ""),
              _micro(r.get("predict_s")), _micro(r.get("predictor_s")),
              "—" if r.get("speedup") is None else f"{r['speedup']:.1f}×",
+             _micro(r.get("python_export_s")),
              "—" if r.get("max_rel_diff") is None else f"{r['max_rel_diff']:.1e}",
              "yes" if r.get("within_target") else "no"] for r in data.get("rows", [])]
 

@@ -9,7 +9,7 @@ SUMMARY = "# Benchmarks\n\n| target | result |\n|---|---|\n| fit ≤ 1 s | **mis
           "details in [sos.md](sos.md)\n"
 PREDICT = {"target_s": 5e-5, "rows": [
     {"shape": "Angle", "K": 6, "n": 2, "field_degree": 1, "predict_s": 2.5457e-4, "predictor_s": 2.2843e-5,
-     "speedup": 11.144, "max_rel_diff": 1.897e-14, "within_target": True},
+     "speedup": 11.144, "python_export_s": 4.21e-5, "max_rel_diff": 1.897e-14, "within_target": True},
     {"shape": "Angle", "K": 6, "n": 2, "field_degree": 3, "predict_s": 2.74e-4, "predictor_s": 6.1e-5,
      "speedup": 4.49, "max_rel_diff": 4.9e-14, "within_target": False}]}
 
@@ -22,8 +22,8 @@ def test_page_from_summary_predict_and_raw_json(tmp_path):
     text = render_bench(tmp_path).read_text()
     assert '<section id="scaling_n">' in text and "<h2>Scaling in n</h2>" in text and 'href="#summary"' in text
     assert Tables(text).rows["predict-table"] == 2
-    assert "<td>254.6 µs</td><td>22.8 µs</td><td>11.1×</td><td>1.9e-14</td><td>yes</td>" in text
-    assert "<td>61.0 µs</td>" in text and "<td>no</td>" in text
+    assert "<td>254.6 µs</td><td>22.8 µs</td><td>11.1×</td><td>42.1 µs</td><td>1.9e-14</td><td>yes</td>" in text
+    assert "<td>61.0 µs</td><td>4.5×</td><td>—</td>" in text and "<td>no</td>" in text
     assert '<img src="scaling_K.png" alt="K"' in text            # figures stay next to the page
     assert 'href="#sos"' in text and 'href="sos.md"' not in text  # the two summaries link within the page
     assert "Not run (<code>make bench-sos</code>)" in text          # sos.md is missing

@@ -8,7 +8,7 @@ def test_quick_run_writes_timings_and_equality(tmp_path, times_ok, capsys):
     assert predict.main(["--quick", "--out", str(tmp_path)]) == 0
     data = json.loads((tmp_path / "predict.json").read_text())
     row = data["rows"][0]
-    assert (row["K"], row["n"], row["field_degree"]) == (6, 2, 1)
-    times_ok(row, ["predict_s", "predictor_s"])
+    assert (row["K"], row["n"], row["field_degree"]) == (8, 2, 1)
+    times_ok(row, ["predict_s", "predictor_s", "python_export_s"])
     assert row["max_rel_diff"] < 1e-12 and row["speedup"] > 2
     assert "predictor" in capsys.readouterr().out
