@@ -18,6 +18,9 @@ and with a warp (:mod:`.warp`; bumps c_j, v_j, sigma_j in z-units, rho_j(0) prec
 since J_phi = A_m ... A_1, A_j = I + v_j g_j^T, and A_j^-1 = I - v_j g_j^T / (1 + g_j.v_j)
 (Sherman-Morrison; 1 + g_j.v_j >= 1 - l_j > 0): O(m n) plain float arithmetic, no matrix
 (:func:`warp_forward` / :func:`warp_back`; unrolled for n = 2, the common case, 3-4x faster).
+The mixture and field run in plain floats too (precomputed tuples, ``math.exp``; n = 2 unrolled):
+for small n numpy's per-call cost (about 1 us a call) is most of the time. Bound with a warp:
+about 0.4 us of Python per bump, forward and back.
 
 which is the same sum as ``predict`` (the quadratic forms |L_k^-1 (z - mu_k)|^2 written as
 |L_k^-1 z - L_k^-1 mu_k|^2), equal to it to rounding (about 1e-15 relative). Where every l_k
@@ -60,26 +63,21 @@ class StatePredictor:
         self._goal = np.array(goal, dtype=float)
         self._scale = float(scale)
         self._mixture = mixture
-        self._A = np.ascontiguousarray(inv.reshape(K * n, n))
-        self._b = np.einsum("kij,kj->ki", inv, mixture.means).reshape(K * n)
-        self._c = np.array(lognorm, dtype=float)
-        self._K = K
-        self._C = np.ascontiguousarray(C.reshape(K, n * m))
+        # plain floats for the scalar path (small n: no numpy call per state)
+        b = np.einsum("kij,kj->ki", inv, mixture.means)
+        self._rows = tuple(tuple(tuple(map(float, r)) for r in inv[k]) for k in range(K))
+        self._bt = tuple(tuple(map(float, r)) for r in b)
+        self._ct = tuple(map(float, lognorm))
+        self._Ct = tuple(tuple(map(float, r)) for r in C.reshape(K, n * m).T)     # (n m, K)
         self._nm = (n, m)
-        self._exps = np.array(exps, dtype=float)
-        self._linear = bool(np.array_equal(self._exps, np.eye(n)))   # field degree 1: z^E = z
+        self._et = tuple(tuple(int(e) for e in r) for r in exps)
+        self._linear = bool(np.array_equal(exps, np.eye(n)))   # field degree 1: z^E = z
+        self._mix2 = tuple((*map(float, inv[k].ravel()), *self._bt[k], self._ct[k]) for k in range(K))
         self._maps = None if warp is None else [
             (tuple(map(float, c)), tuple(map(float, v)), 1.0 / float(s) ** 2,
              math.exp(-float(np.dot(c, c)) / float(s) ** 2)) for c, v, s in zip(*warp)]
         self._forward, self._back = (warp_forward2, warp_back2) if n == 2 else (warp_forward, warp_back)
         self.max_speed = check_max_speed(max_speed)
-        # plain-float copies for the scalar path (small n: no numpy call per state)
-        self._rows = tuple(tuple(tuple(map(float, r)) for r in inv[k]) for k in range(K))
-        self._bt = tuple(tuple(map(float, r)) for r in self._b.reshape(K, n))
-        self._ct = tuple(map(float, self._c))
-        self._Ct = tuple(tuple(map(float, r)) for r in self._C.T)     # (n m, K)
-        self._et = tuple(tuple(int(e) for e in r) for r in self._exps)
-        self._mix2 = tuple(tuple(map(float, (*inv[k].ravel(), *self._bt[k], self._c[k]))) for k in range(K))
         self._field = self._field2 if n == 2 else self._fieldn
 
     def __call__(self, x, goal=None) -> np.ndarray:
