@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import sosdyn as sd
-from problems.settings import METHOD_ORDER, METHODS, PAPER_SHAPES, shape
+from problems.settings import DEFAULT_METHOD, METHOD_ORDER, METHODS, PAPER_SHAPES, shape
 from problems.results import methods_section
 from sosdyn.evaluation.baselines import CLFDM, DMP
 
@@ -14,7 +14,7 @@ def test_shapes_and_factories():
     ica = METHODS["CDSP-ICA"].factory(leaf, quick=True)
     assert isinstance(ica, sd.CDSP) and ica.solver_method == "ica" and ica.max_iter == 4
     assert isinstance(METHODS["DMP"].factory(leaf), DMP) and isinstance(METHODS["CLF-DM"].factory(leaf), CLFDM)
-    assert METHOD_ORDER[0] == "CDSP (paper)" and len(METHOD_ORDER) == 7
+    assert METHOD_ORDER[:2] == (DEFAULT_METHOD, "CDSP (paper)") and len(METHOD_ORDER) == 8   # the default first
 
 
 def test_methods_section_writes_out_per_shape_values():
