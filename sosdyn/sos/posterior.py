@@ -105,6 +105,8 @@ def safe_shift(solution, con) -> float:
     exists."""
     ids, x = solution.data.ids, solution.x
     at = lambda block_ids: x[positions(ids, block_ids)]  # noqa: E731
+    if hasattr(con, "identity_values"):                   # several Gram blocks (correlative sparsity)
+        return _checked(block_shift(con, at), con)
     vars = con.basis.vars
     p = con.poly.with_vars(vars)
     coef = p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids)
@@ -130,12 +132,48 @@ def safe_shift(solution, con) -> float:
         R = variable_bounds(K, vars)
         U = _union_exps(r.exps, con.basis.exps, st)
         delta = min(delta, compact_shift(A, tau, con.basis.exps, U[off], e[off], R))
+    return _checked(delta, con)
+
+
+def _checked(delta: float, con) -> float:
     if not np.isfinite(delta):
         raise UnverifiedSolutionError(
             f"the bound of {con.name!r} cannot be made safe: its Gram matrix has a negative "
             "direction that lowering gamma does not reach, or its residual a monomial no Gram "
             "product produces, and the set bounds no variable box", "unverified", _HINT)
     return float(delta)
+
+
+def block_shift(con, at) -> float:
+    """:func:`safe_shift` for p - gamma = sum_k z_k^T Q_k z_k over several Gram blocks (each
+    clique's basis holds 1): the residual e_a joins its first producing block k (E_k, as
+    :func:`~.verification.residual_gram_norms`), and delta = sum_k delta_k with delta_k the
+    smallest making Q_k + E_k + delta_k e_0 e_0^T >= tau; every x^a of block k has |x^a| <=
+    |z_k|^2, so f - (gamma - delta) >= sum_k tau |z_k|^2 - sum_a |rho_a| |x^a| >= 0 on R^n. Only
+    for plain SOS (no Putinar multipliers: inf, so the caller refuses)."""
+    if any(m.psd.role != "clique" for m in con.multipliers) or con.eq_multipliers:
+        return np.inf
+    coef, st, Qs, _ = con.identity_values(at)
+    p = con.p
+    e = np.bincount(st.p_at, weights=coef, minlength=st.in_gram.size) - np.bincount(
+        st.pair_at, weights=np.concatenate([Q.ravel() for Q in Qs]), minlength=st.in_gram.size)
+    if np.any(~st.in_gram & (e != 0.0)):
+        return np.inf
+    sizes = np.array([Q.shape[0] for Q in Qs], dtype=np.int64)
+    own = np.repeat(np.arange(len(Qs)), sizes ** 2) == st.first_block[st.pair_at]
+    n = np.bincount(st.pair_at[own], minlength=e.size)
+    E = np.where(own, e[st.pair_at] / np.maximum(n[st.pair_at], 1), 0.0)
+    mag = float(np.abs(p.coef[:, 0]).sum() + (np.abs(p.coef[:, 1:]) @ np.abs(at(p.ids))).sum())
+    rounding = (p.coef.shape[1] + int(np.sum(sizes ** 2)) + 8) * EPS * (mag + sum(float(np.abs(Q).sum()) for Q in Qs))
+    delta, start = 0.0, 0
+    for (basis, _), Q in zip(con.gram_blocks, Qs):
+        A = Q + E[start:start + Q.size].reshape(Q.shape)
+        start += Q.size
+        zero = np.flatnonzero(~basis.exps.any(axis=1))
+        if not zero.size:
+            return np.inf
+        delta += constant_shift(A, int(zero[0]), rounding + fp_error(A))
+    return delta
 
 
 def constraint_set(con) -> BasicSet:
