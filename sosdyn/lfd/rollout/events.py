@@ -52,10 +52,15 @@ def as_vector(value, n: int | None, what: str) -> np.ndarray:
     return arr
 
 
+def is_positive_number(value) -> bool:
+    """Whether ``value`` is a real number (Python or numpy, not a bool) in (0, inf)."""
+    real = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    return bool(real and 0 < value < np.inf)
+
+
 def as_positive(value, what: str) -> float:
     """``value`` as a float in (0, inf); bools, None and strings are refused (InputError)."""
-    real = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-    if not real or not 0 < value < np.inf:
+    if not is_positive_number(value):
         raise InputError(f"{what} must be a finite number > 0 (not a bool, not None), got {value!r}.")
     return float(value)
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from sosdyn.errors import InputError
+from ..rollout.events import is_positive_number
 
 _REAL_KINDS = "iuf"           # numpy dtype kinds of a state: signed / unsigned integers, floats
 
@@ -68,8 +69,7 @@ def check_max_speed(max_speed, what: str = "max_speed", unit: str = "data units 
     """``max_speed``: None (no limit) or a finite number > 0 (``unit``); InputError naming ``what``."""
     if max_speed is None:
         return None
-    real = isinstance(max_speed, (int, float, np.integer, np.floating)) and not isinstance(max_speed, bool)
-    if not real or not 0 < max_speed < np.inf:
+    if not is_positive_number(max_speed):
         raise InputError(f"{what} must be a finite number > 0 ({unit}) or None, got {max_speed!r}.")
     return float(max_speed)
 
