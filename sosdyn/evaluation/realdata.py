@@ -16,8 +16,11 @@ Per set of N demonstrations (in the set's order):
    copy = min over training demos of their DTWD to it (:func:`~sosdyn.evaluation.dsopt.nearest_demo_score`);
    arrival = the first time within 1 % of diag of the model's goal, over the demo's remaining
    duration from the start sample (inf: never); excursion = farthest point outside the training
-   box / diag (:func:`sosdyn.lfd.rollout.quality.excursion`); final error = distance from the
-   reproduction's end to the demo's end / diag.
+   box / diag (:func:`sosdyn.lfd.rollout.quality.excursion`); start excursion = the start's own;
+   certified excursion bound = the largest excursion of the box that the certificate keeps the
+   trajectory in (:func:`sosdyn.lfd.model.reach.reach_box`, docs/theory.md; None without a
+   certified constant metric); final error = distance from the reproduction's end to the demo's
+   end / diag.
 """
 
 from __future__ import annotations
@@ -33,6 +36,8 @@ from sosdyn.evaluation import dsopt
 from sosdyn.evaluation.metrics import dtwd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.data.preprocess import REST_NOISE, preprocess, rest_bounds
+from sosdyn.lfd.model.reach import reach_box
+from sosdyn.lfd.rollout.quality import box_excursion, excursion
 
 TRAIN_FRACTION = 4 / 7
 VEL_TOL_FRACTION = 0.006      # ds-opt's 0.1 mm/s over a LASA shape's diag / duration (~65 mm / 4 s)
@@ -87,12 +92,28 @@ def reproduce(field: Callable, train, test) -> list[np.ndarray]:
                                  max_steps=int(math.ceil(horizon / dsopt.DT)))
 
 
-def test_scores(paths, train, test, goal) -> list[dict]:
-    """Protocol step 4: one row per test demo, DTWD and copy added to
+def excursion_bounds(model, train, test) -> list:
+    """Per test start (the 20th kept sample): the certified excursion bound, the largest
+    excursion outside ``train``'s box of any state in ``model``'s reach box from it
+    (:func:`~sosdyn.lfd.model.reach.reach_box`); None for each when the model is not certified or
+    its metric is not constant."""
+    reach = reach_box(model, dsopt.start_points(test)) if getattr(model, "certified_", None) else None
+    if reach is None:
+        return [None] * len(test)
+    lo, hi, _ = box(train)
+    return [float(b) for b in box_excursion(*reach, lo, hi)]
+
+
+def test_scores(paths, train, test, goal, bounds=None) -> list[dict]:
+    """Protocol step 4: one row per test demo, DTWD, copy, the start's own excursion and the
+    certified bound (``bounds``, :func:`excursion_bounds`; None) added to
     :func:`sosdyn.evaluation.dsopt.reproduction_quality`'s arrival, excursion and final error."""
     rows = dsopt.reproduction_quality(paths, train, test, goal)
+    lo, hi, _ = box(train)
+    bounds = [None] * len(test) if bounds is None else bounds
     return [dict(r, dtwd=dtwd(path, d.pos).total, copy=min(dtwd(tr.pos, d.pos).total for tr in train),
-                 n_points=len(path)) for r, path, d in zip(rows, paths, test)]
+                 start_excursion=excursion(x0[None], lo, hi), excursion_bound=b, n_points=len(path))
+            for r, path, d, x0, b in zip(rows, paths, test, dsopt.start_points(test), bounds)]
 
 
 def thin(path: np.ndarray, n: int = PATH_POINTS) -> np.ndarray:
@@ -104,7 +125,8 @@ def evaluate_set(fit_fn: Callable, demos) -> dict:
     """The whole protocol on one set: ``fit_fn(train)`` returns a model with ``predict`` (and
     ``goal_``; else the training goal is used). Returns the per-test rows (``tests``), their
     means (``dtwd_mean``, ``copy_mean``, ``ratio`` = dtwd_mean / copy_mean), the worst
-    ``excursion``, ``arrival_ratio`` and ``final_error``, ``fit_s``, ``certified`` (None for a
+    ``excursion``, ``start_excursion``, ``excursion_bound`` (None without one), ``arrival_ratio``
+    and ``final_error``, ``fit_s``, ``certified`` (None for a
     model without a certificate), the preprocessing summary, the reproductions (thinned) and,
     for a diverging reproduction, ``failure`` (then no scores)."""
     train, recorded, test, report = prepare(demos)
@@ -119,8 +141,10 @@ def evaluate_set(fit_fn: Callable, demos) -> dict:
         paths = reproduce(model.predict, recorded, test)
     except SolverError as exc:
         return dict(out, failure=str(exc))
-    rows = test_scores(paths, recorded, test, goal)
+    rows = test_scores(paths, recorded, test, goal, excursion_bounds(model, recorded, test))
+    bounds = [r["excursion_bound"] for r in rows]
     dtwd_mean, copy_mean = float(np.mean([r["dtwd"] for r in rows])), float(np.mean([r["copy"] for r in rows]))
     return dict(out, tests=rows, dtwd_mean=dtwd_mean, copy_mean=copy_mean, ratio=dtwd_mean / copy_mean,
-                excursion=max(r["excursion"] for r in rows), arrival_ratio=max(r["arrival_ratio"] for r in rows),
+                excursion=max(r["excursion"] for r in rows), start_excursion=max(r["start_excursion"] for r in rows),
+                excursion_bound=None if None in bounds else max(bounds), arrival_ratio=max(r["arrival_ratio"] for r in rows),
                 final_error=max(r["final_error"] for r in rows), paths=[thin(p) for p in paths])

@@ -35,13 +35,13 @@ from scipy.spatial.transform import Rotation
 from sosdyn.errors import InputError, NotFittedError
 from ..data.poses import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart,
                           chart_demonstrations, goal_orientation)
-from ..fit.contraction import constant_index, eval_metric
 from ..fit.pipeline import maps_of
 from ..fit.warp import apply as warp_apply, check_warp
 from ..rollout import rollout as integrate
 from ..runtime.states import check_max_speed, speed_factor
 from .cdsp import CDSP, DEFAULTS
 from .fileformat import write_model_file
+from .reach import metric_matrix
 from .state import STATE_FIELDS, state_record
 
 POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 1
@@ -68,14 +68,6 @@ def pose_speed_factor(S, Sdot, rot_factor: float, max_speed, max_angular_speed) 
     One positive factor on the whole 6-D velocity keeps the chart paths and the goal (docs/theory.md)."""
     w = body_velocity(S[:, 3:] / rot_factor, Sdot[:, 3:] / rot_factor)
     return np.minimum(speed_factor(Sdot[:, :3], max_speed), speed_factor(w, max_angular_speed))
-
-
-def metric_matrix(model: CDSP) -> np.ndarray | None:
-    """The certified metric M when it is constant (metric_degree 0 or identity), else None."""
-    used = np.abs(model.W_).max(axis=(0, 1)) > 0
-    k = constant_index(model.metric_exps_)
-    return None if used.sum() != 1 or not used[k] else \
-        eval_metric(model.W_, model.metric_exps_, np.zeros((1, model.dim_)))[0]
 
 
 def chart_bound(model: CDSP, z0, rot_factor: float) -> float:

@@ -5,7 +5,8 @@ Array functions on one reproduction ``path`` (T, n) sampled every ``dt`` seconds
 * deviation of a demonstration from the path: for each demo sample the distance to the
   nearest path sample; mean and max (data units);
 * arrival time: the first ``k dt`` with ``||path_k - goal|| <= radius`` (inf if never);
-* excursion: ``max_k dist(path_k, box) / diag(box)`` for the box [lo, hi] (0 inside);
+* excursion: ``max_k dist(path_k, box) / diag(box)`` for the box [lo, hi] (0 inside), and its
+  largest value over a whole box of states (:func:`box_excursion`, for a certified reach box);
 * final error: ``||path_T - goal||``.
 
 :func:`reproduction_table` rolls a field out from every demonstration's first sample for twice
@@ -44,6 +45,14 @@ def excursion(path: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
     """Farthest distance of the path outside the box [lo, hi], over the box's diagonal."""
     outside = np.maximum(lo - path, 0.0) + np.maximum(path - hi, 0.0)
     return float(np.linalg.norm(outside, axis=1).max() / max(np.linalg.norm(hi - lo), np.finfo(float).tiny))
+
+
+def box_excursion(box_lo: np.ndarray, box_hi: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The largest :func:`excursion` of any point of the box [box_lo, box_hi] (rows (k, n): k
+    boxes) outside [lo, hi]: the per-coordinate excesses max(lo_i - box_lo_i, box_hi_i - hi_i, 0)
+    are attained independently (a box is a product), so the largest norm is their norm. (k,)."""
+    worst = np.maximum(np.maximum(lo - np.atleast_2d(box_lo), np.atleast_2d(box_hi) - hi), 0.0)
+    return np.linalg.norm(worst, axis=1) / max(np.linalg.norm(hi - lo), np.finfo(float).tiny)
 
 
 def reproduction_table(field: Callable[[np.ndarray], np.ndarray], demos, goal: np.ndarray, dt: float) -> list[dict]:
