@@ -29,11 +29,12 @@ from sosdyn.lfd.fit.params import PLAIN
 from .cache import key_hash
 from .jobs import parallel_map
 from .jsonio import jsonable, rounded, write_json
+from .real_data_blocks import DEFAULT, blocks
 from .real_data_report import figure, write_html
 from .settings import REPORTS
 
 OUT = REPORTS / "real_data"
-CACHE_VERSION = 1
+CACHE_VERSION = 2            # 2: start_excursion and the certified excursion_bound per test demo
 SETS = ("robottasks/openbox", "robottasks/bottle2shelf", "robottasks/platestandingtolying",
         "robottasks/pouring", "pouring", "hammer")
 NOT_APPLICABLE = {"cleaning/cleaning_1": "one demonstration (no held-out split)",
@@ -99,7 +100,7 @@ def job_label(e: dict) -> str:
             f"{e['arrival_ratio']:.2f}x  ({src})")
 
 
-SUMMARY_KEYS = ("ratio", "dtwd_mean", "copy_mean", "excursion", "arrival_ratio", "final_error", "fit_s",
+SUMMARY_KEYS = ("ratio", "dtwd_mean", "copy_mean", "excursion", "start_excursion", "excursion_bound", "arrival_ratio", "final_error", "fit_s",
                 "certified", "n_train", "n_test", "error", "failure", "smoothing_window", "preprocess", "tests")
 
 
@@ -128,10 +129,12 @@ def run(sets=SETS, methods=tuple(METHODS), *, quick: bool = False, out_dir=OUT, 
                                   for m in methods}}
         paths = figure(s, demos, {m: mine[m].get("paths") for m in methods}, out_dir)
         figures[s] = {"png": str(paths["png"].relative_to(out_dir)), "svg": str(paths["svg"].relative_to(out_dir))}
+    default = {e["set"]: e for e in entries if e["method"] == DEFAULT}
+    found = blocks(default, load, out_dir) if default else None
     results = {"meta": {"protocol": PROTOCOL, "sets": list(sets),
                         "methods": list(methods), "quick": quick, "not_applicable": NOT_APPLICABLE,
                         "settings": {m: METHODS[m][1] for m in methods}, "wall_s": time.perf_counter() - t0},
-               "sets": per_set, "figures": figures}
+               "sets": per_set, "figures": figures, "blocks": found}
     write_json(out_dir / "results.json", results)
     return {"results": out_dir / "results.json", "html": write_html(results, out_dir)}
 

@@ -24,7 +24,11 @@ from .jsonio import write_json
 from .real_data import OUT, SETS, load
 
 CONFIGS = {"default": {}, "plain": PLAIN, "K4": {"n_components": 4}, "K12": {"n_components": 12},
-           "g0.5": {"gamma": 0.5}, "g1": {"gamma": 1.0}, "g0.02": {"gamma": 0.02}}
+           "g0.5": {"gamma": 0.5}, "g1": {"gamma": 1.0}, "g0.02": {"gamma": 0.02},
+           # one fixed warp instead of the auto choice: the default's 100-map setting, and one matched to
+           # every training demo instead of their mean (the real sets' demos differ more than LASA's)
+           "warp100": {"warp": {"n_maps": 100, "decay": 0.75}},
+           "warp-each": {"warp": {"n_maps": 60, "decay": 1.0, "match": "each"}}}
 
 
 def scores(model, recorded, curves) -> dict:

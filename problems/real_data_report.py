@@ -44,8 +44,12 @@ def figure(name: str, demos, paths: dict, out_dir: Path) -> dict:
         for i, d in enumerate(test):
             draw(d.pos, color="black", lw=0.9, ls="--", label="test demos" if i == 0 else None)
         for m, reps in paths.items():
+            same = next((o for o in paths if o != m and list(paths).index(o) < list(paths).index(m)
+                         and reps and paths[o] == reps), None)
+            style = {"ls": (0, (4, 3)), "lw": 1.6} if same else {"lw": 1.0}
+            label = f"{m} (= {same}: the same fit chosen)" if same else m
             for i, p in enumerate(reps or []):
-                draw(p, color=_color(m, list(paths)), lw=1.0, alpha=0.85, label=m if i == 0 else None)
+                draw(p, color=_color(m, list(paths)), alpha=0.85, label=label if i == 0 else None, **style)
         goal = train.goal
         ax.plot(*([goal[a]] for a in axes), marker="*", ms=10, color="black", ls="none")
         ax.set_xlabel(f"{labels[axes[0]]} ({demos.units})")
@@ -70,19 +74,44 @@ def fmt(value, digits=2) -> str:
     return "∞" if not math.isfinite(value) else f"{value:,.{digits}f}"
 
 
+def blocks_html(found: dict | None) -> str:
+    """The section "What blocks each missed target" from :func:`problems.real_data_blocks.blocks`."""
+    if not found:
+        return ""
+    e, items = html.escape, []
+    for s, d in found["numbers"].items():
+        parts = []
+        if d["ratio"] > 2:
+            parts.append(f"DTWD {d['ratio']:.2f}× copy; copying the training demo with the nearest start scores "
+                         f"{d['start_copy_ratio']:.2f}×, two training demos differ by {d['spread_ratio']:.2f}× on average")
+        if max(d["excursion"]) > 0.25:
+            parts.append(f"excursion {max(d['excursion']):.3f}: the test starts themselves lie up to "
+                         f"{max(d['start_excursion']):.3f} outside the training box (certified bound "
+                         f"{fmt(max(b for b in d['excursion_bound'] if b is not None), 3)})")
+        if d["cut_moving"]:
+            parts.append(f"{d['cut_moving']} of {len(d['end_speed'])} demos end at more than 10 % of their peak speed")
+        if parts:
+            items.append(f"<li><b>{e(s)}</b>: {e('; '.join(parts))}.</li>")
+    figs = "".join(f"<figure><img src=\"{e(p)}\" alt=\"{e(k)}\" style=\"max-width:100%\"><figcaption>{e(k)}"
+                   f"</figcaption></figure>" for k, p in found["figures"].items())
+    return (f"<h2>What blocks each missed target</h2><p>Numbers for CDSP default; the module "
+            f"problems.real_data_blocks says how each is computed.</p><ul>{''.join(items)}</ul>{figs}")
+
+
 def write_html(results: dict, out_dir: Path) -> Path:
     """The page: protocol, one table row per (set, method) with the item-3 targets, figures."""
     e = html.escape
-    head = ["set", "method", "test DTWD ÷ copy", "excursion ÷ diag", "arrival ÷ duration", "final error ÷ diag",
-            "certified", "fit s", "targets met"]
+    head = ["set", "method", "test DTWD ÷ copy", "excursion ÷ diag", "start excursion", "certified excursion bound",
+            "arrival ÷ duration", "final error ÷ diag", "certified", "fit s", "targets met"]
     rows, figs = [], []
     for s, d in results["sets"].items():
         for m, r in d["methods"].items():
             if r["error"] or r["failure"]:
-                cells = [e(s), e(m), f"failed: {e(str(r['error'] or r['failure'])[:160])}"] + [""] * 6
+                cells = [e(s), e(m), f"failed: {e(str(r['error'] or r['failure'])[:160])}"] + [""] * 8
             else:
                 t = r["targets"]
-                cells = [e(s), e(m), fmt(r["ratio"]), fmt(r["excursion"], 3), fmt(r["arrival_ratio"]),
+                cells = [e(s), e(m), fmt(r["ratio"]), fmt(r["excursion"], 3),
+                         fmt(r.get("start_excursion"), 3), fmt(r.get("excursion_bound"), 3), fmt(r["arrival_ratio"]),
                          fmt(r["final_error"], 3), "—" if r["certified"] is None else fmt(r["certified"]),
                          fmt(r["fit_s"], 1), "all" if t["all"] else "missed: " + ", ".join(
                              k for k, v in t.items() if k != "all" and v is False)]
@@ -104,7 +133,11 @@ are in cm (inferred). Not evaluated: {na}.{' Quick settings.' if results['meta']
 <p>Targets (issue 21, item 3): test DTWD ≤ 2× copy; excursion ≤ 0.25 of the training box's diagonal;
 arrival (within 1 % of the diagonal of the goal) by 2× the demo's remaining duration; certified.
 Each column is the worst test demo, except DTWD (mean over test demos).</p>
+<p>Start excursion: the test start's own distance outside the training box (no rollout from it can do
+better). Certified excursion bound: the farthest the certificate lets a trajectory from the start go
+outside the box (docs/theory.md, "How far a trajectory can go"); it is never exceeded.</p>
 <table><tr>{''.join(f'<th>{h}</th>' for h in head)}</tr>{''.join(rows)}</table>
+{blocks_html(results.get("blocks"))}
 {''.join(figs)}
 <p>Wall time {results['meta']['wall_s']:.0f} s.</p></body></html>
 """

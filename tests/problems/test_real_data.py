@@ -24,6 +24,14 @@ def test_quick_run_writes_results_page_and_figure(tmp_path):
         assert r["excursion"] == max(t["excursion"] for t in r["tests"]) >= 0
         assert all(t["dtwd"] > 0 and t["copy"] > 0 for t in r["tests"])
     assert cdsp["copy_mean"] == gmr["copy_mean"]                    # the reference does not depend on the method
+    # the certified bound holds for every measured rollout; GMR has no certificate, so no bound
+    assert all(t["excursion"] <= t["excursion_bound"] for t in cdsp["tests"]) and gmr["excursion_bound"] is None
+    assert cdsp["excursion_bound"] == max(t["excursion_bound"] for t in cdsp["tests"])
+    blocks = res["blocks"]
+    assert set(blocks["numbers"]) == {"hammer"} and (tmp_path / blocks["figures"]["dtwd"]).is_file()
+    # copy is the per-test-demo minimum over training demos, so copying one chosen by its start scores >= copy
+    assert blocks["numbers"]["hammer"]["start_copy_ratio"] >= 1.0
+    assert ("starts hammer" in blocks["figures"]) == (cdsp["excursion"] > 0.25)
     assert cdsp["smoothing_window"] == 13                           # hammer is noisy: Savitzky-Golay on
     page = paths["html"].read_text()
     assert "figures/hammer.png" in page and (tmp_path / "figures" / "hammer.png").read_bytes()[:4] == b"\x89PNG"

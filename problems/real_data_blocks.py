@@ -1,0 +1,194 @@
+"""What blocks each missed target of ``make real-data`` (issue 21, item 3): numbers and figures.
+
+Per set, from the protocol's own data (:func:`sosdyn.evaluation.realdata.prepare`) and the
+default's entry:
+
+* DTWD: copy picks, for each test demo, the training demo nearest *to the whole test demo* (an
+  oracle); a model sees only the start. ``start_copy`` is the mean DTWD of the training demo whose
+  20th kept sample is nearest to the test start (what copying from the start alone scores),
+  ``spread`` the mean DTWD between two training demos; both over copy, next to the model's ratio.
+* excursion: per test demo the start's own excursion (a lower bound for any model), the
+  measured one and the certified bound (:func:`sosdyn.lfd.model.reach.reach_box`).
+* arrival: per demo the speed at its last kept sample over its peak speed (a demo cut while
+  moving ends fast), and per test reproduction the distance to the goal over time.
+
+Figures (``<out>/figures/blocks_*.png``): ``blocks_dtwd`` and ``blocks_excursion`` (all sets),
+``blocks_arrival__<set>`` (sets missing the arrival target), ``blocks_starts__<set>`` (sets missing
+the excursion target: test starts against the training box and goal).
+"""
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+from matplotlib.patches import Rectangle
+from matplotlib.ticker import ScalarFormatter
+
+from sosdyn.evaluation import dsopt, realdata
+from sosdyn.evaluation.metrics import dtwd
+from sosdyn.report.figures import save_figure
+from sosdyn.report.figures.style import new_figure, styled
+
+DEFAULT = "CDSP default"
+CUT_MOVING = 0.1        # a demo "ends while moving" when its last speed exceeds this fraction of its peak
+TARGETS = {"ratio": 2.0, "excursion": 0.25, "arrival_ratio": 2.0}
+
+
+def set_numbers(demos, entry: dict) -> dict:
+    """The block numbers of one set (module docstring) for the default's ``entry``."""
+    _, recorded, test, _ = realdata.prepare(demos)
+    copy = entry["copy_mean"]
+    starts = np.array([d.pos[dsopt.START_INDEX] for d in recorded])
+    nearest = [int(np.argmin(np.linalg.norm(starts - x0, axis=1))) for x0 in dsopt.start_points(test)]
+    start_copy = float(np.mean([dtwd(recorded[j].pos, d.pos).total for j, d in zip(nearest, test)]))
+    spread = float(np.mean([dtwd(a.pos, b.pos).total for a, b in itertools.combinations(list(recorded), 2)]))
+    end_speed = [float(np.linalg.norm(d.vel[-1]) / np.linalg.norm(d.vel, axis=1).max())
+                 for d in list(recorded) + list(test)]
+    return {"ratio": entry["ratio"], "start_copy_ratio": start_copy / copy, "spread_ratio": spread / copy,
+            "start_excursion": [t["start_excursion"] for t in entry["tests"]],
+            "excursion": [t["excursion"] for t in entry["tests"]],
+            "excursion_bound": [t["excursion_bound"] for t in entry["tests"]],
+            "end_speed": end_speed, "n_train": len(recorded),
+            "cut_moving": int(sum(v > CUT_MOVING for v in end_speed))}
+
+
+@styled
+def dtwd_figure(numbers: dict, out_dir: Path) -> dict:
+    """Per set: the default's DTWD / copy, the nearest-start training demo's and the training demos'
+    mutual DTWD over copy, with the target 2."""
+    names = list(numbers)
+    fig = new_figure(9.0, 3.6)
+    ax = fig.add_subplot(1, 1, 1)
+    x = np.arange(len(names))
+    for k, (key, label, color) in enumerate((("ratio", "CDSP default", "#0072B2"),
+                                             ("start_copy_ratio", "copy the training demo with the nearest start",
+                                              "#009E73"),
+                                             ("spread_ratio", "mean DTWD between two training demos", "0.6"))):
+        ax.bar(x + (k - 1) * 0.27, [numbers[s][key] for s in names], 0.27, color=color, label=label)
+    ax.axhline(TARGETS["ratio"], color="black", ls="--", lw=0.8, label="target: 2x copy")
+    ax.axhline(1.0, color="black", lw=0.5)
+    ax.set_xticks(x, [s.replace("robottasks/", "rt/") for s in names], fontsize=8)
+    ax.set_ylabel("test DTWD / copy (nearest demo, oracle)")
+    ax.set_yscale("log")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.yaxis.set_major_formatter(ScalarFormatter())
+    ax.yaxis.set_minor_formatter(ScalarFormatter())
+    fig.suptitle("Test DTWD over copy (which picks its demo knowing the whole test demo): the default, copying "
+                 "from the start alone, and how far training demos lie from each other", fontsize=9)
+    return save_figure(fig, Path(out_dir) / "figures" / "blocks_dtwd", dpi=110)
+
+
+@styled
+def excursion_figure(numbers: dict, out_dir: Path) -> dict:
+    """Per set and test demo: the start's own excursion, the measured one and the certified bound."""
+    fig = new_figure(9.0, 3.6)
+    ax = fig.add_subplot(1, 1, 1)
+    pos, ticks = 0.0, []
+    for s, d in numbers.items():
+        for i, (a, b, c) in enumerate(zip(d["start_excursion"], d["excursion"], d["excursion_bound"])):
+            for k, (v, color, label) in enumerate(((a, "0.6", "start (any model's lower bound)"),
+                                                   (b, "#0072B2", "measured (CDSP default)"),
+                                                   (c, "#D55E00", "certified bound"))):
+                ax.bar(pos + k * 0.25, np.nan if v is None else v, 0.25, color=color,
+                       label=label if pos == 0 and i == 0 else None)
+            pos += 1.0
+        ticks.append((pos - 0.5 * len(d["excursion"]) - 0.25, s.replace("robottasks/", "rt/")))
+        pos += 0.8
+    ax.axhline(TARGETS["excursion"], color="black", ls="--", lw=0.8, label="target 0.25")
+    ax.set_yscale("symlog", linthresh=0.1)
+    ax.set_xticks([t for t, _ in ticks], [n for _, n in ticks], fontsize=8)
+    ax.set_ylabel("excursion / training-box diagonal")
+    ax.legend(fontsize=7, loc="upper right")
+    fig.suptitle("Excursion per test demo: the start's own, the rollout's, and the certificate's bound", fontsize=9)
+    return save_figure(fig, Path(out_dir) / "figures" / "blocks_excursion", dpi=110)
+
+
+def path_times(n_points: int, n_kept: int) -> np.ndarray:
+    """Times (s) of the rows :func:`sosdyn.evaluation.realdata.thin` kept of a reproduction of
+    ``n_points`` rows x_1..x_n (row k at (k + 1) dt)."""
+    idx = np.unique(np.linspace(0, n_points - 1, min(n_kept, n_points)).astype(int))
+    return (idx + 1) * dsopt.DT
+
+
+@styled
+def arrival_figure(name: str, demos, entry: dict, numbers: dict, out_dir: Path) -> dict:
+    """Left: each demo's speed at its last kept sample over its peak speed (training, test).
+    Right: each test reproduction's distance to the model's goal over the training diagonal against
+    time over the test demo's remaining duration, with the arrival radius and the 2x limit."""
+    _, recorded, _, _ = realdata.prepare(demos)
+    lo, hi, diag = realdata.box(recorded)
+    goal = np.asarray(recorded.goal)
+    fig = new_figure(10.0, 3.8)
+    ax = fig.add_subplot(1, 2, 1)
+    v, n = numbers["end_speed"], numbers["n_train"]
+    ax.bar(np.arange(n), v[:n], color="0.6", label="training demos")
+    ax.bar(np.arange(n, len(v)), v[n:], color="black", label="test demos")
+    ax.axhline(CUT_MOVING, color="#D55E00", ls="--", lw=0.8, label=f"{CUT_MOVING:.0%} of peak")
+    ax.set_xlabel("demo")
+    ax.set_ylabel("speed at the last sample / peak speed")
+    ax.set_title(f"{numbers['cut_moving']} of {len(v)} demos end while moving", fontsize=9)
+    ax.legend(fontsize=7)
+    ax = fig.add_subplot(1, 2, 2)
+    for i, (p, t) in enumerate(zip(entry["paths"], entry["tests"])):
+        times = path_times(t["n_points"], len(p)) / t["duration_s"]
+        ax.plot(times, np.linalg.norm(np.asarray(p) - goal, axis=1) / diag, lw=0.8,
+                label="test reproductions" if i == 0 else None, color="#0072B2")
+    ax.axhline(0.01, color="black", ls="--", lw=0.8, label="arrival: 1 % of the diagonal")
+    ax.axvline(TARGETS["arrival_ratio"], color="#D55E00", ls="--", lw=0.8, label="target: 2x the duration")
+    ax.set_yscale("log")
+    ax.set_xlabel("time / test demo's remaining duration")
+    ax.set_ylabel("distance to the goal / diagonal")
+    ax.legend(fontsize=7)
+    fig.suptitle(f"{name}: demos cut while moving, reproductions that creep into the goal", fontsize=9)
+    return save_figure(fig, Path(out_dir) / "figures" / f"blocks_arrival__{name.replace('/', '__')}", dpi=110)
+
+
+@styled
+def starts_figure(name: str, demos, entry: dict, out_dir: Path) -> dict:
+    """x-y and x-z: training demos, the training box, the goal, the test demos and their starts
+    (marked with the start's own excursion) and the default's reproductions."""
+    _, recorded, test, _ = realdata.prepare(demos)
+    lo, hi, _ = realdata.box(recorded)
+    views = [(0, 1), (0, 2)] if demos.dim >= 3 else [(0, 1)]
+    fig = new_figure(5.0 * len(views), 4.4)
+    for k, (a, b) in enumerate(views):
+        ax = fig.add_subplot(1, len(views), k + 1)
+        for i, d in enumerate(recorded):
+            ax.plot(d.pos[:, a], d.pos[:, b], color="0.7", lw=0.7, label="training demos" if i == 0 else None)
+        ax.add_patch(Rectangle((lo[a], lo[b]), hi[a] - lo[a], hi[b] - lo[b], fill=False, ec="0.3", lw=0.8, ls=":",
+            label="training box"))
+        for i, (d, p, t) in enumerate(zip(test, entry["paths"], entry["tests"])):
+            ax.plot(d.pos[:, a], d.pos[:, b], color="black", lw=0.8, ls="--", label="test demos" if i == 0 else None)
+            p = np.asarray(p)
+            ax.plot(p[:, a], p[:, b], color="#0072B2", lw=1.0, label="CDSP default" if i == 0 else None)
+            x0 = d.pos[dsopt.START_INDEX]
+            ax.plot(x0[a], x0[b], "o", color="#D55E00", ms=5, label="test starts" if i == 0 else None)
+            ax.annotate(f"{t['start_excursion']:.2f}", (x0[a], x0[b]), fontsize=7, xytext=(4, 4),
+                        textcoords="offset points")
+        ax.plot(recorded.goal[a], recorded.goal[b], "*", color="black", ms=10, label="goal")
+        ax.set_xlabel(f"{'xyz'[a]} ({demos.units})")
+        ax.set_ylabel(f"{'xyz'[b]} ({demos.units})")
+        ax.set_aspect("equal", adjustable="datalim")
+    handles, labels = fig.axes[-1].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize=7)
+    fig.suptitle(f"{name}: test starts (numbers: their own excursion / diagonal) against the training box",
+                 fontsize=9)
+    return save_figure(fig, Path(out_dir) / "figures" / f"blocks_starts__{name.replace('/', '__')}", dpi=110)
+
+
+def blocks(entries: dict, load, out_dir: Path) -> dict:
+    """Numbers and figures for the default's entries ``{set: entry}`` (sets whose entry failed are
+    left out); ``load(set)`` gives the set's demonstrations. Returns ``{"numbers", "figures"}``
+    (figure paths relative to ``out_dir``)."""
+    out_dir = Path(out_dir)
+    ok = {s: e for s, e in entries.items() if not (e.get("error") or e.get("failure"))}
+    numbers = {s: set_numbers(load(s), e) for s, e in ok.items()}
+    rel = lambda paths: str(paths["png"].relative_to(out_dir))          # noqa: E731
+    figures = {"dtwd": rel(dtwd_figure(numbers, out_dir)), "excursion": rel(excursion_figure(numbers, out_dir))}
+    for s, e in ok.items():
+        if e["arrival_ratio"] > TARGETS["arrival_ratio"]:
+            figures[f"arrival {s}"] = rel(arrival_figure(s, load(s), e, numbers[s], out_dir))
+        if e["excursion"] > TARGETS["excursion"]:
+            figures[f"starts {s}"] = rel(starts_figure(s, load(s), e, out_dir))
+    return {"numbers": numbers, "figures": figures}
