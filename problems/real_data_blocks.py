@@ -74,33 +74,35 @@ def dtwd_figure(numbers: dict, out_dir: Path) -> dict:
     ax.legend(fontsize=7, loc="upper left")
     ax.yaxis.set_major_formatter(ScalarFormatter())
     ax.yaxis.set_minor_formatter(ScalarFormatter())
-    fig.suptitle("Test DTWD over copy (which picks its demo knowing the whole test demo): the default, copying "
-                 "from the start alone, and how far training demos lie from each other", fontsize=9)
+    fig.suptitle("Test DTWD over copy (copy picks the training demo nearest to the whole test demo):\n"
+                 "the default, copying from the start alone, and how far training demos lie from each other",
+                 fontsize=9)
     return save_figure(fig, Path(out_dir) / "figures" / "blocks_dtwd", dpi=110)
 
 
 @styled
 def excursion_figure(numbers: dict, out_dir: Path) -> dict:
-    """Per set and test demo: the start's own excursion, the measured one and the certified bound."""
+    """Per set: the worst test demo's start excursion, measured excursion and certified bound (bars),
+    every test demo's value (dots)."""
+    names = list(numbers)
     fig = new_figure(9.0, 3.6)
     ax = fig.add_subplot(1, 1, 1)
-    pos, ticks = 0.0, []
-    for s, d in numbers.items():
-        for i, (a, b, c) in enumerate(zip(d["start_excursion"], d["excursion"], d["excursion_bound"])):
-            for k, (v, color, label) in enumerate(((a, "0.6", "start (any model's lower bound)"),
-                                                   (b, "#0072B2", "measured (CDSP default)"),
-                                                   (c, "#D55E00", "certified bound"))):
-                ax.bar(pos + k * 0.25, np.nan if v is None else v, 0.25, color=color,
-                       label=label if pos == 0 and i == 0 else None)
-            pos += 1.0
-        ticks.append((pos - 0.5 * len(d["excursion"]) - 0.25, s.replace("robottasks/", "rt/")))
-        pos += 0.8
+    x = np.arange(len(names))
+    for k, (key, color, label) in enumerate((("start_excursion", "0.6", "start (no rollout from it does better)"),
+                                             ("excursion", "#0072B2", "measured (CDSP default)"),
+                                             ("excursion_bound", "#D55E00", "certified bound"))):
+        values = [[v for v in numbers[s][key] if v is not None] for s in names]
+        ax.bar(x + (k - 1) * 0.27, [max(v, default=np.nan) for v in values], 0.27, color=color, alpha=0.8,
+               label=label + " (worst test demo)")
+        for i, v in enumerate(values):
+            ax.plot(np.full(len(v), x[i] + (k - 1) * 0.27), v, ".", color="black", ms=2.5)
     ax.axhline(TARGETS["excursion"], color="black", ls="--", lw=0.8, label="target 0.25")
     ax.set_yscale("symlog", linthresh=0.1)
-    ax.set_xticks([t for t, _ in ticks], [n for _, n in ticks], fontsize=8)
+    ax.set_xticks(x, [s.replace("robottasks/", "rt/") for s in names], fontsize=8)
     ax.set_ylabel("excursion / training-box diagonal")
     ax.legend(fontsize=7, loc="upper right")
-    fig.suptitle("Excursion per test demo: the start's own, the rollout's, and the certificate's bound", fontsize=9)
+    fig.suptitle("Excursion: the test start's own, the rollout's, and the certificate's bound\n"
+                 "(bars: worst test demo; dots: every test demo)", fontsize=9)
     return save_figure(fig, Path(out_dir) / "figures" / "blocks_excursion", dpi=110)
 
 
@@ -140,7 +142,8 @@ def arrival_figure(name: str, demos, entry: dict, numbers: dict, out_dir: Path) 
     ax.set_xlabel("time / test demo's remaining duration")
     ax.set_ylabel("distance to the goal / diagonal")
     ax.legend(fontsize=7)
-    fig.suptitle(f"{name}: demos cut while moving, reproductions that creep into the goal", fontsize=9)
+    fig.suptitle(f"{name}: demos cut while moving; reproductions that stall short of the goal before converging",
+                 fontsize=9)
     return save_figure(fig, Path(out_dir) / "figures" / f"blocks_arrival__{name.replace('/', '__')}", dpi=110)
 
 
