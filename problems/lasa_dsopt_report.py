@@ -152,6 +152,16 @@ def summary_table(results: dict) -> str:
     return _table(head, rows)
 
 
+def quality_table(results: dict) -> str:
+    """One row per variant: the worst shape's arrival ratio, excursion and final error (each the
+    worst test demo of a shape, as on the real-data page; absent for entries fitted before them)."""
+    e = html.escape
+    head = ["variant", "worst arrival ÷ duration", "worst excursion ÷ diag", "worst final error ÷ diag"]
+    rows = [[e(v), fmt(sm.get("worst_arrival_ratio_test"), 2), fmt(sm.get("worst_excursion_test"), 3),
+             fmt(sm.get("worst_final_error_test"), 4)] for v, sm in results["summary"].items()]
+    return _table(head, rows)
+
+
 def shape_table(results: dict, variants) -> str:
     """One row per shape: the copy, SEDS (published) and the drawn variants' test DTWD (÷ copy)."""
     e, has_seds, seeds = html.escape, results["meta"]["seds_source"] is not None, results["meta"]["seeds"]
@@ -168,12 +178,15 @@ def variant_details(results: dict) -> str:
     out = []
     for v in results["meta"]["variants"]:
         rows = [[e(s), _dtwd_cell(d["variants"][v], seeds), fmt(d["variants"][v].get("dtwd_train_mean")),
-                 fmt(d["variants"][v]["ratio_to_nearest"], 2), fmt(d["variants"][v].get("fit_s"), 1)]
+                 fmt(d["variants"][v]["ratio_to_nearest"], 2), fmt(d["variants"][v].get("arrival_ratio_test"), 2),
+                 fmt(d["variants"][v].get("excursion_test"), 3), fmt(d["variants"][v].get("final_error_test"), 4),
+                 fmt(d["variants"][v].get("fit_s"), 1)]
                 for s, d in results["shapes"].items()]
         settings = results["meta"].get("settings", {}).get(v)
         out.append(f"<details><summary>{e(v)}</summary>"
                    + (f'<p class="note">settings: <code>{e(str(settings))}</code></p>' if settings else "")
-                   + _table(["shape", "test DTWD", "train DTWD", "÷ copy", "fit (s)"], rows) + "</details>")
+                   + _table(["shape", "test DTWD", "train DTWD", "÷ copy", "arrival ÷ duration",
+                                                       "excursion ÷ diag", "final error ÷ diag", "fit (s)"], rows) + "</details>")
     return "".join(out)
 
 
@@ -202,6 +215,12 @@ def write_html(results: dict, out_dir: Path) -> Path:
 <p class="note">Test DTWD in mm, mean over test demos {test_demos}, per variant over the {len(results['shapes'])} shapes;
 "÷ copy" = ratio to the nearest-training-demo score.</p>
 {summary_table(results)}
+<p class="note">Reproduction quality, as on the real-data page (sosdyn.evaluation.dsopt.reproduction_quality):
+arrival = first time within 1 % of the training box's diagonal of the goal over the test demo's remaining duration;
+excursion = farthest point outside the training box over its diagonal; final error = distance from the
+reproduction's end to the test demo's end over the diagonal. Worst test demo per shape, then worst shape
+(per-shape values under the per-variant details).</p>
+{quality_table(results)}
 <h2>Per shape</h2>
 <figure><img src="{e(fig['png'])}" alt="per-shape test DTWD"><figcaption>{e(fig['caption'])}</figcaption></figure>
 <p class="note">Test DTWD (mm) of the variants drawn in the figure; small: ratio to the copy.
