@@ -45,7 +45,7 @@ def set_numbers(demos, entry: dict) -> dict:
     spread = float(np.mean([dtwd(a.pos, b.pos).total for a, b in itertools.combinations(list(recorded), 2)]))
     end_speed = [float(np.linalg.norm(d.vel[-1]) / np.linalg.norm(d.vel, axis=1).max())
                  for d in list(recorded) + list(test)]
-    return {"ratio": entry["ratio"], "start_copy_ratio": start_copy / copy, "spread_ratio": spread / copy,
+    return {"ratio": entry["ratio"], "arrival_ratio": entry["arrival_ratio"], "start_copy_ratio": start_copy / copy, "spread_ratio": spread / copy,
             "start_excursion": [t["start_excursion"] for t in entry["tests"]],
             "excursion": [t["excursion"] for t in entry["tests"]],
             "excursion_bound": [t["excursion_bound"] for t in entry["tests"]],
@@ -85,7 +85,7 @@ def excursion_figure(numbers: dict, out_dir: Path) -> dict:
     """Per set: the worst test demo's start excursion, measured excursion and certified bound (bars),
     every test demo's value (dots)."""
     names = list(numbers)
-    fig = new_figure(9.0, 3.6)
+    fig = new_figure(9.0, 4.2)
     ax = fig.add_subplot(1, 1, 1)
     x = np.arange(len(names))
     for k, (key, color, label) in enumerate((("start_excursion", "0.6", "start (no rollout from it does better)"),
@@ -100,7 +100,8 @@ def excursion_figure(numbers: dict, out_dir: Path) -> dict:
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set_xticks(x, [s.replace("robottasks/", "rt/") for s in names], fontsize=8)
     ax.set_ylabel("excursion / training-box diagonal")
-    ax.legend(fontsize=7, loc="upper right")
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=7)
     fig.suptitle("Excursion: the test start's own, the rollout's, and the certificate's bound\n"
                  "(bars: worst test demo; dots: every test demo)", fontsize=9)
     return save_figure(fig, Path(out_dir) / "figures" / "blocks_excursion", dpi=110)

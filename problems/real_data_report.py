@@ -88,12 +88,13 @@ def blocks_html(found: dict | None) -> str:
             parts.append(f"excursion {max(d['excursion']):.3f}: the test starts themselves lie up to "
                          f"{max(d['start_excursion']):.3f} outside the training box (certified bound "
                          f"{fmt(max(b for b in d['excursion_bound'] if b is not None), 3)})")
-        if d["cut_moving"]:
-            parts.append(f"{d['cut_moving']} of {len(d['end_speed'])} demos end at more than 10 % of their peak speed")
+        if d["arrival_ratio"] > 2:
+            parts.append(f"arrival {d['arrival_ratio']:.2f}× the duration: {d['cut_moving']} of {len(d['end_speed'])} "
+                         "demos end at more than 10 % of their peak speed (cut while moving)")
         if parts:
             items.append(f"<li><b>{e(s)}</b>: {e('; '.join(parts))}.</li>")
-    figs = "".join(f"<figure><img src=\"{e(p)}\" alt=\"{e(k)}\" style=\"max-width:100%\"><figcaption>{e(k)}"
-                   f"</figcaption></figure>" for k, p in found["figures"].items())
+    figs = "".join(f"<figure><img src=\"{e(p)}\" alt=\"{e(k)}\" style=\"max-width:100%\"><figcaption>{e(k)} "
+                   f"({e(p)})</figcaption></figure>" for k, p in found["figures"].items())
     return (f"<h2>What blocks each missed target</h2><p>Numbers for CDSP default; the module "
             f"problems.real_data_blocks says how each is computed.</p><ul>{''.join(items)}</ul>{figs}")
 
