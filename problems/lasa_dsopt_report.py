@@ -157,8 +157,9 @@ def quality_table(results: dict) -> str:
     worst test demo of a shape, as on the real-data page; absent for entries fitted before them)."""
     e = html.escape
     head = ["variant", "worst arrival ÷ duration", "worst excursion ÷ diag", "worst final error ÷ diag"]
-    rows = [[e(v), fmt(sm.get("worst_arrival_ratio_test"), 2), fmt(sm.get("worst_excursion_test"), 3),
-             fmt(sm.get("worst_final_error_test"), 4)] for v, sm in results["summary"].items()]
+    q = lambda value, digits: "∞ (never arrives)" if value == math.inf else fmt(value, digits)   # noqa: E731
+    rows = [[e(v), q(sm.get("worst_arrival_ratio_test"), 2), q(sm.get("worst_excursion_test"), 3),
+             q(sm.get("worst_final_error_test"), 4)] for v, sm in results["summary"].items()]
     return _table(head, rows)
 
 
