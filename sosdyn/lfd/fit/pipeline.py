@@ -40,7 +40,7 @@ from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_
 from .learner import History, Settings, learn, subsample
 from .params import resolve_seed, warp_settings
 from .rounds import corrective_fits, warp_choice
-from .warp import AUTO_WARPS, check_warp, fit_warp, jacobian, pulled_back, stacked_maps
+from .warp import AUTO_WARPS, check_warp, fit_warp, jacobian, pull_back, pulled_back, stacked_maps
 
 
 class Fit:
@@ -213,26 +213,28 @@ def field_at(X, goal, scale, mixture, C, fexps, warp):
 def block_field(fits: list):
     """``field(X, live)``: fit b's field (:func:`field_at`, at its own goal) on the b-th block of
     equal consecutive rows of X, for b in ``live``; the blocks' warps evaluated together
-    (:func:`~.warp.stacked_maps`): the same numbers as each fit's field on its block."""
-    stacked = {}                    # per set of live blocks: (goal, scale, maps) of their rows
+    (:func:`~.warp.stacked_maps`, prepared once per set of live blocks by :func:`~.warp.pull_back`):
+    the same numbers as each fit's field on its block."""
+    stacked = {}                    # per set of live blocks: (goal, scale, pull-back or None, models) of their rows
 
     def rows_of(live, rows, n):
         key = (tuple(live), rows)
         if key not in stacked:
             each = lambda a: np.repeat(np.array([a(fits[b]) for b in live], dtype=float), rows, axis=0)  # noqa: E731
-            stacked[key] = (each(lambda f: f.goal_), each(lambda f: f.scale_)[:, None], stacked_maps(
-                [None if fits[b].warp_ is None else maps_of(fits[b].warp_) for b in live], rows, n))
+            maps = stacked_maps([None if fits[b].warp_ is None else maps_of(fits[b].warp_) for b in live], rows, n)
+            stacked[key] = (each(lambda f: f.goal_), each(lambda f: f.scale_)[:, None],
+                            None if maps is None else pull_back(maps, rows * len(live)),
+                            [(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live])
         return stacked[key]
 
     def field(X, live):
         rows = len(X) // len(live)
-        goal, scale, maps = rows_of(live, rows, X.shape[1])
+        goal, scale, pull, models = rows_of(live, rows, X.shape[1])
 
         def core(U):
-            return np.vstack(core_fields([U[k * rows:(k + 1) * rows] for k in range(len(live))],
-                                         [(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live]))
+            return np.vstack(core_fields([U[k * rows:(k + 1) * rows] for k in range(len(live))], models))
         Z = (X - goal) / scale
-        return (core(Z) if maps is None else pulled_back(Z, maps, core)) * scale
+        return (core(Z) if pull is None else pull(Z, core)) * scale
     return field
 
 

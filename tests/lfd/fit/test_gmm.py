@@ -1,7 +1,15 @@
 """EM on [z, zdot], BIC selection and the GMR cost ceiling."""
 import numpy as np
+from scipy.special import logsumexp
 
-from sosdyn.lfd.fit.gmm import MAX_BIC_COMPONENTS, PositionMixture, fit_joint_gmm, gmm_linear_maps, gmr_cost
+from sosdyn.lfd.fit.gmm import (
+    MAX_BIC_COMPONENTS,
+    PositionMixture,
+    fit_joint_gmm,
+    gmm_linear_maps,
+    gmr_cost,
+    log_sum_exp,
+)
 
 
 def linear_samples(T=400):
@@ -28,3 +36,17 @@ def test_bic_tries_one_to_ten_components_or_one_per_five_samples():
     assert len(bic) == MAX_BIC_COMPONENTS == 10 and gmm.n_components == 1 + int(np.argmin(bic))
     _, bic = fit_joint_gmm(Z[:15], Zdot[:15], "bic", seed=0)
     assert len(bic) == 3
+
+
+def test_log_sum_exp_is_scipys_to_the_bit_and_exact_on_known_rows():
+    """log_sum_exp equals scipy.special.logsumexp bit for bit (ties at the maximum, -inf entries,
+    spreads from 1e-3 to 800, K = 1..17), and log(e^0 + e^0) = log 2, log(e^5) = 5 exactly."""
+    rng = np.random.default_rng(0)
+    for K in (1, 2, 3, 8, 17):
+        A = rng.normal(size=(2000, K)) * rng.choice([1e-3, 1.0, 30.0, 800.0], size=(2000, 1))
+        A[::7, 0] = A[::7, -1]
+        A[::13] = np.round(A[::13])
+        if K > 1:
+            A[::11, 1] = -np.inf
+        assert np.array_equal(log_sum_exp(A), logsumexp(A, axis=1, keepdims=True))
+    assert log_sum_exp(np.array([[0.0, 0.0], [5.0, -np.inf]]))[:, 0].tolist() == [np.log(2.0), 5.0]
