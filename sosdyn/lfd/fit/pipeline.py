@@ -32,9 +32,10 @@ from dataclasses import replace
 import numpy as np
 
 from sosdyn.errors import InputError, NotCertifiedError
+from sosdyn.poly import monomial_values
 from ..data.demonstrations import Demonstrations, sample_step
 from .certificate import CertificateReport, certify, check_certificate, collapse_diagnostic, extract_certificate
-from .contraction import eval_fields, field_exponents, metric_exponents
+from .contraction import field_exponents, fields_at, metric_exponents
 from .corrective import score_steps
 from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost, responsibilities_of
 from .learner import History, Settings, learn, subsample
@@ -192,14 +193,23 @@ def warped_data(Z, Zdot, warp):
 
 def core_field(U, mixture: PositionMixture, C, fexps):
     """udot = sum_k h_k(u) f_k(u) at the rows of U (the certified system)."""
-    return core_fields([U], [(mixture, C, fexps)])[0]
+    return core_fields(U, [(mixture, C, fexps)])
 
 
-def core_fields(blocks: list, models: list) -> list:
-    """:func:`core_field` of ``models[b]`` = (mixture, C, fexps) at the rows of ``blocks[b]``, the
-    weights of all blocks in one pass (:func:`~.gmm.responsibilities_of`)."""
+def core_fields(U, models: list) -> np.ndarray:
+    """:func:`core_field` of ``models[b]`` = (mixture, C, fexps) at the b-th of len(models) equal
+    blocks of rows of U, the weights of all blocks in one pass (:func:`~.gmm.responsibilities_of`)
+    and the monomials once when the models share them (elementwise: the same numbers)."""
+    rows = len(U) // len(models)
+    blocks = [U[b * rows:(b + 1) * rows] for b in range(len(models))]
     H = responsibilities_of([mix for mix, _, _ in models], blocks)
-    return [np.einsum("tk,tki->ti", h, eval_fields(C, fexps, U)) for h, U, (_, C, fexps) in zip(H, blocks, models)]
+    shared = all(np.array_equal(f, models[0][2]) for _, _, f in models)
+    mono = monomial_values(U, models[0][2]) if shared else None
+    out = np.empty(np.shape(U))
+    for b, (h, Ub, (_, C, fexps)) in enumerate(zip(H, blocks, models)):
+        Mb = mono[b * rows:(b + 1) * rows] if shared else monomial_values(Ub, fexps)
+        np.einsum("tk,tki->ti", h, fields_at(C, Mb), out=out[b * rows:(b + 1) * rows])
+    return out
 
 
 def field_at(X, goal, scale, mixture, C, fexps, warp):
@@ -232,7 +242,7 @@ def block_field(fits: list):
         goal, scale, pull, models = rows_of(live, rows, X.shape[1])
 
         def core(U):
-            return np.vstack(core_fields([U[k * rows:(k + 1) * rows] for k in range(len(live))], models))
+            return core_fields(U, models)
         Z = (X - goal) / scale
         return (core(Z) if pull is None else pull(Z, core)) * scale
     return field
