@@ -73,3 +73,18 @@ def test_a_partial_run_leaves_the_skipped_parts_files_alone(tmp_path):
     parts = "shapes,sweeps,scaling_n,backends,profiles,predict,overhead"
     assert learner.main(["--quick", "--skip", parts, "--out", str(tmp_path)]) == 0
     assert {name: (tmp_path / name).read_text() for name in before} == before
+
+
+def test_missed_issue_26_targets_get_a_profile_job():
+    """The default-overhead target and the full default at n = 7, when missed, each get a profile job
+    (the fit that misses it); met or not measured: none."""
+    over = {"met": False, "shapes": [{"shape": "Leaf_2", "ratio": 4.0, "default_s": 1.2},
+                                     {"shape": "Leaf_1", "ratio": 6.5, "default_s": 1.9}]}
+    (title, demos, params), = learner.overhead_jobs(over)
+    assert "Leaf_1" in title and demos.name == "Leaf_1" and params == {}
+    assert learner.overhead_jobs(dict(over, met=True)) == [] and learner.overhead_jobs(None) == []
+    goals = {"ratio": {"met": True}, "build_over_solve": {"met": True}, "cubic_n3": {"met": True},
+             "full_n7": {"met": False, "value": 12.5}}
+    jobs = learner.scaling_jobs({"goals": goals, "rows": [{"n": 7, "total": 4.0}]})
+    assert [j[0].split(" (")[0] for j in jobs] == ["full default CDSP(), synthetic n = 7"]
+    assert jobs[0][1].dim == 7 and "warp" not in jobs[0][2]
