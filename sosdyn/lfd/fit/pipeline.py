@@ -37,7 +37,8 @@ from ..data.demonstrations import Demonstrations, sample_step
 from .certificate import CertificateReport, certify, check_certificate, collapse_diagnostic, extract_certificate
 from .contraction import field_exponents, fields_at, metric_exponents
 from .corrective import score_steps
-from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost, responsibilities_of
+from .gmm import (MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, fit_joint_gmm, gmr_cost,
+                  responsibilities_of, weights_from)
 from .learner import History, Settings, learn, subsample
 from .params import resolve_seed, warp_settings
 from .rounds import corrective_fits, warp_choice
@@ -196,13 +197,21 @@ def core_field(U, mixture: PositionMixture, C, fexps):
     return core_fields(U, [(mixture, C, fexps)])
 
 
-def core_fields(U, models: list) -> np.ndarray:
+def core_fields(U, models: list, log_joint=None) -> np.ndarray:
     """:func:`core_field` of ``models[b]`` = (mixture, C, fexps) at the b-th of len(models) equal
-    blocks of rows of U, the weights of all blocks in one pass (:func:`~.gmm.responsibilities_of`)
-    and the monomials once when the models share them (elementwise: the same numbers)."""
+    blocks of rows of U, the weights of all blocks in one pass (:func:`~.gmm.responsibilities_of`;
+    ``log_joint``: the blocks' log-joints at once, :func:`~.gmm.block_log_joint`) and the monomials
+    once when the models share them (elementwise: the same numbers)."""
     rows = len(U) // len(models)
     blocks = [U[b * rows:(b + 1) * rows] for b in range(len(models))]
-    H = responsibilities_of([mix for mix, _, _ in models], blocks)
+    mixtures = [mix for mix, _, _ in models]
+    if log_joint is None:
+        H = responsibilities_of(mixtures, blocks)
+    else:
+        if not np.isfinite(U).all():
+            return core_fields(U, models)           # responsibilities_of's InputError names the row
+        L = log_joint(U)
+        H = weights_from([L[b * rows:(b + 1) * rows] for b in range(len(models))], mixtures, blocks)
     shared = all(np.array_equal(f, models[0][2]) for _, _, f in models)
     mono = monomial_values(U, models[0][2]) if shared else None
     out = np.empty(np.shape(U))
@@ -232,17 +241,19 @@ def block_field(fits: list):
         if key not in stacked:
             each = lambda a: np.repeat(np.array([a(fits[b]) for b in live], dtype=float), rows, axis=0)  # noqa: E731
             maps = stacked_maps([None if fits[b].warp_ is None else maps_of(fits[b].warp_) for b in live], rows, n)
+            models = [(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live]
+            one_k = len({(mix.n_components, mix.means.shape[1]) for mix, _, _ in models}) == 1
             stacked[key] = (each(lambda f: f.goal_), each(lambda f: f.scale_)[:, None],
-                            None if maps is None else pull_back(maps, rows * len(live)),
-                            [(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live])
+                            None if maps is None else pull_back(maps, rows * len(live)), models,
+                            block_log_joint([mix for mix, _, _ in models], rows) if one_k else None)
         return stacked[key]
 
     def field(X, live):
         rows = len(X) // len(live)
-        goal, scale, pull, models = rows_of(live, rows, X.shape[1])
+        goal, scale, pull, models, log_joint = rows_of(live, rows, X.shape[1])
 
         def core(U):
-            return core_fields(U, models)
+            return core_fields(U, models, log_joint)
         Z = (X - goal) / scale
         return (core(Z) if pull is None else pull(Z, core)) * scale
     return field
