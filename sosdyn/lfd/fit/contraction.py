@@ -71,12 +71,7 @@ def margin_degree(W, mexps, fexps) -> int:
 # ---------------------------------------------------------------------- numeric evaluation
 def eval_fields(C, exps, Z):
     """f_k(z) for every component: (N, K, n)."""
-    return fields_at(C, monomial_values(Z, exps))
-
-
-def fields_at(C, M):
-    """f_k at the points whose monomial values are the rows of M (N, m): (N, K, n)."""
-    return np.einsum("kij,nj->nki", C, M)
+    return np.einsum("kij,nj->nki", C, monomial_values(Z, exps))
 
 
 def eval_jacobians(C, exps, Z):

@@ -35,7 +35,7 @@ from sosdyn.errors import InputError, NotCertifiedError
 from sosdyn.poly import monomial_values
 from ..data.demonstrations import Demonstrations, sample_step
 from .certificate import CertificateReport, certify, check_certificate, collapse_diagnostic, extract_certificate
-from .contraction import field_exponents, fields_at, metric_exponents
+from .contraction import eval_fields, field_exponents, metric_exponents
 from .corrective import score_steps
 from .gmm import (MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, fit_joint_gmm, gmr_cost,
                   responsibilities_of, weights_from)
@@ -197,28 +197,35 @@ def core_field(U, mixture: PositionMixture, C, fexps):
     return core_fields(U, [(mixture, C, fexps)])
 
 
-def core_fields(U, models: list, log_joint=None) -> np.ndarray:
+def core_fields(U, models: list) -> np.ndarray:
     """:func:`core_field` of ``models[b]`` = (mixture, C, fexps) at the b-th of len(models) equal
-    blocks of rows of U, the weights of all blocks in one pass (:func:`~.gmm.responsibilities_of`;
-    ``log_joint``: the blocks' log-joints at once, :func:`~.gmm.block_log_joint`) and the monomials
-    once when the models share them (elementwise: the same numbers)."""
+    blocks of rows of U, the weights of all blocks in one pass (:func:`~.gmm.responsibilities_of`)."""
     rows = len(U) // len(models)
     blocks = [U[b * rows:(b + 1) * rows] for b in range(len(models))]
-    mixtures = [mix for mix, _, _ in models]
-    if log_joint is None:
-        H = responsibilities_of(mixtures, blocks)
-    else:
+    H = responsibilities_of([mix for mix, _, _ in models], blocks)
+    return np.vstack([np.einsum("tk,tki->ti", h, eval_fields(C, fexps, Ub))
+                      for h, Ub, (_, C, fexps) in zip(H, blocks, models)])
+
+
+def block_core(models: list, rows: int):
+    """``core(U)``: :func:`core_fields` of ``models`` on blocks of ``rows`` rows, prepared once for
+    many calls: when the models share K, n and the monomials, every row carries its model's
+    mixture factors (:func:`~.gmm.block_log_joint`) and coefficients, so the log-joints, the fields
+    and their weighted sum are one pass each over all rows (the same numbers as block by block)."""
+    mixtures, fexps = [mix for mix, _, _ in models], models[0][2]
+    if len({(mix.n_components, mix.means.shape[1]) for mix in mixtures}) > 1 or \
+            not all(np.array_equal(f, fexps) for _, _, f in models):
+        return lambda U: core_fields(U, models)
+    log_joint, C = block_log_joint(mixtures, rows), np.repeat(np.array([C for _, C, _ in models]), rows, axis=0)
+
+    def core(U):
         if not np.isfinite(U).all():
             return core_fields(U, models)           # responsibilities_of's InputError names the row
         L = log_joint(U)
-        H = weights_from([L[b * rows:(b + 1) * rows] for b in range(len(models))], mixtures, blocks)
-    shared = all(np.array_equal(f, models[0][2]) for _, _, f in models)
-    mono = monomial_values(U, models[0][2]) if shared else None
-    out = np.empty(np.shape(U))
-    for b, (h, Ub, (_, C, fexps)) in enumerate(zip(H, blocks, models)):
-        Mb = mono[b * rows:(b + 1) * rows] if shared else monomial_values(Ub, fexps)
-        np.einsum("tk,tki->ti", h, fields_at(C, Mb), out=out[b * rows:(b + 1) * rows])
-    return out
+        H = np.concatenate(weights_from([L[b * rows:(b + 1) * rows] for b in range(len(models))], mixtures,
+                                        [U[b * rows:(b + 1) * rows] for b in range(len(models))]))
+        return np.einsum("tk,tki->ti", H, np.einsum("tkij,tj->tki", C, monomial_values(U, fexps)))
+    return core
 
 
 def field_at(X, goal, scale, mixture, C, fexps, warp):
@@ -234,26 +241,21 @@ def block_field(fits: list):
     equal consecutive rows of X, for b in ``live``; the blocks' warps evaluated together
     (:func:`~.warp.stacked_maps`, prepared once per set of live blocks by :func:`~.warp.pull_back`):
     the same numbers as each fit's field on its block."""
-    stacked = {}                    # per set of live blocks: (goal, scale, pull-back or None, models) of their rows
+    stacked = {}                    # per set of live blocks: (goal, scale, pull-back or None, core) of their rows
 
     def rows_of(live, rows, n):
         key = (tuple(live), rows)
         if key not in stacked:
             each = lambda a: np.repeat(np.array([a(fits[b]) for b in live], dtype=float), rows, axis=0)  # noqa: E731
             maps = stacked_maps([None if fits[b].warp_ is None else maps_of(fits[b].warp_) for b in live], rows, n)
-            models = [(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live]
-            one_k = len({(mix.n_components, mix.means.shape[1]) for mix, _, _ in models}) == 1
             stacked[key] = (each(lambda f: f.goal_), each(lambda f: f.scale_)[:, None],
-                            None if maps is None else pull_back(maps, rows * len(live)), models,
-                            block_log_joint([mix for mix, _, _ in models], rows) if one_k else None)
+                            None if maps is None else pull_back(maps, rows * len(live)),
+                            block_core([(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live], rows))
         return stacked[key]
 
     def field(X, live):
         rows = len(X) // len(live)
-        goal, scale, pull, models, log_joint = rows_of(live, rows, X.shape[1])
-
-        def core(U):
-            return core_fields(U, models, log_joint)
+        goal, scale, pull, core = rows_of(live, rows, X.shape[1])
         Z = (X - goal) / scale
         return (core(Z) if pull is None else pull(Z, core)) * scale
     return field
