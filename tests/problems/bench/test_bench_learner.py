@@ -8,6 +8,7 @@ pytest.importorskip("SumOfSquares")
 pytest.importorskip("pyinstrument")
 
 from problems.bench import learner  # noqa: E402
+from problems.bench.profiling import ROOT, _short_path  # noqa: E402
 from problems.bench.timing import timing  # noqa: E402
 
 
@@ -88,3 +89,11 @@ def test_missed_issue_26_targets_get_a_profile_job():
     jobs = learner.scaling_jobs({"goals": goals, "rows": [{"n": 7, "total": 4.0}]})
     assert [j[0].split(" (")[0] for j in jobs] == ["full default CDSP(), synthetic n = 7"]
     assert jobs[0][1].dim == 7 and "warp" not in jobs[0][2]
+
+
+def test_profiles_name_files_from_this_checkout_whichever_its_folder():
+    """A profile's rows name sosdyn's files as sosdyn/... from any checkout (a worktree too), so the
+    inclusive table of sosdyn functions is not empty; installed packages from site-packages/."""
+    assert _short_path(ROOT + "sosdyn/lfd/fit/warp.py") == "sosdyn/lfd/fit/warp.py"
+    assert _short_path("/opt/venv/lib/python3.11/site-packages/numpy/linalg/_linalg.py") == "numpy/linalg/_linalg.py"
+    assert _short_path("/elsewhere/a/b.py") == "b.py"
