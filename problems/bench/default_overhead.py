@@ -2,8 +2,9 @@
 
 On the paper's four LASA shapes, in one process: one warm-up fit (the first fit of a process pays
 one-off costs, imports and first calls, that neither side should carry), then per shape the core
-fit and the default fit, alternately. Reports each time, the sum over shapes and the ratio
-default / core (target: <= 2), and the default's split from ``model.timings_``: ``candidates_s``
+fit and the default fit, alternately. Reports each time (process CPU time, which other processes
+on a shared machine disturb less than the wall clock; the wall times too), the sum over shapes and
+the ratio default / core in CPU time (target: <= 2), and the default's split from ``model.timings_``: ``candidates_s``
 (its three warp candidates: two greedy warp fits and three core fits, one of them the plain core
 itself) and ``choice_s`` (the training rollouts that score them); the floor of the ratio is the
 candidates' core fits, about 3 x the core. ``python -m problems bench --skip ...`` runs it as the
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 from sosdyn.lfd import CDSP, load_lasa
@@ -33,26 +35,30 @@ def run(quick: bool = False, log=print) -> dict:
     rows = []
     for name in shapes:
         demos = load_lasa(name)
-        t0 = now()
+        t0, c0 = now(), time.process_time()
         CDSP(**PLAIN, **small).fit(demos)
-        core = now() - t0
-        t0 = now()
+        core, core_cpu = now() - t0, time.process_time() - c0
+        t0, c0 = now(), time.process_time()
         model = CDSP(**small).fit(demos)
-        default = now() - t0
+        default, default_cpu = now() - t0, time.process_time() - c0
         T = model.timings_
-        rows.append({"shape": name, "core_s": core, "default_s": default, "ratio": default / core,
+        rows.append({"shape": name, "core_s": core_cpu, "default_s": default_cpu, "ratio": default_cpu / core_cpu,
+                     "core_wall_s": core, "default_wall_s": default,
                      "candidates_s": timing(T, "candidates_s", "model.timings_"),
                      "choice_s": timing(T, "choice_s", "model.timings_"), "warp_scores": model.warp_scores_,
                      "kept": min(model.warp_scores_, key=model.warp_scores_.get)})
-        log(f"overhead: {name:17s} core {fmt_s(core):>8s} default {fmt_s(default):>8s} ({default / core:.1f}x; "
-            f"candidates {fmt_s(rows[-1]['candidates_s'])}, choice {fmt_s(rows[-1]['choice_s'])}; kept "
-            f"{rows[-1]['kept']!r})")
+        log(f"overhead: {name:17s} core {fmt_s(core_cpu):>8s} default {fmt_s(default_cpu):>8s} CPU "
+            f"({default_cpu / core_cpu:.1f}x; wall {fmt_s(core)} / {fmt_s(default)}; candidates "
+            f"{fmt_s(rows[-1]['candidates_s'])}, choice {fmt_s(rows[-1]['choice_s'])} wall; kept {rows[-1]['kept']!r})")
     core, default = sum(r["core_s"] for r in rows), sum(r["default_s"] for r in rows)
+    wall = sum(r["core_wall_s"] for r in rows), sum(r["default_wall_s"] for r in rows)
     res = {"shapes": rows, "core_s": core, "default_s": default, "ratio": default / core, "target": TARGET,
-           "met": default / core <= TARGET, "candidates_over_core": sum(r["candidates_s"] for r in rows) / core,
-           "choice_over_core": sum(r["choice_s"] for r in rows) / core}
-    log(f"overhead: sum: core {fmt_s(core)}, default {fmt_s(default)}: {res['ratio']:.2f}x (target <= {TARGET}); "
-        f"candidates {res['candidates_over_core']:.2f}x core, choice {res['choice_over_core']:.2f}x core")
+           "met": default / core <= TARGET, "clock": "process CPU time", "wall_ratio": wall[1] / wall[0],
+           "candidates_over_core": sum(r["candidates_s"] for r in rows) / wall[0],
+           "choice_over_core": sum(r["choice_s"] for r in rows) / wall[0]}
+    log(f"overhead: sum: core {fmt_s(core)}, default {fmt_s(default)} CPU: {res['ratio']:.2f}x (target <= {TARGET}; "
+        f"wall {res['wall_ratio']:.2f}x); candidates {res['candidates_over_core']:.2f}x core, choice "
+        f"{res['choice_over_core']:.2f}x core (wall)")
     return res
 
 

@@ -266,16 +266,30 @@ def scaling_jobs(scaling) -> list:
         wanted.setdefault(g["build_over_solve"]["at_n"], "build <= solve goal")
     jobs = [(f"default core fit, synthetic n = {n} ({why}; {fmt_s(totals[n])} in the scaling run)", synth(n), core)
             for n, why in wanted.items()]
+    if g.get("full_n7", {}).get("met") is False:
+        jobs.append((f"full default CDSP(), synthetic n = 7 (full-default goal; {fmt_s(g['full_n7']['value'])} in the "
+                     "scaling run)", synth(7), dict(n_components=scaling_n.K, random_state=0)))
     if g["cubic_n3"]["met"] is False:
         jobs.append((f"cubic preset, synthetic n = 3 (cubic goal; {fmt_s(g['cubic_n3']['value'])})", synth(3),
                      dict(PRESETS["cubic"], n_components=scaling_n.K, random_state=0)))
     return jobs
 
 
-def run_profiles(fits, targets, backends, quick, scaling=None):
+def overhead_jobs(overhead) -> list:
+    """The profile job (title, demos, params) of the default overhead target if it is missed
+    (:mod:`.default_overhead`): the default fit of the paper shape of largest default / core ratio."""
+    if not overhead or overhead.get("met") is not False:
+        return []
+    worst = max(overhead["shapes"], key=lambda r: r["ratio"])
+    return [(f"default CDSP() on {worst['shape']} (overhead target; {fmt_s(worst['default_s'])} CPU, "
+             f"{worst['ratio']:.1f}x its core fit)", load_lasa(worst["shape"]), {})]
+
+
+def run_profiles(fits, targets, backends, quick, scaling=None, overhead=None):
     """Profile the slowest fit of each variant that misses its target, the n-scaling fits that miss
-    theirs (:func:`scaling_jobs`) and the re-solve path."""
-    jobs = []
+    theirs (:func:`scaling_jobs`), the default fit of the paper shape of largest default / core
+    ratio if the overhead target is missed (:mod:`.default_overhead`) and the re-solve path."""
+    jobs = [] if quick else overhead_jobs(overhead)
     for key, vname in (("linear_fit", "linear+ICA"), ("paper_fit", "paper (metric deg 2, alternating)"),
                        ("cubic_fit", "cubic + metric deg 2")):
         if key in targets and targets[key]["met"] is False and not quick:
@@ -362,7 +376,7 @@ def main(argv=None):
     keep("backends", "backends.json", {"environment": res["environment"], "dynamics_step": res["backends"]})
     res["targets"] = evaluate_targets(res["fits"], res["backends"])
     res["profiles"] = [] if "profiles" in skip else run_profiles(res["fits"], res["targets"], res["backends"],
-                                                                  args.quick, res["scaling_n"])
+                                                                  args.quick, res["scaling_n"], res["overhead"])
     keep("profiles", "profiles.json", {"profiles": res["profiles"]})
     if "predict" not in skip:          # the one-state evaluator against model.predict (predict.json)
         predict.main(["--out", str(out_dir)] + (["--quick"] if args.quick else ["--cubic"]))

@@ -4,6 +4,7 @@ from __future__ import annotations
 import cProfile
 import io
 import pstats
+from pathlib import Path
 
 from .timing import fmt_s, md_table, now
 
@@ -49,8 +50,14 @@ def profile_call(fn, top=15, interval=0.001):
     return result, out
 
 
+ROOT = str(Path(__file__).resolve().parents[2]) + "/"     # this checkout (a worktree is not /work/main)
+
+
 def _short_path(path) -> str:
+    """The file's path from site-packages/ or from the checkout's root (``sosdyn/...``), else its name."""
     path = str(path or "")
+    if path.startswith(ROOT):
+        return path[len(ROOT):]
     for marker in ("site-packages/", "/work/main/"):
         if marker in path:
             return path.split(marker, 1)[1]

@@ -46,6 +46,13 @@ def predict_rows(data: dict) -> list[list[str]]:
              "yes" if r.get("within_target") else "no"] for r in data.get("rows", [])]
 
 
+def predict_headers(data: dict | None) -> tuple:
+    """The table's headings; the last names the target the file was measured against (its ``target_s``)."""
+    if not data or data.get("target_s") is None:
+        return PREDICT_COLUMNS
+    return PREDICT_COLUMNS[:-1] + (f"predictor ≤ {data['target_s'] * 1e6:g} µs",)
+
+
 def render_bench(bench_dir: str | Path) -> Path:
     """Write ``bench_dir/index.html`` from the benchmark outputs in ``bench_dir``."""
     bench_dir = Path(bench_dir)
@@ -65,8 +72,9 @@ def render_bench(bench_dir: str | Path) -> Path:
         sections.append({"id": Path(name).stem, "title": title, "command": command,
                          "html": None if text is None else markdown_html(text)})
     predict = bench_dir / PREDICT_FILE
-    rows = predict_rows(json.loads(predict.read_text(encoding="utf-8"))) if predict.is_file() else None
+    data = json.loads(predict.read_text(encoding="utf-8")) if predict.is_file() else None
+    rows = None if data is None else predict_rows(data)
     raw = sorted(p.name for p in bench_dir.glob("*.json"))
     html = jinja_environment().get_template("bench.html.j2").render(
-        sections=sections, predict={"headers": PREDICT_COLUMNS, "rows": rows}, raw=raw)
+        sections=sections, predict={"headers": predict_headers(data), "rows": rows}, raw=raw)
     return replace_atomically(bench_dir / "index.html", html.encode("utf-8"))

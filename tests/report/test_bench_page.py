@@ -24,6 +24,7 @@ def test_page_from_summary_predict_and_raw_json(tmp_path):
     assert Tables(text).rows["predict-table"] == 2
     assert "<td>254.6 µs</td><td>22.8 µs</td><td>11.1×</td><td>42.1 µs</td><td>1.9e-14</td><td>yes</td>" in text
     assert "<td>61.0 µs</td><td>4.5×</td><td>—</td>" in text and "<td>no</td>" in text
+    assert "<th>predictor ≤ 50 µs</th>" in text                   # the target the file was measured against
     assert '<img src="scaling_K.png" alt="K"' in text            # figures stay next to the page
     assert 'href="#sos"' in text and 'href="sos.md"' not in text  # the two summaries link within the page
     assert "Not run (<code>make bench-sos</code>)" in text          # sos.md is missing

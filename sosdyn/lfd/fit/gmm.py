@@ -8,7 +8,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import logsumexp
 
 from sosdyn.errors import InputError
 
@@ -136,32 +135,65 @@ class PositionMixture:
 
 def responsibilities_of(mixtures: list, blocks: list) -> list[np.ndarray]:
     """:meth:`PositionMixture.responsibilities` of ``mixtures[b]`` at the rows of ``blocks[b]``, for
-    every b, with one log-sum-exp over all rows: the log-joints padded with -inf to the largest K
-    (exact zeros in every sum), so each block's numbers are its mixture's own (at round-off when
-    the K differ: the sums' association may change)."""
+    every b, with one log-sum-exp over all rows (:func:`log_sum_exp`): the log-joints padded with
+    -inf to the largest K (exact zeros in every sum), so each block's numbers are its mixture's own
+    (at round-off when the K differ: the sums' association may change)."""
     L = []
     for mix, X in zip(mixtures, blocks):
         X = np.asarray(X, dtype=float)
         n = mix.means.shape[1]
-        bad = np.flatnonzero(~np.isfinite(X).all(axis=1)) if X.ndim == 2 else []
-        if X.ndim != 2 or X.shape[1] != n or len(bad):
+        if X.ndim != 2 or X.shape[1] != n or not np.isfinite(X).all():
+            bad = np.flatnonzero(~np.isfinite(X).all(axis=1)) if X.ndim == 2 and X.shape[1] == n else []
             what = f"row {bad[0]} = {X[bad[0]]} is not finite" if len(bad) else f"has shape {X.shape}"
             raise InputError(f"responsibilities: X {what}; pass finite states of shape (m, {n}).")
         L.append(mix.log_joint(X))
+    return weights_from(L, mixtures, blocks)
+
+
+def block_log_joint(mixtures: list, rows: int):
+    """``log_joint(X)``: :meth:`PositionMixture.log_joint` of ``mixtures[b]`` at the b-th block of
+    ``rows`` rows of X (all mixtures of one K and n), every block in one pass (each row with its
+    mixture's factors; the same numbers as block by block, checked in the tests)."""
+    each = lambda a: np.repeat(np.array([a(mix) for mix in mixtures]), rows, axis=0)   # noqa: E731
+    inv, means, lognorm = each(lambda m: m.factors()[0]), each(lambda m: m.means), each(lambda m: m.factors()[1])
+
+    def log_joint(X):
+        with np.errstate(over="ignore", invalid="ignore"):
+            z = np.einsum("mkij,mkj->mki", inv, X[:, None, :] - means)
+            return lognorm - 0.5 * np.einsum("mki,mki->mk", z, z)
+    return log_joint
+
+
+def weights_from(L: list, mixtures: list, blocks: list) -> list[np.ndarray]:
+    """:func:`responsibilities_of` from the blocks' log-joints ``L`` (checked finite rows)."""
     K = max(mix.n_components for mix in mixtures)
-    lj = L[0] if len(L) == 1 else np.full((sum(len(lb) for lb in L), K), -np.inf)
-    if len(L) > 1:
-        rows = np.cumsum([0] + [len(lb) for lb in L])
+    if len(L) == 1 or all(lb.shape[1] == K for lb in L):
+        lj = L[0] if len(L) == 1 else np.concatenate(L)
+    else:
+        lj, rows = np.full((sum(len(lb) for lb in L), K), -np.inf), np.cumsum([0] + [len(lb) for lb in L])
         for lb, r in zip(L, rows):
             lj[r:r + len(lb), :lb.shape[1]] = lb
-    far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
-    lj[far] = 0.0
-    h = np.exp(lj - logsumexp(lj, axis=1, keepdims=True))
+    far = None if np.isfinite(lj).all() else ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
+    if far is not None:
+        lj[far] = 0.0
+    h = np.exp(lj - log_sum_exp(lj))
     out, start = [], 0
     for mix, X, lb in zip(mixtures, blocks, L):
-        hb, fb = h[start:start + len(lb), :mix.n_components], far[start:start + len(lb)]
-        if fb.any():
+        hb = h[start:start + len(lb), :mix.n_components]
+        fb = None if far is None else far[start:start + len(lb)]
+        if fb is not None and fb.any():
             hb[fb] = np.eye(mix.n_components)[np.argmin(mix.log_mahalanobis(np.asarray(X, float)[fb]), axis=1)]
         out.append(hb)
         start += len(lb)
     return out
+
+
+def log_sum_exp(A: np.ndarray) -> np.ndarray:
+    """log sum_k exp(a_k) of every row of A (N, K) with a finite maximum, as a column (N, 1): with
+    M = max_k a_k attained c times, log1p(s / c) + log c + M, s = sum over the other entries of
+    exp(a_k - M) (scipy.special.logsumexp's formula, operation for operation: the same numbers)."""
+    top = A.max(axis=1, keepdims=True)
+    at_top = A == top
+    c = at_top.sum(axis=1, keepdims=True, dtype=A.dtype)
+    s = np.exp(np.where(at_top, -np.inf, A) - top).sum(axis=1, keepdims=True, dtype=A.dtype)
+    return np.log1p(np.where(s == 0, s, s / c)) + np.log(c) + top

@@ -32,15 +32,17 @@ from dataclasses import replace
 import numpy as np
 
 from sosdyn.errors import InputError, NotCertifiedError
+from sosdyn.poly import monomial_values
 from ..data.demonstrations import Demonstrations, sample_step
 from .certificate import CertificateReport, certify, check_certificate, collapse_diagnostic, extract_certificate
 from .contraction import eval_fields, field_exponents, metric_exponents
 from .corrective import score_steps
-from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm, gmr_cost, responsibilities_of
+from .gmm import (MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, fit_joint_gmm, gmr_cost,
+                  responsibilities_of, weights_from)
 from .learner import History, Settings, learn, subsample
 from .params import resolve_seed, warp_settings
 from .rounds import corrective_fits, warp_choice
-from .warp import AUTO_WARPS, check_warp, fit_warp, jacobian, pulled_back, stacked_maps
+from .warp import AUTO_WARPS, check_warp, fit_warp, jacobian, pull_back, pulled_back, stacked_maps
 
 
 class Fit:
@@ -192,14 +194,38 @@ def warped_data(Z, Zdot, warp):
 
 def core_field(U, mixture: PositionMixture, C, fexps):
     """udot = sum_k h_k(u) f_k(u) at the rows of U (the certified system)."""
-    return core_fields([U], [(mixture, C, fexps)])[0]
+    return core_fields(U, [(mixture, C, fexps)])
 
 
-def core_fields(blocks: list, models: list) -> list:
-    """:func:`core_field` of ``models[b]`` = (mixture, C, fexps) at the rows of ``blocks[b]``, the
-    weights of all blocks in one pass (:func:`~.gmm.responsibilities_of`)."""
+def core_fields(U, models: list) -> np.ndarray:
+    """:func:`core_field` of ``models[b]`` = (mixture, C, fexps) at the b-th of len(models) equal
+    blocks of rows of U, the weights of all blocks in one pass (:func:`~.gmm.responsibilities_of`)."""
+    rows = len(U) // len(models)
+    blocks = [U[b * rows:(b + 1) * rows] for b in range(len(models))]
     H = responsibilities_of([mix for mix, _, _ in models], blocks)
-    return [np.einsum("tk,tki->ti", h, eval_fields(C, fexps, U)) for h, U, (_, C, fexps) in zip(H, blocks, models)]
+    return np.vstack([np.einsum("tk,tki->ti", h, eval_fields(C, fexps, Ub))
+                      for h, Ub, (_, C, fexps) in zip(H, blocks, models)])
+
+
+def block_core(models: list, rows: int):
+    """``core(U)``: :func:`core_fields` of ``models`` on blocks of ``rows`` rows, prepared once for
+    many calls: when the models share K, n and the monomials, every row carries its model's
+    mixture factors (:func:`~.gmm.block_log_joint`) and coefficients, so the log-joints, the fields
+    and their weighted sum are one pass each over all rows (the same numbers as block by block)."""
+    mixtures, fexps = [mix for mix, _, _ in models], models[0][2]
+    if len({(mix.n_components, mix.means.shape[1]) for mix in mixtures}) > 1 or \
+            not all(np.array_equal(f, fexps) for _, _, f in models):
+        return lambda U: core_fields(U, models)
+    log_joint, C = block_log_joint(mixtures, rows), np.repeat(np.array([C for _, C, _ in models]), rows, axis=0)
+
+    def core(U):
+        if not np.isfinite(U).all():
+            return core_fields(U, models)           # responsibilities_of's InputError names the row
+        L = log_joint(U)
+        H = np.concatenate(weights_from([L[b * rows:(b + 1) * rows] for b in range(len(models))], mixtures,
+                                        [U[b * rows:(b + 1) * rows] for b in range(len(models))]))
+        return np.einsum("tk,tki->ti", H, np.einsum("tkij,tj->tki", C, monomial_values(U, fexps)))
+    return core
 
 
 def field_at(X, goal, scale, mixture, C, fexps, warp):
@@ -213,26 +239,25 @@ def field_at(X, goal, scale, mixture, C, fexps, warp):
 def block_field(fits: list):
     """``field(X, live)``: fit b's field (:func:`field_at`, at its own goal) on the b-th block of
     equal consecutive rows of X, for b in ``live``; the blocks' warps evaluated together
-    (:func:`~.warp.stacked_maps`): the same numbers as each fit's field on its block."""
-    stacked = {}                    # per set of live blocks: (goal, scale, maps) of their rows
+    (:func:`~.warp.stacked_maps`, prepared once per set of live blocks by :func:`~.warp.pull_back`):
+    the same numbers as each fit's field on its block."""
+    stacked = {}                    # per set of live blocks: (goal, scale, pull-back or None, core) of their rows
 
     def rows_of(live, rows, n):
         key = (tuple(live), rows)
         if key not in stacked:
             each = lambda a: np.repeat(np.array([a(fits[b]) for b in live], dtype=float), rows, axis=0)  # noqa: E731
-            stacked[key] = (each(lambda f: f.goal_), each(lambda f: f.scale_)[:, None], stacked_maps(
-                [None if fits[b].warp_ is None else maps_of(fits[b].warp_) for b in live], rows, n))
+            maps = stacked_maps([None if fits[b].warp_ is None else maps_of(fits[b].warp_) for b in live], rows, n)
+            stacked[key] = (each(lambda f: f.goal_), each(lambda f: f.scale_)[:, None],
+                            None if maps is None else pull_back(maps, rows * len(live)),
+                            block_core([(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live], rows))
         return stacked[key]
 
     def field(X, live):
         rows = len(X) // len(live)
-        goal, scale, maps = rows_of(live, rows, X.shape[1])
-
-        def core(U):
-            return np.vstack(core_fields([U[k * rows:(k + 1) * rows] for k in range(len(live))],
-                                         [(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live]))
+        goal, scale, pull, core = rows_of(live, rows, X.shape[1])
         Z = (X - goal) / scale
-        return (core(Z) if maps is None else pulled_back(Z, maps, core)) * scale
+        return (core(Z) if pull is None else pull(Z, core)) * scale
     return field
 
 

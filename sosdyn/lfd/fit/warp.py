@@ -240,25 +240,44 @@ def pulled_back(Z: np.ndarray, maps, field) -> np.ndarray:
     (1 + g_j.v_j) (Sherman-Morrison; 1 + g_j.v_j >= 1 - l_j > 0): forward u_{j+1} = u_j + (rho_j(u_j) -
     rho_j(0)) v_j, kept as u_j = w_j - s_j with w_{j+1} = w_j + rho_j v_j and the constant s_j = sum_{i<j}
     rho_i(0) v_i folded into the centres; back, from y = f(phi(z)), y <- y - v_j (g_j.y) / (1 + g_j.v_j) for
-    j = m..1 (one pass of O(m n) per row, no n x n solve). The maps' arrays may also be per row, (m, k, n), (m, k, n), (m, k): each row its own warp (:func:`stacked_maps`)."""
+    j = m..1 (one pass of O(m n) per row, no n x n solve). The maps' arrays may also be per row, (m, k, n),
+    (m, k, n), (m, k): each row its own warp (:func:`stacked_maps`). :func:`pull_back` prepares it for
+    many calls with k rows."""
+    return pull_back(maps, np.shape(Z)[0])(Z, field)
+
+
+def pull_back(maps, k: int):
+    """``pull(Z, field)``: :func:`pulled_back` (the same operations, the same numbers) for Z of k rows,
+    everything that does not depend on Z computed once and every step's array made once (a rollout
+    calls it once per Euler step: its cost is numpy's per-call overhead, about 9 calls per map)."""
     C, V, S = (np.asarray(a, dtype=float) for a in maps)
-    m, (k, n) = len(S), np.shape(Z)
-    V = np.broadcast_to(V[:, None, :] if V.ndim == 2 else V, (m, k, n))
+    m, n = len(S), np.shape(C)[-1]
+    V = np.ascontiguousarray(np.broadcast_to(V[:, None, :] if V.ndim == 2 else V, (m, k, n)))
     C = np.broadcast_to(C[:, None, :] if C.ndim == 2 else C, (m, k, n))
     S2 = np.broadcast_to(S[:, None] ** 2 if S.ndim == 1 else S ** 2, (m, k))
     shift = np.cumsum(np.exp(-np.sum(C ** 2, axis=-1) / S2)[..., None] * V, axis=0)   # s_{j+1}
     centres = C + np.concatenate([np.zeros((1, k, n)), shift[:-1]])                     # c_j + s_j
-    D, R, W, nS2 = np.empty((m, k, n)), np.empty((m, k, 1)), np.array(Z, dtype=float), -S2[..., None]
-    for j in range(m):
-        np.subtract(W, centres[j], out=D[j])                                            # u_j - c_j
-        np.exp(np.vecdot(D[j], D[j])[:, None] / nS2[j], out=R[j])                       # rho_j(u_j)
-        W += R[j] * V[j]
-    F = np.array(field(W - shift[-1] if m else W), dtype=float)
-    G = (-2.0 / S2[..., None]) * R * D                                                   # g_j
-    Vd = V / (1.0 + np.vecdot(G, V))[..., None]                                         # v_j / (1 + g_j.v_j)
-    for j in range(m - 1, -1, -1):
-        F -= np.vecdot(G[j], F)[:, None] * Vd[j]
-    return F
+    nS2, g2 = -S2[..., None], -2.0 / S2[..., None]
+    D, R, G, Vd = np.empty((m, k, n)), np.empty((m, k, 1)), np.empty((m, k, n)), np.empty((m, k, n))
+    q, tmp, gv = np.empty(k), np.empty((k, n)), np.empty((m, k))
+    per_map = list(zip(D, R, centres, nS2, V))
+    back = list(zip(G, Vd))[::-1]
+    q1 = q[:, None]
+
+    def pull(Z, field):
+        W = np.array(Z, dtype=float)
+        for Dj, Rj, cj, nS2j, Vj in per_map:
+            np.subtract(W, cj, out=Dj)                                                   # u_j - c_j
+            np.vecdot(Dj, Dj, out=q)
+            np.exp(np.divide(q1, nS2j, out=Rj), out=Rj)                                  # rho_j(u_j)
+            W += np.multiply(Rj, Vj, out=tmp)
+        F = np.array(field(W - shift[-1] if m else W), dtype=float)
+        np.multiply(np.multiply(g2, R, out=G), D, out=G)                                 # g_j
+        np.divide(V, np.add(1.0, np.vecdot(G, V, out=gv), out=gv)[..., None], out=Vd)   # v_j / (1 + g_j.v_j)
+        for Gj, Vdj in back:
+            F -= np.multiply(np.vecdot(Gj, F, out=q)[:, None], Vdj, out=tmp)
+        return F
+    return pull
 
 
 def stacked_maps(maps: list, rows: int, n: int):
@@ -299,4 +318,4 @@ def check_warp(maps, n_samples: int, seed: int) -> dict:
 __all__ = ["AUTO_WARPS", "BOUND_TOL", "CHECK_BOX", "LIP_FACTOR", "MATCHES", "MAX_MAPS", "MIN_CONDITION", "SIGMA_GRID",
            "TARGETS", "WARP_DEFAULTS",
            "apply", "arc_fraction", "bumps_at", "check_maps", "check_warp", "fit_maps", "fit_warp", "invert",
-           "jacobian", "line_targets", "lipschitz_numbers", "pulled_back", "radial_targets", "stacked_maps"]
+           "jacobian", "line_targets", "lipschitz_numbers", "pull_back", "pulled_back", "radial_targets", "stacked_maps"]

@@ -60,35 +60,38 @@ def euler_blocks_until_rest(field: Callable[[np.ndarray, list], np.ndarray], sta
     size = m // blocks
     out = np.empty((max(max_steps - 1, window), m, n))
     done: list = [None] * blocks
-    quiet, i = np.zeros(blocks, dtype=int), 0     # steps in a row with every |v| < vel_tol (per block); step
+    quiet, i = [0] * blocks, 0                    # steps in a row with every |v| < vel_tol (per block); step
     rows_of = {}                                  # the live blocks' rows, by their number (the set only shrinks)
     while True:
         i += 1
         live = [b for b in range(blocks) if done[b] is None]
-        if len(live) not in rows_of:
-            rows_of[len(live)] = np.concatenate([np.arange(b * size, (b + 1) * size) for b in live])
+        if len(live) not in rows_of:              # all blocks live: a slice
+            rows_of[len(live)] = slice(None) if len(live) == blocks else \
+                np.concatenate([np.arange(b * size, (b + 1) * size) for b in live])
         rows = rows_of[len(live)]
         out[i - 1, rows] = X[rows]
-        V = np.asarray(field(X[rows], live), dtype=float)
-        if V.shape != (len(rows), n):
-            raise InputError(f"The field returned shape {V.shape} for X of shape {(len(rows), n)}; "
+        V = np.asarray(field(X[rows].copy() if len(live) == blocks else X[rows], live), dtype=float)
+        if V.shape != (len(live) * size, n):
+            raise InputError(f"The field returned shape {V.shape} for X of shape {(len(live) * size, n)}; "
                              "expected the same shape.")
+        Vb = V.reshape(len(live), size, n)
+        finite = np.isfinite(Vb).all(axis=(1, 2)).tolist()
+        calm = (np.abs(Vb) < vel_tol).all(axis=(1, 2)).tolist()
         for k, b in enumerate(live):
-            Vb = V[k * size:(k + 1) * size]
-            if not np.all(np.isfinite(Vb)):
-                bad = int(np.flatnonzero(~np.isfinite(Vb).all(axis=1))[0])
+            if not finite[k]:
+                bad = int(np.flatnonzero(~np.isfinite(Vb[k]).all(axis=1))[0])
                 done[b] = SolverError(f"The reproduction from start {bad} diverged: the field returned NaN/inf "
                                       f"at step {i}.", hint="check the model's stability, or lower dt.")
                 continue
-            quiet[b] = quiet[b] + 1 if np.all(np.abs(Vb) < vel_tol) else 0
+            quiet[b] = quiet[b] + 1 if calm[k] else 0
             if i >= window and (quiet[b] >= window or i >= max_steps - 1):
                 done[b] = [out[:i, s].copy() for s in range(b * size, (b + 1) * size)]
         with np.errstate(over="ignore", invalid="ignore"):
             X[rows] = X[rows] + dt * V
+        finite = np.isfinite(X.reshape(blocks, size, n)).all(axis=(1, 2)).tolist()
         for b in range(blocks):
-            Xb = X[b * size:(b + 1) * size]
-            if done[b] is None and not np.all(np.isfinite(Xb)):
-                bad = int(np.flatnonzero(~np.isfinite(Xb).all(axis=1))[0])
+            if done[b] is None and not finite[b]:
+                bad = int(np.flatnonzero(~np.isfinite(X[b * size:(b + 1) * size]).all(axis=1))[0])
                 done[b] = SolverError(f"The reproduction from start {bad} diverged: its state is NaN/inf at "
                                       f"step {i + 1}.", hint="check the model's stability, or lower dt.")
         if all(d is not None for d in done):

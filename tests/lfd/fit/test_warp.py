@@ -27,6 +27,7 @@ from sosdyn.lfd.fit.warp import (
     jacobian,
     line_targets,
     lipschitz_numbers,
+    pull_back,
     pulled_back,
     radial_targets,
     stacked_maps,
@@ -150,6 +151,22 @@ def test_per_row_maps_are_each_rows_own_warp():
     U, J = jacobian(Z[:2], C1, V1, S1, np.zeros(2))
     np.testing.assert_allclose(both[:2], np.linalg.solve(J, f(U)[:, :, None])[:, :, 0], rtol=1e-13, atol=1e-15)
     assert stacked_maps([None, None], 3, 2) is None
+
+
+def test_a_prepared_pull_back_called_again_gives_a_fresh_calls_numbers():
+    """pull_back reuses its arrays from call to call (an Euler rollout calls it every step): a second
+    and third call on other states give, bit for bit, what a fresh pulled_back gives, and the first
+    result is not overwritten; the identity of a warp with no maps is the field itself."""
+    C, V, S, _ = random_maps(7, 3)
+    f = lambda U: np.column_stack([-U[:, 0] + U[:, 1] ** 2, -2 * U[:, 1]])    # noqa: E731
+    pull = pull_back((C, V, S), 5)
+    rng = np.random.default_rng(9)
+    Z1, Z2 = rng.uniform(-1, 1, (5, 2)), rng.uniform(-1, 1, (5, 2))
+    first = pull(Z1, f)
+    kept = first.copy()
+    assert np.array_equal(pull(Z2, f), pulled_back(Z2, (C, V, S), f))
+    assert np.array_equal(pull(Z1, f), kept) and np.array_equal(first, kept)
+    assert np.array_equal(pull_back((C[:0], V[:0], S[:0]), 5)(Z1, f), f(Z1))
 
 
 CDSP_SMALL = {"n_components": 3, "max_samples": 300, "verify_samples": 500}

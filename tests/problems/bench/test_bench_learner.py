@@ -8,6 +8,7 @@ pytest.importorskip("SumOfSquares")
 pytest.importorskip("pyinstrument")
 
 from problems.bench import learner  # noqa: E402
+from problems.bench.profiling import ROOT, _short_path  # noqa: E402
 from problems.bench.timing import timing  # noqa: E402
 
 
@@ -73,3 +74,26 @@ def test_a_partial_run_leaves_the_skipped_parts_files_alone(tmp_path):
     parts = "shapes,sweeps,scaling_n,backends,profiles,predict,overhead"
     assert learner.main(["--quick", "--skip", parts, "--out", str(tmp_path)]) == 0
     assert {name: (tmp_path / name).read_text() for name in before} == before
+
+
+def test_missed_issue_26_targets_get_a_profile_job():
+    """The default-overhead target and the full default at n = 7, when missed, each get a profile job
+    (the fit that misses it); met or not measured: none."""
+    over = {"met": False, "shapes": [{"shape": "Leaf_2", "ratio": 4.0, "default_s": 1.2},
+                                     {"shape": "Leaf_1", "ratio": 6.5, "default_s": 1.9}]}
+    (title, demos, params), = learner.overhead_jobs(over)
+    assert "Leaf_1" in title and demos.name == "Leaf_1" and params == {}
+    assert learner.overhead_jobs(dict(over, met=True)) == [] and learner.overhead_jobs(None) == []
+    goals = {"ratio": {"met": True}, "build_over_solve": {"met": True}, "cubic_n3": {"met": True},
+             "full_n7": {"met": False, "value": 12.5}}
+    jobs = learner.scaling_jobs({"goals": goals, "rows": [{"n": 7, "total": 4.0}]})
+    assert [j[0].split(" (")[0] for j in jobs] == ["full default CDSP(), synthetic n = 7"]
+    assert jobs[0][1].dim == 7 and "warp" not in jobs[0][2]
+
+
+def test_profiles_name_files_from_this_checkout_whichever_its_folder():
+    """A profile's rows name sosdyn's files as sosdyn/... from any checkout (a worktree too), so the
+    inclusive table of sosdyn functions is not empty; installed packages from site-packages/."""
+    assert _short_path(ROOT + "sosdyn/lfd/fit/warp.py") == "sosdyn/lfd/fit/warp.py"
+    assert _short_path("/opt/venv/lib/python3.11/site-packages/numpy/linalg/_linalg.py") == "numpy/linalg/_linalg.py"
+    assert _short_path("/elsewhere/a/b.py") == "b.py"
