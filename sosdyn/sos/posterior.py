@@ -46,20 +46,27 @@ from .sets import BasicSet, variable_bounds
 from .verification import fp_error, gram_structure
 
 EPS = np.finfo(float).eps
+FACES = (1e-9, 1e-7, 1e-5)     # relative Gram diagonals below which a row is off the face (face_masks)
 _HINT = "rescale the variables so the minimiser is near the unit box, or a set K that bounds the variables"
 
 
-def constant_shift(A, k0: int, tau: float) -> float:
-    """Smallest delta >= 0 with lambda_min(A + delta e_k0 e_k0^T) >= tau (checked), or inf.
-
-    With A' = A without row/column k0 and b = A[others, k0]: PSD iff A' - tau I > 0 and
-    a_00 + delta - tau >= b^T (A' - tau I)^{-1} b (Schur complement)."""
+def constant_need(A, k0: int, tau: float) -> float:
+    """The signed number c with lambda_min(A + d e_k0 e_k0^T) >= tau iff d >= c (up to rounding),
+    or inf when no d works. With A' = A without row/column k0 and b = A[others, k0]: PSD iff
+    A' - tau I > 0 and a_00 + d - tau >= b^T (A' - tau I)^{-1} b (Schur complement)."""
     rest = np.delete(np.arange(A.shape[0]), k0)
     Ar = A[np.ix_(rest, rest)] - tau * np.eye(rest.size)
     if rest.size and np.linalg.eigvalsh(Ar)[0] <= fp_error(A):
         return np.inf
     b = A[rest, k0]
-    need = tau - A[k0, k0] + (float(b @ np.linalg.solve(Ar, b)) if rest.size else 0.0)
+    return tau - A[k0, k0] + (float(b @ np.linalg.solve(Ar, b)) if rest.size else 0.0)
+
+
+def constant_shift(A, k0: int, tau: float, need: float | None = None) -> float:
+    """Smallest delta >= 0 with lambda_min(A + delta e_k0 e_k0^T) >= tau (checked), or inf."""
+    need = constant_need(A, k0, tau) if need is None else need
+    if not np.isfinite(need):
+        return np.inf
     delta = max(0.0, need)
     step = tau + 1e-12 * (delta + abs(A[k0, k0]))
     for _ in range(64):                    # the solve's own rounding: confirm, grow if needed
@@ -69,6 +76,27 @@ def constant_shift(A, k0: int, tau: float) -> float:
             return delta
         delta, step = delta + step, 2.0 * step
     return np.inf
+
+
+def shared_constant(As, zeros, taus) -> float:
+    """delta = sum_k c_k with every lambda_min(A_k + c_k e_0 e_0^T) >= tau_k (checked): the blocks
+    share the constant monomial, so a block with room (c_k < 0: its Schur complement exceeds
+    tau_k) gives up to half of it to the blocks that need a raise; inf if a block cannot be
+    made PSD by its constant."""
+    needs = [constant_need(A, k0, tau) for A, k0, tau in zip(As, zeros, taus)]
+    if not all(np.isfinite(needs)):
+        return np.inf
+    raise_ = sum(constant_shift(A, k0, tau, c) for A, k0, tau, c in zip(As, zeros, taus, needs) if c > 0)
+    room = -sum(c for c in needs if c < 0)
+    take = min(raise_, room / 2)
+    given = 0.0
+    for A, k0, tau, c in zip(As, zeros, taus, needs):
+        if c < 0 and take > 0:
+            low = take * (-c) / room
+            B = A.copy()
+            B[k0, k0] -= low
+            given += low if np.linalg.eigvalsh(B)[0] >= tau else 0.0
+    return max(0.0, raise_ - given) + 1e-12 * raise_
 
 
 def multiplier_shift(con, at):
@@ -117,22 +145,64 @@ def safe_shift(solution, con) -> float:
         r = Polynomial(vars, np.zeros((1, len(vars)), dtype=np.int64), [0.0])
     Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
     st = gram_structure(r.exps, con.basis.exps)
-    size = st.in_gram.size
-    e = np.bincount(st.p_at, weights=r.coef[:, 0], minlength=size) \
-        - np.bincount(st.pair_at, weights=Q.ravel(), minlength=size)
-    zero = np.flatnonzero(~con.basis.exps.any(axis=1))
-    n = np.bincount(st.pair_at, minlength=size)
-    A = Q + (np.where(st.in_gram, e, 0.0) / np.maximum(n, 1))[st.pair_at].reshape(Q.shape)
-    terms = p.coef.shape[1] + Q.size + 8
-    tau = terms * EPS * (mag + adj_mag + float(np.abs(Q).sum())) + fp_error(A)
-    off = ~st.in_gram & (e != 0.0)
-    delta = np.inf if off.any() or not zero.size else constant_shift(A, int(zero[0]), tau)
+    rounding = (p.coef.shape[1] + Q.size + 8) * EPS * (mag + adj_mag + float(np.abs(Q).sum()))
     K = constraint_set(con)
-    if K.ineqs or K.eqs:
-        R = variable_bounds(K, vars)
-        U = _union_exps(r.exps, con.basis.exps, st)
-        delta = min(delta, compact_shift(A, tau, con.basis.exps, U[off], e[off], R))
-    return _checked(delta, con)
+    R = variable_bounds(K, vars) if K.ineqs or K.eqs else None
+    U = _union_exps(r.exps, con.basis.exps, st) if R is not None else None
+    compact = None if R is None else lambda A, kept, off, e: compact_shift(  # noqa: E731
+        A, rounding + fp_error(A), con.basis.exps[kept], U[off], e[off], R)
+    at_one = np.zeros(st.in_gram.size)                   # the whole rounding bound on one monomial:
+    at_one[st.pair_at[0]] = rounding                     # one block, so tau = rounding as before
+    return _checked(face_shift(r.coef[:, 0], st, [Q], [con.basis.exps], at_one, compact), con)
+
+
+def face_masks(Qs):
+    """Kept-row masks of every block, one list per face tried: the whole basis, then the rows
+    whose diagonal exceeds rel x the block's largest (rel in FACES) -- the face the solver's
+    point lies on (monomials whose square p cannot produce have a zero diagonal in every exact
+    certificate, and a negative eigenvalue there would multiply an unbounded |z_j|^2)."""
+    yield [np.ones(Q.shape[0], dtype=bool) for Q in Qs]
+    for rel in FACES:
+        yield [np.diag(Q) > rel * max(float(np.diag(Q).max(initial=0.0)), 0.0) for Q in Qs]
+
+
+def face_shift(p_coef, st, Qs, basis_exps, r, compact=None) -> float:
+    """min over the faces of :func:`face_masks` of sum_k delta_k (module docstring, steps 2-3) for
+    p - gamma = sum_k z_k^T Q_k z_k + e over the blocks Qs: rows off the face are set to zero
+    (their products join the residual e), e_a is split over the kept pairs of the first block
+    with a kept pair producing x^a, and delta_k is the smallest with lambda_min(A_k + delta_k
+    e_0 e_0^T) >= tau_k on block k's kept rows (:func:`shared_constant`), tau_k = the rounding
+    bounds ``r`` (|rho_a| <= r_a) of the monomials block k owns + its eigenvalue error: each owned
+    |x^a| <= |z_k|^2, so sum_k tau_k |z_k|^2 >= sum_a |rho_a| |x^a|.
+    A residual monomial no kept pair produces leaves only ``compact(A, kept, off, e)`` (one
+    block; inf without). Every face gives an exact identity, so each delta is safe; the
+    smallest is returned."""
+    sizes = np.array([Q.shape[0] for Q in Qs], dtype=np.int64)
+    owner = np.repeat(np.arange(len(Qs)), sizes ** 2)
+    size = st.in_gram.size
+    base = np.bincount(st.p_at, weights=p_coef, minlength=size)
+    best = np.inf
+    for kept in face_masks(Qs):
+        pair_kept = np.concatenate([np.outer(k, k).ravel() for k in kept])
+        vals = np.concatenate([Q.ravel() for Q in Qs])
+        e = base - np.bincount(st.pair_at, weights=np.where(pair_kept, vals, 0.0), minlength=size)
+        first = np.full(size, len(Qs), dtype=np.int64)
+        np.minimum.at(first, st.pair_at[pair_kept], owner[pair_kept])
+        own = pair_kept & (owner == first[st.pair_at])
+        n = np.bincount(st.pair_at[own], minlength=size)
+        E = np.where(own, e[st.pair_at] / np.maximum(n[st.pair_at], 1), 0.0)
+        off = (e != 0.0) & (n == 0)
+        starts = np.cumsum(np.concatenate([[0], sizes ** 2]))
+        As = [(Q + E[s0:s0 + Q.size].reshape(Q.shape))[np.ix_(k, k)] for Q, k, s0 in zip(Qs, kept, starts)]
+        zeros = [np.flatnonzero(~B[k].any(axis=1))[:1] for k, B in zip(kept, basis_exps)]
+        owned = np.bincount(first, weights=r, minlength=len(Qs) + 1)
+        delta = np.inf if off.any() or not all(z.size for z in zeros) else shared_constant(
+            As, [int(z[0]) for z in zeros], [owned[k] + fp_error(A) for k, A in enumerate(As)])
+        A = As[0]
+        if compact is not None:
+            delta = min(delta, compact(A, kept[0], off, e))
+        best = min(best, delta)
+    return best
 
 
 def _checked(delta: float, con) -> float:
@@ -146,34 +216,20 @@ def _checked(delta: float, con) -> float:
 
 def block_shift(con, at) -> float:
     """:func:`safe_shift` for p - gamma = sum_k z_k^T Q_k z_k over several Gram blocks (each
-    clique's basis holds 1): the residual e_a joins its first producing block k (E_k, as
-    :func:`~.verification.residual_gram_norms`), and delta = sum_k delta_k with delta_k the
-    smallest making Q_k + E_k + delta_k e_0 e_0^T >= tau; every x^a of block k has |x^a| <=
-    |z_k|^2, so f - (gamma - delta) >= sum_k tau |z_k|^2 - sum_a |rho_a| |x^a| >= 0 on R^n. Only
-    for plain SOS (no Putinar multipliers: inf, so the caller refuses)."""
+    clique's basis holds 1; :func:`face_shift`): the rounding of monomial a is bounded by
+    r_a = (terms summed + 8) eps sum |terms| (p's, then the products z_j z_k Q_jk giving x^a),
+    each block's tau from the monomials it owns. Only for plain SOS (no Putinar multipliers:
+    inf, so the caller refuses)."""
     if any(m.psd.role != "clique" for m in con.multipliers) or con.eq_multipliers:
         return np.inf
     coef, st, Qs, _ = con.identity_values(at)
     p = con.p
-    e = np.bincount(st.p_at, weights=coef, minlength=st.in_gram.size) - np.bincount(
-        st.pair_at, weights=np.concatenate([Q.ravel() for Q in Qs]), minlength=st.in_gram.size)
-    if np.any(~st.in_gram & (e != 0.0)):
-        return np.inf
-    sizes = np.array([Q.shape[0] for Q in Qs], dtype=np.int64)
-    own = np.repeat(np.arange(len(Qs)), sizes ** 2) == st.first_block[st.pair_at]
-    n = np.bincount(st.pair_at[own], minlength=e.size)
-    E = np.where(own, e[st.pair_at] / np.maximum(n[st.pair_at], 1), 0.0)
-    mag = float(np.abs(p.coef[:, 0]).sum() + (np.abs(p.coef[:, 1:]) @ np.abs(at(p.ids))).sum())
-    rounding = (p.coef.shape[1] + int(np.sum(sizes ** 2)) + 8) * EPS * (mag + sum(float(np.abs(Q).sum()) for Q in Qs))
-    delta, start = 0.0, 0
-    for (basis, _), Q in zip(con.gram_blocks, Qs):
-        A = Q + E[start:start + Q.size].reshape(Q.shape)
-        start += Q.size
-        zero = np.flatnonzero(~basis.exps.any(axis=1))
-        if not zero.size:
-            return np.inf
-        delta += constant_shift(A, int(zero[0]), rounding + fp_error(A))
-    return delta
+    size = st.in_gram.size
+    mag = np.bincount(st.p_at, weights=np.abs(p.coef[:, 0]) + np.abs(p.coef[:, 1:]) @ np.abs(at(p.ids)),
+                      minlength=size) + np.bincount(st.pair_at, weights=np.abs(np.concatenate(
+                          [Q.ravel() for Q in Qs])), minlength=size)
+    terms = p.coef.shape[1] + int(np.bincount(st.pair_at, minlength=size).max(initial=0)) + 8
+    return face_shift(coef, st, Qs, [basis.exps for basis, _ in con.gram_blocks], terms * EPS * mag)
 
 
 def constraint_set(con) -> BasicSet:
@@ -200,12 +256,13 @@ def bound_pattern(program):
         return None
     hits = []
     for con in program.sos_constraints:
-        col = np.flatnonzero(con.poly.ids == t)
+        poly = con.p if hasattr(con, "identity_values") else con.poly   # sparse: p, not p - sum sigma_k
+        col = np.flatnonzero(poly.ids == t)
         if not col.size:
             continue
-        coefs = con.poly.coef[:, 1 + col[0]]
+        coefs = poly.coef[:, 1 + col[0]]
         rows = np.flatnonzero(coefs)
-        if rows.size != 1 or con.poly.exps[rows[0]].any() or coefs[rows[0]] >= 0:
+        if rows.size != 1 or poly.exps[rows[0]].any() or coefs[rows[0]] >= 0:
             return None
         hits.append((con, -float(coefs[rows[0]])))
     if len(hits) != 1:
