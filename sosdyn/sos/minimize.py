@@ -29,7 +29,7 @@ class LowerBound:
     """A verified lower bound ``value`` <= min f on the set, with its program and certificate.
 
     ``value`` is ``solution.objective``: the independently checked gamma lowered by the
-    posterior correction (:func:`~.posterior.safe_objective`), or with ``rigorous=True`` the
+    posterior correction (:func:`~.posterior.safe_point`), or with ``rigorous=True`` the
     bound proven in exact arithmetic; ``solver_value`` the solver's gamma.
     """
 

@@ -26,10 +26,10 @@ a second delta also holds: f - gamma >= (lambda_min(A) - tau) |z|^2 - sum_{a off
 (sup_K |z|^2 <= sum_j R^{2 z_j}); the smaller of the two is used. K is read from the
 constraint itself (the constraints of its multipliers, :func:`constraint_set`).
 
-:func:`safe_objective` applies this to any program of the form "maximize c t s.t. t enters
-one SOS constraint only as -a t in its constant term" (:func:`bound_pattern`), which is what
-``Solution.objective`` returns for it -- ``minimize_on`` and hand-written bound programs
-alike. When neither exists (A's
+:func:`safe_point` applies this to any program of the form "maximize c t s.t. t enters
+one SOS constraint only as -a t in its constant term" (:func:`bound_pattern`): t lowered by
+delta / a is what ``Solution.objective`` and ``Solution.value(t)`` return for it --
+``minimize_on`` and hand-written bound programs alike. When neither exists (A's
 negative direction avoids the constant, or e has a monomial outside z z^T, on an unbounded
 set), no number is returned: UnverifiedSolutionError.
 """
@@ -39,7 +39,7 @@ import numpy as np
 
 from ..errors import UnverifiedSolutionError
 from ..poly import Polynomial
-from .conic import positions
+from .conic import objective_value, positions
 from .gram import svec_to_matrix
 from .objective import affine_rows
 from .sets import BasicSet, variable_bounds
@@ -156,14 +156,18 @@ def safe_shift(solution, con) -> float:
     return _checked(face_shift(r.coef[:, 0], st, [Q], [con.basis.exps], at_one, compact), con)
 
 
-def face_masks(Qs):
+def face_masks(Qs, zeros):
     """Kept-row masks of every block, one list per face tried: the whole basis, then the rows
-    whose diagonal exceeds rel x the block's largest (rel in FACES) -- the face the solver's
-    point lies on (monomials whose square p cannot produce have a zero diagonal in every exact
-    certificate, and a negative eigenvalue there would multiply an unbounded |z_j|^2)."""
+    whose diagonal exceeds rel x the block's largest (rel in FACES), the constant monomial (row
+    ``zeros[k]``) always kept -- the face the solver's point lies on (monomials whose square p
+    cannot produce have a zero diagonal in every exact certificate, and a negative eigenvalue
+    there would multiply an unbounded |z_j|^2)."""
     yield [np.ones(Q.shape[0], dtype=bool) for Q in Qs]
     for rel in FACES:
-        yield [np.diag(Q) > rel * max(float(np.diag(Q).max(initial=0.0)), 0.0) for Q in Qs]
+        masks = [np.diag(Q) > rel * float(np.diag(Q).max(initial=0.0)) for Q in Qs]
+        for m, z in zip(masks, zeros):
+            m[z] = True
+        yield masks
 
 
 def face_shift(p_coef, st, Qs, basis_exps, r, compact=None) -> float:
@@ -182,7 +186,8 @@ def face_shift(p_coef, st, Qs, basis_exps, r, compact=None) -> float:
     size = st.in_gram.size
     base = np.bincount(st.p_at, weights=p_coef, minlength=size)
     best = np.inf
-    for kept in face_masks(Qs):
+    zeros = [np.flatnonzero(~B.any(axis=1))[:1] for B in basis_exps]
+    for kept in face_masks(Qs, zeros):
         pair_kept = np.concatenate([np.outer(k, k).ravel() for k in kept])
         vals = np.concatenate([Q.ravel() for Q in Qs])
         e = base - np.bincount(st.pair_at, weights=np.where(pair_kept, vals, 0.0), minlength=size)
@@ -270,15 +275,19 @@ def bound_pattern(program):
     return hits[0][0], t, float(C[0, nz[0]]), hits[0][1]
 
 
-def safe_objective(solution, value: float) -> float:
-    """The objective ``value`` of a lower-bound program (:func:`bound_pattern`) lowered to the
-    safe side: c (t - delta / a), rounded down; other programs' ``value`` unchanged."""
-    found = bound_pattern(solution.program)
-    if found is None:
-        return value
-    con, _, c, a = found
-    low = value - c * safe_shift(solution, con) / a
-    return float(np.nextafter(low - 4 * EPS * (abs(value) + abs(low)), -np.inf))
+def safe_point(solution, found) -> tuple[int, float, float]:
+    """(position of t in the solution's decision vector, t - delta / a, c (t - delta / a) + c0),
+    both rounded down, for a lower-bound program ``found`` = :func:`bound_pattern` (c, c0 of its
+    objective c t + c0): the certificate holds exactly at the lowered t, so both are safe.
+    Raises UnverifiedSolutionError when no safe shift exists."""
+    con, t, c, a = found
+    pos = int(positions(solution.data.ids, np.array([t], dtype=np.int64))[0])
+    value = objective_value(solution.data, solution.x)
+    shift = safe_shift(solution, con) / a
+    t_now = float(solution.x[pos])
+    low_t, low = t_now - shift, value - c * shift
+    return (pos, float(np.nextafter(low_t - 4 * EPS * (abs(t_now) + abs(low_t)), -np.inf)),
+            float(np.nextafter(low - 4 * EPS * (abs(value) + abs(low)), -np.inf)))
 
 
 def _union_exps(p_exps, basis_exps, st) -> np.ndarray:

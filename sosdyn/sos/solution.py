@@ -12,6 +12,7 @@ solution keep working.
 """
 from __future__ import annotations
 
+import copy
 import time
 
 import numpy as np
@@ -23,7 +24,7 @@ from .decomposition import SOSDecomposition, sos_decomposition
 from .gram import svec_to_matrix
 from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
-from .posterior import safe_objective
+from .posterior import bound_pattern, safe_point
 from .rigorous import ANSWERED, QUICK_TIGHTENINGS, Bound, prove_bound
 from .verification import VerificationReport, verify_certificate
 
@@ -40,6 +41,7 @@ _UNVERIFIED_HINTS = {
           "(a small positive margin in strict inequalities, a lower degree)",
 }
 _DEFAULT_TOLS = (1e-7, 1e-6)      # verify()'s default (eig_tol, rel_tol): the cached report
+MARGINS = (1e-9, 1e-8, 1e-7)          # Q >= eps I relative to each block's largest entry (_tightened_safe_point)
 _PROVING = False                  # an exact proof (Solution._proven) is under way
 
 
@@ -90,7 +92,7 @@ class Solution:
         self._report = None
         self._bound = None
         self._bound_error = None
-        self._safe = None
+        self._safe = None              # (position of the bound variable, its safe value, the safe objective)
 
     # ------------------------------------------------------------------ status
     @property
@@ -145,13 +147,30 @@ class Solution:
         """The decision vector handed out: the proven one in rigorous mode."""
         return self.rigorous_bound().x if self.rigorous else self.x
 
+    def _point_for(self, ids) -> np.ndarray:
+        """The decision vector handed out for an expression in decision ``ids``: in a lower-bound
+        program whose bound variable t is among them, t is read at its safe value (``objective``)."""
+        x = self._point()
+        pattern = None if self.rigorous else bound_pattern(self.program)
+        if pattern is None or pattern[1] not in set(np.asarray(ids).tolist()):
+            return x
+        pos, t, _ = self._safe_point(pattern)
+        x = x.copy()
+        x[pos] = t
+        return x
+
     def _assign(self, p: Polynomial) -> Polynomial:
-        return assign_at(p, self.data.ids, self._point())
+        return assign_at(p, self.data.ids, self._point_for(p.ids))
 
     def value(self, item):
         """Numbers for a decision expression: float, numeric Polynomial, ndarray or PolyMatrix.
 
-        Raises InfeasibleError / UnverifiedSolutionError / SolverError unless verified.
+        In a lower-bound program (maximize t, t only in the constant term of one SOS constraint:
+        ``posterior.bound_pattern``) t is read at the safe value ``objective`` is computed from,
+        t - delta / a (:mod:`.posterior`), never the solver's t, which can lie above the minimum;
+        UnverifiedSolutionError when no safe value exists (as ``objective``). The other
+        variables are the solver's (verified) numbers. Raises InfeasibleError /
+        UnverifiedSolutionError / SolverError unless verified.
         """
         self.raise_for_status()
         if isinstance(item, Polynomial):
@@ -163,7 +182,7 @@ class Solution:
                 return np.vectorize(lambda e: e.constant_value(), otypes=[float])(m.entries)
             return m
         if isinstance(item, QuadraticForm):
-            return item.value(self._point()[positions(self.data.ids, item.ids)])
+            return item.value(self._point_for(item.ids)[positions(self.data.ids, item.ids)])
         if is_cvxpy(item):
             return item.value
         raise TypeError(f"cannot take the value of {type(item).__name__}")
@@ -193,19 +212,61 @@ class Solution:
             return float(self.info.get("objective"))
         if self.rigorous and self.rigorous_bound().proven is not None:
             return self.rigorous_bound().proven
+        pattern = bound_pattern(self.program)
+        if pattern is None:
+            return objective_value(self.data, self.x)
+        return self._safe_point(pattern)[2]
+
+    def _safe_point(self, pattern) -> tuple[int, float, float]:
+        """(position of the bound variable t, its safe value, the safe objective): the posterior
+        shift (:func:`~.posterior.safe_point`) at the solver's point, else at the point of a
+        re-solve with every Gram block tightened to Q >= eps I (eps = MARGINS x the block's largest
+        diagonal: a margin in the directions the constant cannot reach, bought with a slightly
+        lower t), else the quick exact proof's point; cached, and so is the refusal when none
+        exists."""
         if self._safe is None:
             try:
-                self._safe = safe_objective(self, objective_value(self.data, self.x))
-            except UnverifiedSolutionError as exc:   # no floating-point correction: an exact proof
-                try:
-                    bound = self._quick_proof()
-                except UnverifiedSolutionError:
-                    bound = None
-                if bound is None or bound.proven is None:
-                    raise UnverifiedSolutionError(f"{exc.detail} (nor by a quick exact proof)", "unverified",
-                                                  f"rigorous=True (the full exact search); or {exc.hint}") from exc
-                self._safe = bound.proven
+                self._safe = safe_point(self, pattern)
+            except UnverifiedSolutionError as exc:   # no floating-point correction: a margin, an exact proof
+                self._safe = self._tightened_safe_point(pattern) or self._proven_safe_point(pattern, exc)
+        if isinstance(self._safe, UnverifiedSolutionError):
+            raise self._safe
         return self._safe
+
+    def _proven_safe_point(self, pattern, exc):
+        """The quick exact proof's (position of t, t, proven bound), or the refusal to raise."""
+        try:
+            bound = self._quick_proof()
+        except UnverifiedSolutionError:
+            bound = None
+        if bound is None or bound.proven is None:
+            return UnverifiedSolutionError(
+                f"{exc.detail} (nor at a tightened re-solve, nor by a quick exact proof), so neither "
+                "objective nor the value of its bound variable is returned", "unverified",
+                "rigorous=True (the full exact search); solver_objective is the solver's number, which "
+                f"is not a bound; or {exc.hint}")
+        pos = int(positions(self.data.ids, np.array([pattern[1]], dtype=np.int64))[0])
+        return pos, float(np.nextafter(bound.x[pos], -np.inf)), bound.proven
+
+    def _tightened_safe_point(self, pattern):
+        """:func:`~.posterior.safe_point` at a re-solve of the program with its Gram blocks
+        tightened (``SOSProgram.tightened``), read for this program's decisions; None if none
+        gives one. Any point the posterior certifies gives a valid bound: the argument uses
+        only the numbers, not how they were found."""
+        scales = {id(b.psd): max(1.0, float(np.abs(svec_to_matrix(self.values_of(b.ids), b.psd.size)).max()))
+                  for b in self.program.blocks if b.psd is not None and b.psd.cone == "psd" and b.psd.size}
+        for rel in MARGINS:
+            tight = self.program.tightened({}, {k: rel * v for k, v in scales.items()})
+            sol = tight.solve(retry=False)
+            if sol.status not in ANSWERED or not np.isfinite(sol.x).all():
+                continue
+            view = copy.copy(self)
+            view.x = sol.values_of(self.data.ids)
+            try:
+                return safe_point(view, pattern)
+            except UnverifiedSolutionError:
+                continue
+        return None
 
     @property
     def solver_objective(self) -> float:

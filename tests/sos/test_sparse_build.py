@@ -95,12 +95,16 @@ def test_update_keeps_the_blocks_and_rematches():
     x, y, z = sd.variables("x y z")
     prog = sd.SOSProgram()
     g = prog.new_var()
-    con = prog.add_sos((x - y) ** 2 + (y - z) ** 2 + 3 - g, sparsity="correlative")
+    # x^2 + z^2 make the quadratic part definite (min 3 / 5 at 0, Gram blocks nonsingular off the
+    # constant, so the bound is corrected, not refused; (x - y)^2 + (y - z)^2 alone vanishes on a
+    # line and its clique blocks are forced singular: see test_safe_bounds)
+    f = (x - y) ** 2 + (y - z) ** 2 + x**2 + z**2
+    con = prog.add_sos(f + 3 - g, sparsity="correlative")
     prog.maximize(g)
-    assert prog.solve().value(g) == pytest.approx(3.0, abs=1e-6)
+    assert 3.0 - 1e-6 <= prog.solve().value(g) <= 3.0
     blocks = [psd.name for _, psd in con.gram_blocks]
-    con.update((x - y) ** 2 + (y - z) ** 2 + 5 - g)
-    assert prog.solve().value(g) == pytest.approx(5.0, abs=1e-6)
+    con.update(f + 5 - g)
+    assert 5.0 - 1e-6 <= prog.solve().value(g) <= 5.0
     assert [psd.name for _, psd in con.gram_blocks] == blocks
     with pytest.raises(sd.InputError, match="do not cover"):
         con.update((x - sd.variables("w")[0]) ** 2 - g)
