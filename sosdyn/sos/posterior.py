@@ -151,8 +151,10 @@ def safe_shift(solution, con) -> float:
     U = _union_exps(r.exps, con.basis.exps, st) if R is not None else None
     compact = None if R is None else lambda A, kept, off, e: compact_shift(  # noqa: E731
         A, rounding + fp_error(A), con.basis.exps[kept], U[off], e[off], R)
-    at_one = np.zeros(st.in_gram.size)                   # the whole rounding bound on one monomial:
-    at_one[st.pair_at[0]] = rounding                     # one block, so tau = rounding as before
+    at_one = np.zeros(st.in_gram.size)                   # the whole rounding bound on the constant
+    zero = np.flatnonzero(~con.basis.exps.any(axis=1))   # (always kept): one block, tau = rounding
+    if zero.size:
+        at_one[st.pair_at[zero[0] * (Q.shape[0] + 1)]] = rounding
     return _checked(face_shift(r.coef[:, 0], st, [Q], [con.basis.exps], at_one, compact), con)
 
 
@@ -199,10 +201,10 @@ def face_shift(p_coef, st, Qs, basis_exps, r, compact=None) -> float:
         off = (e != 0.0) & (n == 0)
         starts = np.cumsum(np.concatenate([[0], sizes ** 2]))
         As = [(Q + E[s0:s0 + Q.size].reshape(Q.shape))[np.ix_(k, k)] for Q, k, s0 in zip(Qs, kept, starts)]
-        zeros = [np.flatnonzero(~B[k].any(axis=1))[:1] for k, B in zip(kept, basis_exps)]
+        at = [np.flatnonzero(~B[k].any(axis=1))[:1] for k, B in zip(kept, basis_exps)]   # z_0 in the kept rows
         owned = np.bincount(first, weights=r, minlength=len(Qs) + 1)
-        delta = np.inf if off.any() or not all(z.size for z in zeros) else shared_constant(
-            As, [int(z[0]) for z in zeros], [owned[k] + fp_error(A) for k, A in enumerate(As)])
+        delta = np.inf if off.any() or not all(z.size for z in at) else shared_constant(
+            As, [int(z[0]) for z in at], [owned[k] + fp_error(A) for k, A in enumerate(As)])
         A = As[0]
         if compact is not None:
             delta = min(delta, compact(A, kept[0], off, e))

@@ -12,7 +12,6 @@ solution keep working.
 """
 from __future__ import annotations
 
-import copy
 import time
 
 import numpy as np
@@ -26,6 +25,7 @@ from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
 from .posterior import bound_pattern, safe_point
 from .rigorous import ANSWERED, QUICK_TIGHTENINGS, Bound, prove_bound
+from .tightened import tightened_safe_point
 from .verification import VerificationReport, verify_certificate
 
 _HINTS = {
@@ -41,7 +41,6 @@ _UNVERIFIED_HINTS = {
           "(a small positive margin in strict inequalities, a lower degree)",
 }
 _DEFAULT_TOLS = (1e-7, 1e-6)      # verify()'s default (eig_tol, rel_tol): the cached report
-MARGINS = (1e-9, 1e-8, 1e-7)          # Q >= eps I relative to each block's largest entry (_tightened_safe_point)
 _PROVING = False                  # an exact proof (Solution._proven) is under way
 
 
@@ -220,15 +219,13 @@ class Solution:
     def _safe_point(self, pattern) -> tuple[int, float, float]:
         """(position of the bound variable t, its safe value, the safe objective): the posterior
         shift (:func:`~.posterior.safe_point`) at the solver's point, else at the point of a
-        re-solve with every Gram block tightened to Q >= eps I (eps = MARGINS x the block's largest
-        diagonal: a margin in the directions the constant cannot reach, bought with a slightly
-        lower t), else the quick exact proof's point; cached, and so is the refusal when none
-        exists."""
+        re-solve with every Gram block tightened (:func:`~.tightened.tightened_safe_point`), else
+        the quick exact proof's point; cached, and so is the refusal when none exists."""
         if self._safe is None:
             try:
                 self._safe = safe_point(self, pattern)
             except UnverifiedSolutionError as exc:   # no floating-point correction: a margin, an exact proof
-                self._safe = self._tightened_safe_point(pattern) or self._proven_safe_point(pattern, exc)
+                self._safe = tightened_safe_point(self, pattern) or self._proven_safe_point(pattern, exc)
         if isinstance(self._safe, UnverifiedSolutionError):
             raise self._safe
         return self._safe
@@ -247,26 +244,6 @@ class Solution:
                 f"is not a bound; or {exc.hint}")
         pos = int(positions(self.data.ids, np.array([pattern[1]], dtype=np.int64))[0])
         return pos, float(np.nextafter(bound.x[pos], -np.inf)), bound.proven
-
-    def _tightened_safe_point(self, pattern):
-        """:func:`~.posterior.safe_point` at a re-solve of the program with its Gram blocks
-        tightened (``SOSProgram.tightened``), read for this program's decisions; None if none
-        gives one. Any point the posterior certifies gives a valid bound: the argument uses
-        only the numbers, not how they were found."""
-        scales = {id(b.psd): max(1.0, float(np.abs(svec_to_matrix(self.values_of(b.ids), b.psd.size)).max()))
-                  for b in self.program.blocks if b.psd is not None and b.psd.cone == "psd" and b.psd.size}
-        for rel in MARGINS:
-            tight = self.program.tightened({}, {k: rel * v for k, v in scales.items()})
-            sol = tight.solve(retry=False)
-            if sol.status not in ANSWERED or not np.isfinite(sol.x).all():
-                continue
-            view = copy.copy(self)
-            view.x = sol.values_of(self.data.ids)
-            try:
-                return safe_point(view, pattern)
-            except UnverifiedSolutionError:
-                continue
-        return None
 
     @property
     def solver_objective(self) -> float:
