@@ -11,8 +11,9 @@
   regularisation, or tighter iterative refinement each turns the refusal into a verified
   answer (and a combination of them, or tighter tolerances, where one alone does not). Not
   every refusal goes away: chained singular n = 40 and 60 stay refused after all of them
-  (its Gram blocks have no interior; capping the objective short of the first answer does
-  not help either, measured).
+  (block eigenvalues -3e-6 ... -1.7e-5 against -2.8e-6; its Gram blocks have no interior: with
+  every block >= 1e-7 I relative it is primal infeasible; capping the objective short of the
+  first answer does not help either, measured).
 * **Unbounded** -- a solver that reports dual infeasibility (no finite optimum) has not
   shown that the constraints can be met: with an infeasible SOS constraint and an objective
   variable that no constraint mentions, Clarabel says "unbounded". The program is then solved
