@@ -203,8 +203,9 @@ class Solution:
 
         A lower-bound program (maximize gamma, gamma only in the constant term of one SOS
         constraint: ``posterior.bound_pattern``) returns gamma lowered to the safe side
-        (:mod:`.posterior`), or the exactly proven bound when no floating-point correction
-        exists; ``solver_objective`` is the solver's number."""
+        (:mod:`.posterior`; at a tightened re-solve, :mod:`.tightened`, when the solver's point
+        has no correction), or the exactly proven bound, else UnverifiedSolutionError;
+        ``value(gamma)`` is the same number; ``solver_objective`` is the solver's."""
         self.raise_for_status()
         sense, expr = self.program.objective or ("min", None)
         if is_cvxpy(expr):
