@@ -17,7 +17,7 @@ import copy
 
 import numpy as np
 
-from ..errors import UnverifiedSolutionError
+from ..errors import ResourceLimitError, UnverifiedSolutionError
 from .gram import svec_to_matrix
 from .posterior import safe_point
 from .rigorous import ANSWERED
@@ -28,12 +28,17 @@ MARGINS = (1e-9, 1e-8, 1e-7)      # Q >= eps I relative to each block's largest 
 def tightened_safe_point(solution, pattern):
     """:func:`~.posterior.safe_point` of ``solution`` (a lower-bound program, ``pattern`` =
     :func:`~.posterior.bound_pattern`) at the first tightened re-solve that admits one, read for
-    the original program's decisions; None if none does."""
+    the original program's decisions; None if none does (or the memory guard refuses the
+    tightened program: its new blocks and face rows can be estimated far above the original's,
+    Broyden tridiagonal n = 1000: 94.8 GiB against 0.5 GiB)."""
     program = solution.program
     scales = {id(b.psd): max(1.0, float(np.abs(svec_to_matrix(solution.values_of(b.ids), b.psd.size)).max()))
               for b in program.blocks if b.psd is not None and b.psd.cone == "psd" and b.psd.size}
     for rel in MARGINS:
-        sol = program.tightened({}, {k: rel * v for k, v in scales.items()}).solve(retry=False)
+        try:
+            sol = program.tightened({}, {k: rel * v for k, v in scales.items()}).solve(retry=False)
+        except ResourceLimitError:
+            return None
         if sol.status not in ANSWERED or not np.isfinite(sol.x).all():
             continue
         view = copy.copy(solution)
