@@ -23,6 +23,7 @@ EXPERIMENTS = {
     "warp-figure": "warp_figure",      # the pre-warp on DoubleBendedLine (docs/theory.md's figure)
     "demo3d": "demo3d",
     "demo7d": "demo7d",                # a certified CDSP from 5 noisy 7-D joint-space demonstrations
+    "kinks7d": "kinks7d",              # peak accelerations of 7-D reproductions, plain and tempered gating
     "robot": "robot",                  # CDSP drives a simulated Panda (pybullet; the [robot] extra)
     "sweep": "sweep",                  # a hyper-parameter sweep (joblib processes, or a Dask cluster)
     "learner-table": "learner_table",

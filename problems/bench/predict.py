@@ -6,11 +6,16 @@ Fits one LASA shape (K = 8, 2-D, linear fields: one plain fit and the default's 
 one call at a time (median over ``--calls`` calls, each timed alone, after a warm-up) at states
 along the demonstrations, and checks that both give the same velocities: the largest relative
 difference |v_fast - v| / max(|v|, tiny) over the rows of a 10^4-state grid twice the data's box.
+Also times ``load_model`` of a maximal legal warp (MAX_MAPS bumps of Lipschitz number 2.7e-3, wide
+sigma = 0.5 and tiny sigma = 1e-3, forged onto the plain model with its checksum recomputed; issue 23
+item 3: 14-37 s before the load-time check touched only the states a bump moves).
 Writes ``reports/bench/predict.json``. Run: ``python -m problems.bench.predict [--quick]``.
 """
 from __future__ import annotations
 
 import argparse
+import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -18,6 +23,9 @@ import numpy as np
 
 from sosdyn import CDSP, load_lasa
 from sosdyn.lfd.fit.params import PLAIN
+from sosdyn.lfd.fit.warp import LIP_FACTOR, MAX_MAPS
+from sosdyn.lfd.model.fileformat import _digest
+from sosdyn.lfd.model.files import load_model
 from sosdyn.lfd.runtime.export import to_python
 
 from ..settings import BENCH
@@ -72,6 +80,23 @@ def measure(shape: str, field_degree: int, calls: int, states: int, warp: str = 
             "within_target": bool(t_fast <= TARGET_S)}
 
 
+def max_warp_load_s(model, sigma: float, seed: int = 0) -> float:
+    """Seconds to ``load_model`` ``model`` carrying MAX_MAPS bumps of width ``sigma`` (z-units), centres
+    uniform in |z|_inf <= 2, each of Lipschitz number 2.7e-3 (prod (1 - l_j) = 1.8e-12 >= the floor)."""
+    rng = np.random.default_rng(seed)
+    C, V = rng.uniform(-2, 2, (MAX_MAPS, model.dim_)), rng.normal(size=(MAX_MAPS, model.dim_))
+    V *= (2.7e-3 * sigma / LIP_FACTOR / np.linalg.norm(V, axis=1))[:, None]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = model.save(Path(tmp) / "m.json")
+        data = json.loads(path.read_text())
+        data["state"]["warp_"] = {"centers": C.tolist(), "vectors": V.tolist(), "sigmas": [sigma] * MAX_MAPS}
+        data["sha256"] = _digest({k: v for k, v in data.items() if k != "sha256"})
+        path.write_text(json.dumps(data))
+        t0 = time.perf_counter()
+        load_model(path)
+        return time.perf_counter() - t0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m problems.bench.predict", description=__doc__.split("\n")[0])
     ap.add_argument("--shape", default="Angle", help="LASA shape (default: %(default)s)")
@@ -83,6 +108,9 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     calls, states = (1000, 1000) if args.quick else (args.calls, args.states)
     rows = [measure(args.shape, 1, calls, states), measure(args.shape, 1, calls, states, warp="auto")]
+    plain = CDSP(**dict(PLAIN, n_components=8, random_state=0, warp="none")).fit(load_lasa(args.shape))
+    loads = {f"sigma {s:g}": max_warp_load_s(plain, s) for s in (0.5, 1e-3)}
+    print(f"load_model with {MAX_MAPS} bumps: " + ", ".join(f"{k}: {v:.2f} s" for k, v in loads.items()), flush=True)
     if args.cubic:
         rows.append(measure(args.shape, 3, calls, states))
     for r in rows:
@@ -91,7 +119,8 @@ def main(argv=None) -> int:
               f"Python export {r['python_export_s'] * 1e6:.1f} us ({r['export_over_predictor']:.1f}x the predictor), "
               f"max rel diff {r['max_rel_diff']:.1e} on {r['states_checked']} states", flush=True)
     path = write_json(Path(args.out) / "predict.json",
-                      {"target_s": TARGET_S, "rows": rows, "environment": environment()})
+                      {"target_s": TARGET_S, "rows": rows, "max_warp_load_s": loads,
+                       "environment": environment()})
     print(f"wrote {path}")
     return 0
 

@@ -2,17 +2,30 @@
 
     xdot = sum_k h_k(x) (A_k x + b_k),   A_k = S_k,xdot x S_k,xx^-1,  b_k = mu_k,xdot - A_k mu_k,x
     h_k(x) = pi_k N(x; mu_k,x, S_k,xx) / sum_i pi_i N(x; mu_i,x, S_i,xx)
+
+Off the data the weights are tempered (:class:`PositionMixture`, ``bound`` c): with the squared
+Mahalanobis distances d_k^2(x) = |L_k^-1 (x - mu_k)|^2 and tau(x) = max(1, min_k d_k^2(x) / c),
+
+    h_k(x) = softmax_k(log pi_k - sum_i log L_k,ii - n/2 log 2 pi - 1/2 d_k^2(x) / tau(x)),
+
+the same numbers, bit for bit, where min_k d_k^2 <= c (tau = 1: every training point, by the
+choice of c in :func:`gate_bound`), and off the data a softmax of c (d_k / d_min)^2 that turns
+with the direction of x rather than jumping from 0 to 1 across a Voronoi face of the thin
+Gaussians (docs/findings.md, 7-D kinks). The certificate does not involve the weights (it holds
+for any h in the simplex along any trajectory; docs/theory.md), so it holds for either gating.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import chdtri
 
 from sosdyn.errors import InputError
 
 MAX_BIC_COMPONENTS = 10         # n_components="bic" tries K = 1..10
 MIN_SAMPLES_PER_COMPONENT = 5   # and needs at least 5 samples per Gaussian
+GATE_QUANTILE = 0.999           # the gating's bound is at least the chi^2_n quantile of this level
 
 
 def check_joint_gmm(gmm, n: int) -> None:
@@ -69,14 +82,16 @@ def gmr_cost(gmm, Z, Zdot) -> float:
 
 @dataclass
 class PositionMixture:
-    """pi_k, mu_k,x, S_k,xx of the position marginal: all h_k(x) needs.
+    """pi_k, mu_k,x, S_k,xx of the position marginal and the gating's bound c: all h_k(x) needs.
 
-    Treat it as immutable: the Cholesky factors are computed once, on first use.
+    ``bound`` None: the plain posterior; a number c > 0: tempered where min_k d_k^2 > c (module
+    docstring). Treat it as immutable: the Cholesky factors are computed once, on first use.
     """
 
     weights: np.ndarray       # (K,)
     means: np.ndarray         # (K, n)
     covariances: np.ndarray   # (K, n, n)
+    bound: float | None = None
 
     @classmethod
     def from_joint(cls, gmm, n: int) -> "PositionMixture":
@@ -99,15 +114,28 @@ class PositionMixture:
         return self._cache
 
     def log_joint(self, X: np.ndarray) -> np.ndarray:
-        """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K).
+        """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K); with a ``bound`` the
+        quadratic forms divided by tau(x) (module docstring; q / 1.0 = q exactly where tau = 1).
 
         Far from the data the quadratic form overflows and an entry is -inf (NaN when
-        ``x - mu_k`` itself overflows); :meth:`responsibilities` handles both.
+        ``x - mu_k`` itself overflows, or every form overflows under a bound); :meth:`responsibilities`
+        handles both.
         """
         inv, lognorm = self.factors()
         with np.errstate(over="ignore", invalid="ignore"):
             z = np.einsum("kij,mkj->mki", inv, X[:, None, :] - self.means[None])
-            return lognorm[None, :] - 0.5 * np.einsum("mki,mki->mk", z, z)
+            return lognorm[None, :] - 0.5 * tempered(np.einsum("mki,mki->mk", z, z), self.bound)
+
+    def far_weights(self, X: np.ndarray) -> np.ndarray:
+        """h at rows of X where :meth:`log_joint` has no finite entry or a NaN (the forms overflow):
+        without a bound one-hot on the component of least Mahalanobis distance (the softmax's limit),
+        with a bound c the exact tempered weights softmax_k(c_k - c/2 (d_k / d_min)^2), the distance
+        ratios from :meth:`log_mahalanobis` (finite for any finite x)."""
+        logd = self.log_mahalanobis(X)
+        if self.bound is None:
+            return np.eye(self.n_components)[np.argmin(logd, axis=1)]
+        lj = self.factors()[1][None, :] - 0.5 * self.bound * np.exp(2.0 * (logd - logd.min(axis=1, keepdims=True)))
+        return np.exp(lj - log_sum_exp(lj))
 
     def log_mahalanobis(self, X: np.ndarray) -> np.ndarray:
         """log ||S_k^-1/2 (x - mu_k)|| at the rows of X, shape (m, K), finite for any finite x.
@@ -125,12 +153,40 @@ class PositionMixture:
         """h_k(x) = pi_k N(x; mu_k, S_k) / sum_i pi_i N(x; mu_i, S_i), shape (m, K), rows sum to one.
 
         Computed in log-space: h = exp(l - logsumexp(l)), l_k = log pi_k + log N(x; mu_k, S_k).
-        Where every l_k underflows (the quadratic forms overflow float, ||x|| ~ 1e154 and up)
-        h is one-hot on the component nearest in Mahalanobis distance (:meth:`log_mahalanobis`):
-        the limit of the softmax as the quadratic terms dominate log pi_k and the normalisers.
+        With a ``bound``, tempered off the data (module docstring). Where every l_k underflows (the
+        quadratic forms overflow float, ||x|| ~ 1e154 and up) :meth:`far_weights`: without a bound
+        one-hot on the component nearest in Mahalanobis distance (:meth:`log_mahalanobis`), the
+        limit of the softmax as the quadratic terms dominate log pi_k and the normalisers.
         Raises :class:`InputError` for rows of X that are NaN or inf.
         """
         return responsibilities_of([self], [X])[0]
+
+
+def tempered(q: np.ndarray, bound) -> np.ndarray:
+    """The quadratic forms q (m, K) divided by tau = max(1, min_k q_k / bound) row by row (module
+    docstring; q / 1.0 = q exactly where tau = 1); ``bound`` None (as they are), a number, or a
+    column (m, 1) of per-row bounds (inf: not tempered). A row with a form that is not finite
+    becomes NaN (its weights are :meth:`PositionMixture.far_weights`, exact there)."""
+    if bound is None:
+        return q
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.where(np.isfinite(q).all(axis=1, keepdims=True) | ~np.isfinite(bound),
+                        q / np.maximum(1.0, q.min(axis=1, keepdims=True) / bound), np.nan)
+
+
+def gate_bound(mixture: PositionMixture, U: np.ndarray, quantile: float = GATE_QUANTILE) -> float:
+    """The gating's bound c for ``mixture`` fitted on the rows of U: the larger of the chi^2_n
+    ``quantile`` and max_t min_k d_k^2(u_t), so that every training point (and every state as near
+    to a Gaussian) gets the plain posterior, bit for bit."""
+    inv, _ = mixture.factors()
+    z = np.einsum("kij,mkj->mki", inv, U[:, None, :] - mixture.means[None])
+    chi2_quantile = chdtri(U.shape[1], 1.0 - quantile)         # P(chi^2_n > x) = 1 - quantile
+    return float(max(chi2_quantile, np.einsum("mki,mki->mk", z, z).min(axis=1).max()))
+
+
+def with_bound(mixture: PositionMixture, bound: float | None) -> PositionMixture:
+    """``mixture`` with the gating's bound ``bound`` (a new object: factors are recomputed once)."""
+    return PositionMixture(mixture.weights, mixture.means, mixture.covariances, bound)
 
 
 def responsibilities_of(mixtures: list, blocks: list) -> list[np.ndarray]:
@@ -156,11 +212,13 @@ def block_log_joint(mixtures: list, rows: int):
     mixture's factors; the same numbers as block by block, checked in the tests)."""
     each = lambda a: np.repeat(np.array([a(mix) for mix in mixtures]), rows, axis=0)   # noqa: E731
     inv, means, lognorm = each(lambda m: m.factors()[0]), each(lambda m: m.means), each(lambda m: m.factors()[1])
+    bound = None if all(m.bound is None for m in mixtures) else \
+        each(lambda m: np.inf if m.bound is None else m.bound)[:, None]     # tempered rows (module docstring)
 
     def log_joint(X):
         with np.errstate(over="ignore", invalid="ignore"):
             z = np.einsum("mkij,mkj->mki", inv, X[:, None, :] - means)
-            return lognorm - 0.5 * np.einsum("mki,mki->mk", z, z)
+            return lognorm - 0.5 * tempered(np.einsum("mki,mki->mk", z, z), bound)
     return log_joint
 
 
@@ -182,7 +240,7 @@ def weights_from(L: list, mixtures: list, blocks: list) -> list[np.ndarray]:
         hb = h[start:start + len(lb), :mix.n_components]
         fb = None if far is None else far[start:start + len(lb)]
         if fb is not None and fb.any():
-            hb[fb] = np.eye(mix.n_components)[np.argmin(mix.log_mahalanobis(np.asarray(X, float)[fb]), axis=1)]
+            hb[fb] = mix.far_weights(np.asarray(X, float)[fb])
         out.append(hb)
         start += len(lb)
     return out

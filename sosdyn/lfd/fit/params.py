@@ -24,7 +24,8 @@ MAX_CORRECTIVE_ROUNDS = 10      # corrective refits of one fit (each a whole CDS
 PARAMS = ("n_components", "metric_degree", "field_degree", "gamma", "metric", "solver",
           "solver_method", "max_iter", "tol", "eps", "margin", "metric_prox", "refine_gmm", "max_samples",
           "random_state", "verify_samples", "allow_uncertified", "corrective_rounds", "corrective_tau",
-          "corrective_min_dist", "warp")                              # what get_params and a file hold
+          "corrective_min_dist", "warp", "gating")                    # what get_params and a file hold
+GATINGS = ("posterior", "tempered")     # the mixture weights: plain, or tempered off the data (.gmm)
 WARPS = ("auto", "none")        # warp: one of these, or a dict of WARP_DEFAULTS' keys (one fixed warp)
 MAX_POINTS = 10_000
 CORRECTIVE_OFF = {"corrective_rounds": 0}     # no corrective refits
@@ -48,7 +49,7 @@ PRESETS = {
 #: Parameters added after earlier model files were written, with the value those fits used
 #: (tau and min_dist are unused at 0 rounds; recorded as the defaults).
 LEGACY_PARAMS = {"metric_prox": 0.0, "corrective_rounds": 0, "corrective_tau": TAU, "corrective_min_dist": MIN_DIST,
-                 "warp": "none"}
+                 "warp": "none", "gating": "posterior"}
 
 
 def check_params(p: Mapping, defaults: Mapping) -> None:
@@ -98,6 +99,7 @@ def check_params(p: Mapping, defaults: Mapping) -> None:
         if isinstance(v, (bool, np.bool_)) or not isinstance(v, Real) or not np.isfinite(v) or v < 0:
             fail(name, "a finite number >= 0")
     choice("metric", METRICS)
+    choice("gating", GATINGS)
     choice("solver_method", METHODS)
     if not isinstance(p["solver"], str) or not p["solver"]:
         fail("solver", f"the name of a conic solver, e.g. one of {SOLVERS}")

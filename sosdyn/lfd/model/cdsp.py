@@ -84,6 +84,11 @@ class CDSP:
       diffeomorphism of Gaussian bumps fixing the goal (``sosdyn.lfd.fit.warp``); a dict (keys of
       ``WARP_DEFAULTS``) is one fixed warp; "auto" fits no warp and each ``AUTO_WARPS`` candidate
       and keeps the one whose rollouts from the training demos' starts deviate least from them.
+    - ``gating`` ("posterior" or "tempered"): the weights h_k; "tempered" divides the quadratic
+      forms by max(1, min_k d_k^2 / c) (c = max(chi^2_n(0.999), the training points' largest
+      min_k d_k^2), so the weights are the posterior, bit for bit, at every training point and turn
+      smoothly off the data instead of switching between thin Gaussians: the 7-D reproductions'
+      kinks (``sosdyn.lfd.fit.gmm``; docs/findings.md). The certificate holds for either.
 
     Warp (z = (x - x*)/s): the core f is fitted on (phi(z_i), J_phi(z_i) zdot_i) and certified in
     u as always; the model is zdot = J_phi(z)^{-1} f(phi(z)). Since du = J_phi dz, the x-system is
@@ -122,7 +127,8 @@ class CDSP:
                  solver="CLARABEL", solver_method="ica", max_iter=20, tol=1e-4, eps=1e-3,
                  margin=1e-4, metric_prox=METRIC_PROX, refine_gmm=False, max_samples=3000, random_state=0,
                  verify_samples=DEFAULT_SAMPLES, allow_uncertified=False, progress=None,
-                 corrective_rounds=ROUNDS, corrective_tau=TAU, corrective_min_dist=MIN_DIST, warp="auto"):
+                 corrective_rounds=ROUNDS, corrective_tau=TAU, corrective_min_dist=MIN_DIST, warp="auto",
+                 gating="posterior"):
         self.n_components = n_components
         self.metric_degree = metric_degree
         self.field_degree = field_degree
@@ -145,6 +151,7 @@ class CDSP:
         self.corrective_tau = corrective_tau
         self.corrective_min_dist = corrective_min_dist
         self.warp = warp
+        self.gating = gating
 
     @classmethod
     def preset(cls, name: str, **overrides) -> CDSP:

@@ -20,7 +20,8 @@ from __future__ import annotations
 import inspect
 
 from ..data.poses import CHART_MARGIN
-from ..runtime.export import _flat, _literal, to_cpp, to_python
+from ..runtime.codegen import _flat, _literal
+from ..runtime.export import to_cpp, to_python
 from .pose import SMALL_ANGLE, PoseCDSP, body_velocity
 
 

@@ -78,7 +78,8 @@ def check_param_names(params: dict, names) -> None:
 def state_record(state: dict) -> dict:
     """``state`` (STATE_FIELDS) as file content: the mixture as its three arrays."""
     m = state["mixture_"]
-    return dict(state, mixture_={"weights": m.weights, "means": m.means, "covariances": m.covariances})
+    return dict(state, mixture_={"weights": m.weights, "means": m.means, "covariances": m.covariances,
+                                 "bound": m.bound})
 
 
 def validate_state(st: dict, n_components, field_degree: int, metric_degree: int, eps: float) -> dict:
@@ -153,7 +154,9 @@ def _exponents(st, name, n, count, expected):
 
 
 def _mixture(mx, K, n) -> PositionMixture:
-    """Weights > 0 summing to 1, means (K, n), covariances (K, n, n) symmetric positive definite."""
+    """Weights > 0 summing to 1, means (K, n), covariances (K, n, n) symmetric positive definite,
+    the gating's bound null or a positive number (absent in files older than it: null, the plain
+    posterior, so such a model evaluates as it did)."""
     w = array(need(mx, "weights", "state.mixture_"), "state.mixture_.weights", (K,))
     means = array(need(mx, "means", "state.mixture_"), "state.mixture_.means", (K, n))
     cov = array(need(mx, "covariances", "state.mixture_"), "state.mixture_.covariances", (K, n, n))
@@ -169,7 +172,11 @@ def _mixture(mx, K, n) -> PositionMixture:
         except np.linalg.LinAlgError:
             raise ModelFileError(f"malformed: state.mixture_.covariances[{k}] is not positive definite "
                                  "(no Cholesky factor)") from None
-    return PositionMixture(w, means, cov)
+    bound = mx.get("bound")
+    unknown = sorted(set(mx) - {"weights", "means", "covariances", "bound"})
+    if unknown:
+        raise ModelFileError(f"malformed: state.mixture_ has unknown fields {unknown}")
+    return PositionMixture(w, means, cov, None if bound is None else positive(bound, "state.mixture_.bound"))
 
 
 def _certificate(cert, K, eps) -> dict:

@@ -6,7 +6,8 @@ computes the same numbers with everything that does not depend on x precomputed 
 
     z = (x - x*) / s
     d = A z - b,     A = [L_1^-1; ...; L_K^-1]  (K n x n),   b_k = L_k^-1 mu_k     (S_k = L_k L_k^T)
-    l_k = c_k - 1/2 |d_k|^2,    c_k = log pi_k - sum_i log L_k,ii - n/2 log 2 pi
+    q_k = |d_k|^2,  tau = max(1, min_k q_k / c) (1 without a gating bound c; :mod:`sosdyn.lfd.fit.gmm`)
+    l_k = c_k - 1/2 q_k / tau,    c_k = log pi_k - sum_i log L_k,ii - n/2 log 2 pi
     h = exp(l - max l) / sum exp(l - max l)
     xdot = s * (h^T C) z^E,      C reshaped to (K, n m),  z^E the m monomial values of z
 
@@ -20,13 +21,20 @@ since J_phi = A_m ... A_1, A_j = I + v_j g_j^T, and A_j^-1 = I - v_j g_j^T / (1 
 (:func:`warp_forward` / :func:`warp_back`; unrolled for n = 2, the common case, 3-4x faster).
 The mixture and field run in plain floats too (precomputed tuples, ``math.exp``; n = 2 unrolled):
 for small n numpy's per-call cost (about 1 us a call) is most of the time. Bound with a warp:
-about 0.4 us of Python per bump, forward and back.
+about 0.4 us of Python per bump, forward and back. The forward pass cannot be fused into a few
+numpy calls over all bumps: u_j+1 depends on u_j through rho_j, and the fixed-point (Jacobi)
+iteration over all bumps at once took a median of 10 sweeps (3-14) of about 6 numpy calls each on
+a LASA warp of 38 bumps to settle at 1e-15: slower than the loop.
 
 which is the same sum as ``predict`` (the quadratic forms |L_k^-1 (z - mu_k)|^2 written as
-|L_k^-1 z - L_k^-1 mu_k|^2), equal to it to rounding (about 1e-15 relative). Where every l_k
-under- or overflows (|z| ~ 1e154 and up) the predictor falls back on the mixture's own
-:meth:`~sosdyn.lfd.fit.gmm.PositionMixture.responsibilities` (one-hot on the nearest component),
-so the far-field behaviour is the same as ``predict``'s too.
+|L_k^-1 z - L_k^-1 mu_k|^2), equal to it to rounding (about 1e-15 relative). Where a quadratic
+form overflows (|z| ~ 1e154 and up) the predictor falls back on the mixture's own
+:meth:`~sosdyn.lfd.fit.gmm.PositionMixture.responsibilities`, so the far-field behaviour is the
+same as ``predict``'s too.
+
+The single-state arithmetic is module functions on plain tuples (:func:`tables`, :func:`field2`,
+:func:`fieldn`, :func:`warp_forward2`, ...): the Python export (:mod:`.export`) embeds their
+source, so its one-state path is this code, not a copy.
 
 Runtime goal: ``predictor(x, goal=g)`` evaluates the model with its goal moved to g, i.e. the
 goal-shifted field translated, s f((x - g) / s) = predictor(x - g + x*): what a rollout uses
@@ -57,28 +65,16 @@ class StatePredictor:
 
     def __init__(self, goal: np.ndarray, scale: float, mixture: PositionMixture, C: np.ndarray,
                  exps: np.ndarray, warp=None, max_speed: float | None = None):
-        inv, lognorm = mixture.factors()
-        K, n, m = C.shape
+        n = C.shape[1]
         self.dim, self._shape = n, (n,)
         self._goal = np.array(goal, dtype=float)
         self._scale = float(scale)
-        self._mixture = mixture
-        # plain floats for the scalar path (small n: no numpy call per state)
-        b = np.einsum("kij,kj->ki", inv, mixture.means)
-        self._rows = tuple(tuple(tuple(map(float, r)) for r in inv[k]) for k in range(K))
-        self._bt = tuple(tuple(map(float, r)) for r in b)
-        self._ct = tuple(map(float, lognorm))
-        self._Ct = tuple(tuple(map(float, r)) for r in C.reshape(K, n * m).T)     # (n m, K)
-        self._nm = (n, m)
-        self._et = tuple(tuple(int(e) for e in r) for r in exps)
-        self._linear = bool(np.array_equal(exps, np.eye(n)))   # field degree 1: z^E = z
-        self._mix2 = tuple((*map(float, inv[k].ravel()), *self._bt[k], self._ct[k]) for k in range(K))
-        self._maps = None if warp is None else [
-            (tuple(map(float, c)), tuple(map(float, v)), 1.0 / float(s) ** 2,
-             math.exp(-float(np.dot(c, c)) / float(s) ** 2)) for c, v, s in zip(*warp)]
+        self._tables = tables(mixture, C, exps)
+        self._far = lambda z: mixture.responsibilities(np.array(z)[None])[0].tolist()
+        self._maps = None if warp is None else warp_tables(*warp)
         self._forward, self._back = (warp_forward2, warp_back2) if n == 2 else (warp_forward, warp_back)
         self.max_speed = check_max_speed(max_speed)
-        self._field = self._field2 if n == 2 else self._fieldn
+        self._field = field2 if n == 2 else fieldn
 
     def __call__(self, x, goal=None) -> np.ndarray:
         """xdot (n,) at the state x (n,), in the data's units, for the goal ``goal`` (None: the
@@ -91,7 +87,7 @@ class StatePredictor:
         grads = None
         if self._maps is not None:                   # u = phi(z) and the gradients g_j
             z, grads = self._forward(self._maps, z)
-        v = self._field(z)
+        v = self._field(self._tables, z, self._far)
         if grads is not None:                        # J_phi^-1 v
             v = self._back(self._maps, grads, v)
         s = self._scale
@@ -106,56 +102,6 @@ class StatePredictor:
                 v = [a * (self.max_speed / speed) for a in v]
         return np.array(v)
 
-    def _field2(self, z: list) -> list:
-        """:meth:`_fieldn` for n = 2, unrolled."""
-        z0, z1 = z
-        try:
-            lj = []
-            for a00, a01, a10, a11, b0, b1, c in self._mix2:
-                d0, d1 = a00 * z0 + a01 * z1 - b0, a10 * z0 + a11 * z1 - b1
-                lj.append(c - 0.5 * (d0 * d0 + d1 * d1))
-            top = max(lj)
-        except OverflowError:
-            top = math.inf
-        if not math.isfinite(top):
-            return self._fieldn(z)
-        e = [math.exp(a - top) for a in lj]
-        t = sum(e)
-        h = [a / t for a in e]
-        g = [sum(map(mul, col, h)) for col in self._Ct]           # h^T C, (2 m,)
-        try:
-            if self._linear:
-                return [g[0] * z0 + g[1] * z1, g[2] * z0 + g[3] * z1]
-            m = self._nm[1]
-            mono = [_monomial(z, e) for e in self._et]
-            return [sum(map(mul, g[:m], mono)), sum(map(mul, g[m:], mono))]
-        except OverflowError:
-            return [math.inf, math.inf]
-
-    def _fieldn(self, z: list) -> list:
-        """(h(z)^T C) z^E in plain floats (module docstring); the mixture's own responsibilities
-        where every l_k under- or overflows."""
-        try:
-            lj = [c - 0.5 * sum((sum(map(mul, r, z)) - bi) ** 2 for r, bi in zip(rows, b))
-                  for rows, b, c in zip(self._rows, self._bt, self._ct)]
-            top = max(lj)
-        except OverflowError:
-            top = math.inf
-        if math.isfinite(top):                       # no NaN, at least one finite l_k
-            e = [math.exp(a - top) for a in lj]
-            t = sum(e)
-            h = [a / t for a in e]
-        else:
-            with np.errstate(over="ignore", invalid="ignore"):
-                h = self._mixture.responsibilities(np.array(z)[None])[0].tolist()
-        g = [sum(map(mul, col, h)) for col in self._Ct]           # h^T C, (n m,)
-        n, m = self._nm
-        try:
-            mono = z if self._linear else [_monomial(z, e) for e in self._et]
-            return [sum(map(mul, g[i * m:(i + 1) * m], mono)) for i in range(n)]
-        except OverflowError:
-            return [math.inf] * n
-
     def _state(self, value, what: str) -> np.ndarray:
         """``value`` as a finite float (n,): a finite float array of shape (n,) as it is (the
         control-loop case, no copy), anything else through :func:`~.states.as_state`."""
@@ -163,6 +109,78 @@ class StatePredictor:
                 and math.isfinite(value.sum())):
             return value
         return as_state(value, self.dim, what)     # lists, tuples, integers, anything wrong
+
+
+def tables(mixture: PositionMixture, C: np.ndarray, exps: np.ndarray) -> tuple:
+    """The plain-float tables of :func:`field2` / :func:`fieldn`: (per component (L_k^-1 rows
+    flattened, b_k, c_k), the gating bound c or None, C^T (n m, K), n, m, E rows, whether z^E = z)."""
+    inv, lognorm = mixture.factors()
+    K, n, m = C.shape
+    b = np.einsum("kij,kj->ki", inv, mixture.means)
+    mix = tuple((*map(float, inv[k].ravel()), *map(float, b[k]), float(lognorm[k])) for k in range(K))
+    return (mix, None if mixture.bound is None else float(mixture.bound),
+            tuple(tuple(map(float, r)) for r in C.reshape(K, n * m).T), n, m,
+            tuple(tuple(int(e) for e in r) for r in exps), bool(np.array_equal(exps, np.eye(n))))
+
+
+def warp_tables(centers, vectors, sigmas) -> tuple:
+    """The plain-float bumps of :func:`warp_forward` (n-tuples) / :func:`warp_forward2` (unrolled):
+    (c_j, v_j, 1/sigma_j^2, rho_j(0))."""
+    return tuple((tuple(map(float, c)), tuple(map(float, v)), 1.0 / float(s) ** 2,
+                  math.exp(-float(np.dot(c, c)) / float(s) ** 2)) for c, v, s in zip(centers, vectors, sigmas))
+
+
+def gating(mix: tuple, bound, lj: list, z: list, far) -> list:
+    """h from l_k = c_k - q_k / 2 (module docstring): softmax(l), tempered where min q > bound
+    (q_k = 2 (c_k - l_k), l_k <- c_k - (q_k / tau) / 2, tau = min q / bound); ``far(z)`` where an
+    l_k is not finite (a quadratic form overflowed)."""
+    if not math.isfinite(sum(lj)):
+        return far(z)
+    if bound is not None:
+        q = [2.0 * (r[-1] - a) for r, a in zip(mix, lj)]
+        if min(q) > bound:                              # tempered off the data
+            tau = min(q) / bound
+            lj = [r[-1] - 0.5 * (a / tau) for r, a in zip(mix, q)]
+    top = max(lj)
+    e = [math.exp(a - top) for a in lj]
+    t = sum(e)
+    return [a / t for a in e]
+
+
+def field2(T: tuple, z: list, far) -> list:
+    """:func:`fieldn` for n = 2, unrolled."""
+    mix, bound, Ct, _, m, et, linear = T
+    z0, z1 = z
+    lj = []
+    for a00, a01, a10, a11, b0, b1, c in mix:
+        d0, d1 = a00 * z0 + a01 * z1 - b0, a10 * z0 + a11 * z1 - b1
+        lj.append(c - 0.5 * (d0 * d0 + d1 * d1))
+    h = gating(mix, bound, lj, z, far)
+    g = [sum(map(mul, col, h)) for col in Ct]               # h^T C, (2 m,)
+    try:
+        if linear:
+            return [g[0] * z0 + g[1] * z1, g[2] * z0 + g[3] * z1]
+        mono = [_monomial(z, e) for e in et]
+        return [sum(map(mul, g[:m], mono)), sum(map(mul, g[m:], mono))]
+    except OverflowError:
+        return [math.inf, math.inf]
+
+
+def fieldn(T: tuple, z: list, far) -> list:
+    """(h(z)^T C) z^E in plain floats for the tables T (:func:`tables`; module docstring), h tempered
+    by the bound; ``far(z)`` gives h where a quadratic form overflows."""
+    mix, bound, Ct, n, m, et, linear = T
+    lj = []
+    for r in mix:
+        d = [sum(map(mul, r[i * n:(i + 1) * n], z)) - r[n * n + i] for i in range(n)]
+        lj.append(r[-1] - 0.5 * sum(map(mul, d, d)))
+    h = gating(mix, bound, lj, z, far)
+    g = [sum(map(mul, col, h)) for col in Ct]               # h^T C, (n m,)
+    try:
+        mono = z if linear else [_monomial(z, e) for e in et]
+        return [sum(map(mul, g[i * m:(i + 1) * m], mono)) for i in range(n)]
+    except OverflowError:
+        return [math.inf] * n
 
 
 def _monomial(z: list, e: tuple) -> float:

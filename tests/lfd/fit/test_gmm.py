@@ -71,3 +71,21 @@ def test_block_log_joint_is_each_mixtures_own_to_the_bit():
     unit = PositionMixture(np.array([0.25, 0.75]), np.zeros((2, 3)), np.broadcast_to(np.eye(3), (2, 3, 3)).copy())
     np.testing.assert_allclose(block_log_joint([unit, unit], 1)(np.zeros((2, 3))),
                                np.log([[0.25, 0.75]] * 2) - 1.5 * np.log(2 * np.pi), rtol=1e-15)
+
+
+def test_block_log_joint_tempers_each_block_with_its_own_bound():
+    """Gating bounds None, 2 and 5 on three blocks (gating="tempered" candidates, or one without):
+    each block's numbers are its own mixture's tempered log_joint, bit for bit, and rows beyond a
+    bound differ from the plain posterior's."""
+    rng = np.random.default_rng(4)
+    mixes = []
+    for bound in (None, 2.0, 5.0):
+        A = rng.normal(size=(4, 2, 2))
+        mixes.append(PositionMixture(rng.dirichlet(np.ones(4)), rng.normal(size=(4, 2)),
+                                     A @ A.transpose(0, 2, 1) + 0.1 * np.eye(2), bound))
+    X = 3 * rng.normal(size=(30, 2))
+    together = block_log_joint(mixes, 10)(X)
+    each = np.vstack([m.log_joint(X[10 * b:10 * (b + 1)]) for b, m in enumerate(mixes)])
+    assert np.array_equal(together, each)
+    plain = PositionMixture(mixes[2].weights, mixes[2].means, mixes[2].covariances)
+    assert np.abs(plain.log_joint(X[20:]) - together[20:]).max() > 1.0

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from sosdyn.errors import InputError, ModelFileError
-from sosdyn.lfd.fit.warp import LIP_FACTOR, MAX_MAPS, MIN_CONDITION, check_maps, fit_maps, lipschitz_numbers
+from sosdyn.lfd.fit.warp import LIP_FACTOR, MAX_MAPS, MIN_CONDITION, check_maps, fit_maps, jacobian, lipschitz_numbers
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.fileformat import _digest
 from sosdyn.lfd.model.files import load_model
@@ -84,3 +84,59 @@ def test_a_forged_huge_warp_is_refused_before_any_work(model_file, tmp_path):
     with pytest.raises(ModelFileError, match="invalid state.warp_: 40000 maps, more than 10000"):
         load_model(path)
     assert time.perf_counter() - t0 < 5.0
+
+
+def _plain_jacobian(X, C, V, S, goal):
+    """The reference: J <- (I + v grad rho^T) J at every row, for every bump."""
+    U = np.array(X, dtype=float)
+    J = np.broadcast_to(np.eye(U.shape[1]), (U.shape[0],) + (U.shape[1],) * 2).copy()
+    for c, v, s in zip(C, V, S):
+        rho = np.exp(-np.sum((U - c) ** 2, axis=-1) / s ** 2)
+        grad = (-2.0 / s ** 2) * rho[:, None] * (U - c)
+        J += v[None, :, None] * np.einsum("ki,kij->kj", grad, J)[:, None, :]
+        U += (rho - np.exp(-np.sum((goal - c) ** 2) / s ** 2))[:, None] * v
+    return U, J
+
+
+@pytest.mark.parametrize("n, sigma", [(2, 0.5), (2, 0.02), (3, 1e-3), (7, 0.7)])
+def test_the_jacobian_is_the_plain_chain_rule_bit_for_bit(n, sigma):
+    rng = np.random.default_rng(n)
+    C, Z = rng.uniform(-2, 2, (60, n)), rng.uniform(-2, 2, (500, n))
+    V = rng.normal(size=(60, n)) * 0.1 * sigma
+    U, J = jacobian(Z, C, V, np.full(60, sigma), np.zeros(n))
+    U0, J0 = _plain_jacobian(Z, C, V, np.full(60, sigma), np.zeros(n))
+    assert np.array_equal(U, U0) and np.array_equal(J, J0)
+
+
+def _legal_warp(m, sigma, seed=0, n=2):
+    """m bumps of l_j = 2.7e-3 (prod (1 - l_j) = 1.8e-12 for m = MAX_MAPS, above the floor)."""
+    rng = np.random.default_rng(seed)
+    C, V = rng.uniform(-2, 2, (m, n)), rng.normal(size=(m, n))
+    V *= (2.7e-3 * sigma / LIP_FACTOR / np.linalg.norm(V, axis=1))[:, None]
+    return C, V, np.full(m, sigma)
+
+
+def test_tiny_bumps_cost_only_the_rows_they_move(monkeypatch):
+    """A maximal warp of tiny bumps (the forged-file case): J_phi is updated only where a bump is
+    not exactly 0 in float (|z - c| < sqrt(745) sigma = 0.027: 1.4e-4 of the box), so the 10^4 bumps
+    update about 1.4 states each out of 10^4 (the plain loop: all 10^8; 14-37 s to load such a
+    file, now 1.4 s: timing in problems/bench/predict.py)."""
+    counted = []
+    einsum = np.einsum
+    monkeypatch.setattr(np, "einsum", lambda *a, **k: counted.append(a[-1].shape[-1]) or einsum(*a, **k))
+    C, V, S = _legal_warp(MAX_MAPS, 1e-3)
+    Z = np.random.default_rng(1).uniform(-2, 2, (10_000, 2))
+    U, J = jacobian(Z, C, V, S, np.zeros(2))
+    assert len(counted) == MAX_MAPS and sum(counted) < 30_000            # rows updated, over all bumps
+    sv = np.linalg.svd(J, compute_uv=False)
+    assert sv.min() >= np.prod(1 - lipschitz_numbers(V, S)) and np.abs(sv - 1).max() < 0.01
+
+
+@pytest.mark.slow
+def test_a_maximal_forged_warp_loads_and_a_bad_bump_in_it_does_not(model_file, tmp_path):
+    C, V, S = _legal_warp(MAX_MAPS, 0.5)
+    loaded = load_model(_forge(model_file, tmp_path / "max.json", (C, V, S)))
+    assert loaded.verification_.warp["n_maps"] == MAX_MAPS and loaded.verification_.warp["passed"]
+    V[-1] *= 1.5 / 2.7e-3                                              # the last bump: l = 1.5
+    with pytest.raises(ModelFileError, match="invalid state.warp_: map 9999 has Lipschitz number 1.5 >= 1"):
+        load_model(_forge(model_file, tmp_path / "bad.json", (C, V, S)))

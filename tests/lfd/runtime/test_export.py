@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from sosdyn.errors import InputError, NotFittedError
+from sosdyn.lfd.fit.gmm import with_bound
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.runtime.export import export, to_cpp, to_python
 
@@ -39,14 +40,20 @@ def test_python_export_matches_predict(model, tmp_path):
     assert gen.predict(x).shape == (model.dim_,)
 
 
-def test_python_export_far_from_data_uses_the_nearest_component(tmp_path, linear_demos):
-    model = CDSP(n_components=3, warp="none").fit(linear_demos)
+@pytest.mark.parametrize("tempered", [True, False])
+def test_python_export_far_from_data_uses_the_far_weights(tmp_path, linear_demos, tempered):
+    """Where the quadratic forms overflow: one-hot on the nearest component without a gating bound,
+    the exact tempered softmax with one (both the fallback branch)."""
+    model = CDSP(n_components=3, warp="none", gating="tempered").fit(linear_demos)
+    if not tempered:
+        model.mixture_ = with_bound(model.mixture_, None)
     gen = import_source(to_python(model), tmp_path / "far.py")
     far = model.goal_ + model.scale_ * np.array([[1e156, 3e155], [-2e157, 1e150], [5e155, -5e155]])
     Z = (far - model.goal_) / model.scale_
     H = model.mixture_.responsibilities(Z)
-    assert set(np.unique(H)) == {0.0, 1.0}             # the fallback branch is the one tested
+    assert (set(np.unique(H)) == {0.0, 1.0}) != tempered      # the fallback branch is the one tested
     np.testing.assert_allclose(gen.predict(far), model.predict(far), rtol=TOL)
+    np.testing.assert_allclose(gen.predict(far[0]), model.predict(far)[0], rtol=TOL)   # one state
     with pytest.raises(ValueError, match="NaN or inf"):
         gen.predict([np.nan, 0.0])
     with pytest.raises(ValueError, match="shape"):
@@ -105,3 +112,13 @@ def test_python_export_refuses_an_overflowing_state_like_predict(model, tmp_path
         model.predict(far)
     with pytest.raises(ValueError, match="overflows float"):
         gen.predict(far)
+
+
+def test_python_export_of_one_state_is_the_predictors_arithmetic(model, tmp_path):
+    """One finite state (and a moved goal): the generated module runs the predictor's own functions,
+    so the numbers are the predictor's bit for bit (the batch path agrees to rounding only)."""
+    gen, step = import_source(to_python(model), tmp_path / "one.py"), model.predictor()
+    X = box_states(model, 200, seed=4)
+    assert all(np.array_equal(gen.predict(x), step(x)) for x in X)
+    g = model.goal_ + 0.1 * model.scale_
+    assert all(np.array_equal(gen.predict(x, goal=g), step(x, goal=g)) for x in X[:20])
