@@ -1,0 +1,220 @@
+"""Second-order CDSP: the maths on arrays (data, gating, the two convex steps, the alternation).
+
+State z = (x, v) in R^{2n}, goal g, equilibrium z* = (g, 0). In scaled units (length s, time T,
+:func:`scaled_samples`) e = (e_x, e_v) = ((x - g)/s, v T/s) and
+
+    de_x/dt' = e_v,   de_v/dt' = sum_k h_k(e) C_k e,   i.e.  de/dt' = sum_k h_k(e) F_k e,
+    F_k = [[0, I], [A_k, B_k]],  C_k = [A_k, B_k]  (n x 2n),  t' = t / T.
+
+Certificate (docs/theory.md, "Second order"): one constant M > 0 (2n x 2n) with
+
+    L_k = F_k^T M + M F_k + 2 gamma' M  <=  -margin I   for every k   (gamma' = gamma T),
+
+so V(e) = e^T M e obeys dV/dt' <= -2 gamma' V for ANY weights h in the simplex: the gating may
+depend on x and v (which is what lets two branches cross at one x with different v).
+
+Fitting alternates two convex programs through :class:`~sosdyn.sos.SOSProgram` (constant PSD
+constraints, as the first-order steps in :mod:`.steps`):
+
+* field step (M fixed): least squares of the accelerations (:class:`.steps.LeastSquaresData`
+  with features e) subject to -L_k - delta I >= 0, linear in C_k;
+* metric step (C fixed): maximise t with -L_k - t I >= 0, M - eps I >= 0, trace M = 2n (the
+  scale of M is free), plus a proximal term rho |M - M0|^2.
+
+The field step's margin is min(margin, t) with t the metric step's margin, so the current fields
+stay feasible and the training cost cannot increase. The first metric is the one of the
+critically damped nominal system A = -w^2 I, B = -2 w I (w = max(1, 2 gamma')).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from sosdyn.errors import InputError
+from sosdyn.poly import PolyMatrix, Polynomial
+from sosdyn.sos import SOSProgram, svec_to_matrix
+from ..data.demonstrations import Demonstrations
+from ..data.preprocess import MIN_WINDOW, resample_uniform, savgol_derivatives, smoothing_window
+from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm
+from .learner import subsample
+from .steps import LeastSquaresData, solve_with_fallback
+from .steps.common import proximal
+
+DERIV_WINDOW = 9                # Savitzky-Golay window for smooth data (as estimate_velocity)
+METRIC_EPS = 1e-3               # M >= eps I (trace M = 2n)
+T_MAX = 10.0                    # the metric step's margin bound
+
+
+@dataclass(frozen=True)
+class Scaled:
+    """Samples in scaled units: E (N, 2n) = (e_x, e_v), Ea (N, n) = a T^2 / s; goal g, s, T."""
+
+    goal: np.ndarray
+    length: float
+    time: float
+    E: np.ndarray
+    Ea: np.ndarray
+    window: int
+
+
+def demo_derivatives(demos: Demonstrations, window: int | None = None):
+    """Per demo (pos, vel, acc) from one cubic Savitzky-Golay fit (:func:`~sosdyn.lfd.data.preprocess.savgol_derivatives`)
+    after resampling to uniform steps; ``window`` None: the preprocess "auto" window, or
+    DERIV_WINDOW when the data are smooth. Returns (list of (pos, vel, acc), window)."""
+    uniform = [resample_uniform(d) for d in demos]
+    if window is None:
+        window = smoothing_window(uniform) or DERIV_WINDOW
+    return [tuple(savgol_derivatives(d.t, d.pos, window, order=2)) for d in uniform], window
+
+
+def scaled_samples(demos: Demonstrations, n_components: int, max_samples, window=None) -> Scaled:
+    """The stacked samples in scaled units: s = max |x_c - g_c| (1 if 0), T = s / v_rms (v_rms the
+    root-mean-square speed, so e_v has RMS 1); subsampled to ``max_samples``. InputError if fewer
+    than MIN_SAMPLES_PER_COMPONENT samples per Gaussian remain or the demos do not move."""
+    parts, window = demo_derivatives(demos, window)
+    X, V, A = (np.vstack([p[i] for p in parts]) for i in range(3))
+    X, VA, _ = subsample(X, np.hstack([V, A]), max_samples)
+    n = X.shape[1]
+    V, A = VA[:, :n], VA[:, n:]
+    if X.shape[0] < MIN_SAMPLES_PER_COMPONENT * n_components:
+        raise InputError(f"{X.shape[0]} samples are too few for {n_components} Gaussians; use fewer "
+                         "components, more demonstrations or a larger max_samples.")
+    goal = np.asarray(demos.goal, dtype=float)
+    s = float(np.abs(X - goal).max()) or 1.0
+    v_rms = float(np.sqrt((V ** 2).sum(axis=1).mean()))
+    if not v_rms > 0:
+        raise InputError("the demonstrations do not move (zero velocity everywhere); nothing to learn.")
+    T = s / v_rms
+    return Scaled(goal, s, T, np.hstack([(X - goal) / s, V * T / s]), A * T * T / s, window)
+
+
+def fit_gating(E: np.ndarray, n_components: int, seed: int) -> PositionMixture:
+    """A full-covariance GMM on the scaled states e = (e_x, e_v) (EM, :func:`~.gmm.fit_joint_gmm`):
+    h_k(e) are its responsibilities."""
+    n = E.shape[1] // 2
+    gmm, _ = fit_joint_gmm(E[:, :n], E[:, n:], n_components, seed)
+    return PositionMixture(gmm.weights_.copy(), gmm.means_.copy(), gmm.covariances_.copy())
+
+
+def companion(C: np.ndarray) -> np.ndarray:
+    """F_k = [[0, I], [A_k, B_k]] (K, 2n, 2n) from C (K, n, 2n) = [A_k, B_k]."""
+    K, n, _ = C.shape
+    F = np.zeros((K, 2 * n, 2 * n))
+    F[:, :n, n:] = np.eye(n)
+    F[:, n:, :] = C
+    return F
+
+
+def lmi(F, M, gamma):
+    """L = F^T M + M F + 2 gamma M (numbers, or PolyMatrix when F or M is one)."""
+    return F.T @ M + M @ F + 2.0 * gamma * M
+
+
+def accelerations(C, H, E):
+    """sum_k h_k C_k e at the rows of E (N, 2n), H (N, K) the weights: (N, n)."""
+    return np.einsum("tk,kij,tj->ti", H, C, E)
+
+
+def acceleration_at(X, V, goal, length, time, mixture: PositionMixture, C) -> np.ndarray:
+    """Accelerations (N, n) in data units at positions X and velocities V (N, n) for the goal
+    ``goal``: a = (s / T^2) sum_k h_k(e) C_k e, e = ((x - g)/s, v T/s). The gating sees x - g, so a
+    goal change translates the motion."""
+    E = np.hstack([(X - goal) / length, V * (time / length)])
+    return accelerations(C, mixture.responsibilities(E), E) * (length / time ** 2)
+
+
+def decision_companion(ids: np.ndarray, n: int) -> PolyMatrix:
+    """[[0, I], [C]] with C (n x 2n) the decision variables ``ids`` (row-major), as a PolyMatrix."""
+    entries = np.empty((2 * n, 2 * n), dtype=object)
+    for i in range(n):
+        for j in range(2 * n):
+            entries[i, j] = Polynomial.constant(1.0 if j == n + i else 0.0)
+            entries[n + i, j] = Polynomial.affine([ids[i * 2 * n + j]], [1.0])
+    return PolyMatrix(entries)
+
+
+def field_step(data: LeastSquaresData, M, gamma, margin, solver="CLARABEL"):
+    """M fixed: C (K, n, 2n) minimising the data term with -L_k - margin I PSD for every k.
+    Returns (C, cost)."""
+    K, n, m = data.shape
+    prog = SOSProgram("second-order field step")
+    ids = prog.new_ids(K * n * m, name="fields")
+    I = PolyMatrix.identity(m)
+    for k, own in enumerate(ids.reshape(K, n * m)):
+        prog.add_sos_matrix(-lmi(decision_companion(own, n), M, gamma) - I * margin, name=f"contraction[{k}]")
+    prog.minimize(data.form(ids))
+    sol = solve_with_fallback(prog, solver, affine_psd=True)
+    C = sol.values_of(ids).reshape(K, n, m)
+    return C, data.cost(C)
+
+
+def metric_step(C, gamma, M0=None, prox=0.0, eps=METRIC_EPS, solver="CLARABEL"):
+    """C fixed: M (trace 2n, M >= eps I) maximising the margin t, -L_k - t I PSD, t <= T_MAX;
+    with ``prox`` > 0 maximise t - prox |svec(M) - svec(M0)|^2 (a unique maximiser). Returns (M, t)."""
+    F = companion(C)
+    m = F.shape[1]
+    prog = SOSProgram("second-order metric step")
+    M = prog.new_psd(m, name="M")
+    t = prog.new_var(name="margin")
+    I = PolyMatrix.identity(m)
+    prog.add_sos_matrix(M - I * eps, name="metric positive")
+    prog.add_eq(sum(M[a, a] for a in range(m)), float(m), name="trace M = 2n")
+    prog.add_ge(T_MAX - t, 0.0, name="margin bound")
+    for k in range(F.shape[0]):
+        prog.add_sos_matrix(-lmi(F[k], M, gamma) - I * t, name=f"contraction[{k}]")
+    if prox > 0 and M0 is not None:
+        sv = np.array([M0[a, b] * (1.0 if a == b else np.sqrt(2.0)) for b in range(m) for a in range(b + 1)])
+        order = np.argsort(M.ids)
+        prog.minimize(proximal(M.ids[order], sv[order], prox) + (-t))
+    else:
+        prog.maximize(t)
+    sol = solve_with_fallback(prog, solver, affine_psd=True)
+    return svec_to_matrix(sol.values_of(M.ids), m), float(sol.value(t))
+
+
+def nominal_fields(n: int, K: int, omega: float) -> np.ndarray:
+    """C of the critically damped system A = -w^2 I, B = -2 w I, for every component."""
+    return np.tile(np.hstack([-omega ** 2 * np.eye(n), -2 * omega * np.eye(n)]), (K, 1, 1))
+
+
+@dataclass
+class SecondOrderFit:
+    """The result of :func:`fit_second_order`: fields C (K, n, 2n), metric M, margin, the gating
+    mixture on e, the scales, and one history row per step."""
+
+    scaled: Scaled
+    mixture: PositionMixture
+    C: np.ndarray
+    M: np.ndarray
+    margin: float
+    history: list = field(default_factory=list)
+
+
+def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, margin: float, max_iter: int,
+                     tol: float, prox: float = 1e-2, solver="CLARABEL", progress=None) -> SecondOrderFit:
+    """The alternation of the module docstring in scaled units (``gamma`` in 1/s of the data)."""
+    g = gamma * scaled.time
+    n = scaled.Ea.shape[1]
+    K = mixture.n_components
+    data = LeastSquaresData(mixture.responsibilities(scaled.E), scaled.E, scaled.Ea)
+    history = []
+
+    def log(row):
+        history.append(row)
+        if progress is not None:
+            progress(row)
+
+    M, t = metric_step(nominal_fields(n, K, max(1.0, 2.0 * g)), g, solver=solver)
+    C, cost = field_step(data, M, g, min(margin, t), solver)
+    log({"step": "field", "cost": cost, "margin": min(margin, t)})
+    for _ in range(max_iter):
+        M, t = metric_step(C, g, M, prox, solver=solver)
+        C_new, new = field_step(data, M, g, min(margin, t), solver)
+        log({"step": "metric+field", "cost": new, "metric_margin": t, "cond_M": float(np.linalg.cond(M))})
+        if new > cost:          # round-off: the old fields are feasible (margin t) under the new M
+            break
+        C, cost, gain = C_new, new, cost - new
+        if gain <= tol * max(cost, 1e-12):
+            break
+    return SecondOrderFit(scaled, mixture, C, M, min(margin, t), history)

@@ -1,0 +1,231 @@
+"""The second-order CDSP estimator: certified motions that may cross themselves.
+
+Model (scaled units, :mod:`sosdyn.lfd.fit.second_order`): e = ((x - g)/s, v T/s),
+de/dt' = sum_k h_k(e) F_k e with F_k = [[0, I], [A_k, B_k]]; certificate: one constant M > 0 with
+F_k^T M + M F_k <= -2 gamma' M for every k (gamma' = gamma T), checked independently
+(:mod:`sosdyn.lfd.fit.second_order_check`) before a model is returned. Then from EVERY (x0, v0),
+|| (x - g, v) || in the metric decays like exp(-gamma t): x -> g and v -> 0 (docs/theory.md,
+"Second order"). The gating h(e) depends on v, so two branches may cross at one x.
+"""
+from __future__ import annotations
+
+import inspect
+import time
+from pathlib import Path
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from sosdyn.errors import InputError, NotCertifiedError, NotFittedError
+from ..data.demonstrations import check_demonstrations, sample_step
+from ..data.poses import PoseDemonstrations
+from ..fit.certificate import DEFAULT_SAMPLES
+from ..fit.params import check_params, check_solver, resolve_seed
+from ..fit.second_order import acceleration_at, fit_gating, fit_second_order, scaled_samples
+from ..fit.second_order_check import check_second_order, energy_violations, excursion_bound
+from ..rollout import Trajectory, as_vector
+from ..rollout import rollout as integrate
+from ..runtime.second_order import SecondOrderPredictor
+from ..runtime.states import as_state, as_states
+from .cdsp import DEFAULTS as FIRST_ORDER_DEFAULTS
+from .fileformat import write_model_file
+
+SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION = "sosdyn-second-order", 1
+PARAMS = ("n_components", "gamma", "margin", "max_iter", "tol", "metric_prox", "max_samples", "random_state",
+          "verify_samples", "solver")
+
+
+class SecondOrderCDSP:
+    """Learn a certified second-order motion ẍ = a(x, ẋ) from demonstrations (positions + times).
+
+    **Parameters**: ``n_components`` (int or "bic": Gaussians of the gating GMM on (x, v)),
+    ``gamma`` (1/s: the certified decay rate of ||(x - g, v)||_M), ``margin`` (the fields' LMI
+    margin, scaled units), ``max_iter`` / ``tol`` (alternations, relative cost decrease),
+    ``metric_prox`` (proximal weight of the metric step), ``max_samples``, ``random_state`` (EM and
+    the sampled check), ``verify_samples`` (states of the sampled check), ``solver``.
+
+    **Learned**: ``goal_``, ``dim_``, ``dt_``, ``length_scale_`` (s), ``time_scale_`` (T),
+    ``mixture_`` (the gating on e), ``C_`` (K, n, 2n) = [A_k, B_k] in scaled units, ``M_`` (2n, 2n),
+    ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`),
+    ``energy_violations_`` (how often the training demos themselves break the certified decrease),
+    ``history_``, ``fit_seconds_``, ``seed_``. In data units A_k / T^2 and B_k / T: :meth:`fields`.
+    """
+
+    name = "CDSP-2"
+
+    def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=20, tol=1e-4, metric_prox=1e-2,
+                 max_samples=3000, random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
+        self.n_components = n_components
+        self.gamma = gamma
+        self.margin = margin
+        self.max_iter = max_iter
+        self.tol = tol
+        self.metric_prox = metric_prox
+        self.max_samples = max_samples
+        self.random_state = random_state
+        self.verify_samples = verify_samples
+        self.solver = solver
+
+    def get_params(self) -> dict:
+        return {k: getattr(self, k) for k in PARAMS}
+
+    def __repr__(self) -> str:
+        changed = [f"{k}={v!r}" for k, v in self.get_params().items() if not (v is DEFAULTS[k] or v == DEFAULTS[k])]
+        if hasattr(self, "C_"):
+            changed.append(f"fitted: K={self.C_.shape[0]}, n={self.dim_}, certified={self.certificate_.passed}")
+        return f"SecondOrderCDSP({', '.join(changed)})"
+
+    def check_params(self) -> None:
+        """Types and ranges (the first-order checks of the shared parameters; InputError with a hint)."""
+        check_params({**FIRST_ORDER_DEFAULTS, **self.get_params()}, {**FIRST_ORDER_DEFAULTS, **DEFAULTS})
+        check_solver(self.solver)
+
+    # ------------------------------------------------------------------ fitting
+    def fit(self, demos):
+        """Learn from Demonstrations (validated first, as :meth:`CDSP.fit`); returns self.
+
+        Raises NotCertifiedError when the independent check fails (no model is returned then)."""
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._fit(demos)
+
+    def _fit(self, demos):
+        start = time.perf_counter()
+        self.check_params()
+        if isinstance(demos, PoseDemonstrations):
+            raise InputError("these are pose demonstrations; SecondOrderCDSP learns positions. "
+                             "Try: sosdyn.PoseCDSP for poses, or Demonstrations of positions.")
+        demos = check_demonstrations(demos)
+        seed = resolve_seed(self.random_state)
+        K = 1 if self.n_components == "bic" else int(self.n_components)
+        scaled = scaled_samples(demos, K, self.max_samples)
+        mixture = fit_gating(scaled.E, self.n_components, seed)
+        result = fit_second_order(scaled, mixture, float(self.gamma), float(self.margin), int(self.max_iter),
+                                  float(self.tol), float(self.metric_prox), self.solver)
+        report = check_second_order(result.C, result.M, self.gamma, scaled.time, mixture, self.verify_samples, seed)
+        if not report.passed:
+            raise NotCertifiedError(f"the second-order certificate failed its independent check: {report}",
+                                    status="not_certified", hint="a smaller gamma or a larger margin")
+        n = demos.dim
+        self.seed_, self.dim_, self.goal_, self.dt_ = seed, n, scaled.goal, sample_step(demos)
+        self.length_scale_, self.time_scale_, self.window_ = scaled.length, scaled.time, scaled.window
+        self.mixture_, self.C_, self.M_, self.margin_ = mixture, result.C, result.M, result.margin
+        self.certificate_, self.history_ = report, result.history
+        self.energy_violations_ = energy_violations(result.M, report.gamma_scaled, scaled.E,
+                                                    np.hstack([scaled.E[:, n:], scaled.Ea]))
+        self.fit_seconds_ = time.perf_counter() - start
+        return self
+
+    # ------------------------------------------------------------------ prediction
+    def _check_fitted(self):
+        if not hasattr(self, "C_"):
+            raise NotFittedError("this SecondOrderCDSP model is not fitted yet; call fit(demos) first")
+
+    def acceleration(self, X, V, goal):
+        """Accelerations (m, n) at the rows of X and V for the goal ``goal`` (no input checks)."""
+        return acceleration_at(X, V, goal, self.length_scale_, self.time_scale_, self.mixture_, self.C_)
+
+    def predict(self, X, V):
+        """Accelerations (m, n) at positions X and velocities V ((m, n) each, or one state (n,))."""
+        self._check_fitted()
+        X, V = as_states(X, self.dim_, "X"), as_states(V, self.dim_, "V")
+        if X.shape != V.shape:
+            raise InputError(f"X has {X.shape[0]} states but V has {V.shape[0]}; pass one velocity per position.")
+        with np.errstate(over="ignore", invalid="ignore"):
+            A = self.acceleration(X, V, self.goal_)
+        if not np.isfinite(A).all():
+            raise InputError("the states are so far from the data that the acceleration overflows float. "
+                             "Try: states within a few orders of magnitude of the demonstrations.")
+        return A
+
+    def fields(self):
+        """(A, B) per component in data units: A_k / T^2 (K, n, n) and B_k / T (K, n, n)."""
+        self._check_fitted()
+        n, T = self.dim_, self.time_scale_
+        return self.C_[:, :, :n] / T ** 2, self.C_[:, :, n:] / T
+
+    def predictor(self) -> SecondOrderPredictor:
+        """A one-state evaluator ``step(x, v, goal=None) -> acceleration`` (:mod:`~sosdyn.lfd.runtime.second_order`)."""
+        self._check_fitted()
+        return SecondOrderPredictor(self.goal_, self.length_scale_, self.time_scale_, self.mixture_, self.C_)
+
+    def excursion_bound(self, x0, v0=None, goal=None) -> float:
+        """The certified bound on max_t |x(t) - goal| (data units) from (x0, v0): the projection on x
+        of the ellipsoid {e : e^T M e <= e0^T M e0} (:func:`~sosdyn.lfd.fit.second_order_check.excursion_bound`)."""
+        self._check_fitted()
+        x0, v0, goal = self._start(x0, v0, goal)
+        e0 = np.concatenate([(x0 - goal) / self.length_scale_, v0 * self.time_scale_ / self.length_scale_])
+        return excursion_bound(self.M_, e0) * self.length_scale_
+
+    def _start(self, x0, v0, goal):
+        n = self.dim_
+        x0 = as_state(x0, n, "x0")
+        v0 = np.zeros(n) if v0 is None else as_state(v0, n, "v0")
+        return x0, v0, self.goal_ if goal is None else as_state(goal, n, "goal")
+
+    def rollout(self, x0, duration, v0=None, dt=None, goal=None, perturbations=(), goal_changes=()) -> Trajectory:
+        """Integrate (x, v) from (x0, v0) (v0 None: at rest) for ``duration`` s on a grid of step ``dt``
+        (None: ``dt_``). Pushes ``[(t, dx)]`` with dx of shape (n,) (position) or (2n,) (position and
+        velocity); goal changes ``[(t, g)]`` (the motion translates). The Trajectory has ``vel``; a
+        push's ``before`` / ``after`` are (x, v) states (:func:`sosdyn.lfd.rollout.rollout`)."""
+        self._check_fitted()
+        n = self.dim_
+        x0, v0, goal = self._start(x0, v0, goal)
+        pushes = [(t, np.concatenate([d, np.zeros(n)]) if d.size == n else d)
+                  for t, d in _pairs(perturbations, "perturbation", (n, 2 * n))]
+        goals = [(t, np.concatenate([g, np.zeros(n)])) for t, g in _pairs(goal_changes, "goal change", (n,))]
+
+        def field(Y, G):
+            return np.hstack([Y[:, n:], self.acceleration(Y[:, :n], Y[:, n:], G[:n])])
+
+        traj = integrate(field, np.concatenate([x0, v0]), duration=duration, dt=self.dt_ if dt is None else dt,
+                         goal=np.concatenate([goal, np.zeros(n)]), perturbations=pushes, goal_changes=goals,
+                         scale=self.length_scale_)
+        events = [dict(e, before=e["before"][:n], after=e["after"][:n]) if e["kind"] == "goal_change" else e
+                  for e in traj.events]
+        return Trajectory(traj.t, traj.pos[:, :n], traj.goal_history[:, :n], events, vel=traj.pos[:, n:])
+
+    # ------------------------------------------------------------------ evidence and files
+    def verify(self, n_samples=None, seed=None):
+        """The independent check again (exact LMIs, sampled decrease at ``n_samples`` states drawn
+        with ``seed``; defaults ``verify_samples`` and ``seed_``)."""
+        self._check_fitted()
+        return check_second_order(self.C_, self.M_, self.gamma, self.time_scale_, self.mixture_,
+                                  self.verify_samples if n_samples is None else n_samples,
+                                  self.seed_ if seed is None else seed)
+
+    def state(self) -> dict:
+        """The learned values a model file holds (plain lists)."""
+        self._check_fitted()
+        mix = self.mixture_
+        return {"goal": self.goal_, "dt": self.dt_, "length_scale": self.length_scale_,
+                "time_scale": self.time_scale_, "window": self.window_, "weights": mix.weights,
+                "means": mix.means, "covariances": mix.covariances, "C": self.C_, "M": self.M_,
+                "margin": self.margin_}
+
+    def save(self, path, key=None) -> Path:
+        """Write the model file (JSON, checksummed, atomic; signed with ``key``); ``sd.load_model`` reads it."""
+        params = dict(self.get_params(), random_state=self.seed_)
+        return write_model_file({"format": SECOND_ORDER_FORMAT, "version": SECOND_ORDER_VERSION,
+                                 "params": params, "state": self.state()}, path, key)
+
+
+def _pairs(items, kind: str, sizes: tuple) -> list:
+    """``[(time, vector)]`` with vectors of a length in ``sizes`` (times are checked by the integrator)."""
+    if isinstance(items, (str, bytes, dict)) or not hasattr(items, "__iter__"):
+        raise InputError(f"{kind}s must be a list of pairs (time, vector), got {type(items).__name__}.")
+    out = []
+    for i, item in enumerate(items):
+        try:
+            t, vector = item
+        except (TypeError, ValueError):
+            raise InputError(f"{kind} {i} must be a pair (time, vector), got {item!r}.") from None
+        vector = as_vector(vector, None, f"{kind} {i} vector")
+        if vector.size not in sizes:
+            raise InputError(f"{kind} {i} vector has {vector.size} entries; expected "
+                             f"{' or '.join(map(str, sizes))} (position" + (", or position and velocity)."
+                                                                          if len(sizes) > 1 else ")."))
+        out.append((t, vector))
+    return out
+
+
+DEFAULTS = {name: p.default for name, p in inspect.signature(SecondOrderCDSP).parameters.items()}
