@@ -27,7 +27,7 @@ critically damped nominal system A = -w^2 I, B = -2 w I (w = max(1, 2 gamma')).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -176,45 +176,3 @@ def metric_step(C, gamma, M0=None, prox=0.0, eps=METRIC_EPS, solver="CLARABEL"):
 def nominal_fields(n: int, K: int, omega: float) -> np.ndarray:
     """C of the critically damped system A = -w^2 I, B = -2 w I, for every component."""
     return np.tile(np.hstack([-omega ** 2 * np.eye(n), -2 * omega * np.eye(n)]), (K, 1, 1))
-
-
-@dataclass
-class SecondOrderFit:
-    """The result of :func:`fit_second_order`: fields C (K, n, 2n), metric M, margin, the gating
-    mixture on e, the scales, and one history row per step."""
-
-    scaled: Scaled
-    mixture: PositionMixture
-    C: np.ndarray
-    M: np.ndarray
-    margin: float
-    history: list = field(default_factory=list)
-
-
-def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, margin: float, max_iter: int,
-                     tol: float, prox: float = 1e-2, solver="CLARABEL", progress=None) -> SecondOrderFit:
-    """The alternation of the module docstring in scaled units (``gamma`` in 1/s of the data)."""
-    g = gamma * scaled.time
-    n = scaled.Ea.shape[1]
-    K = mixture.n_components
-    data = LeastSquaresData(mixture.responsibilities(scaled.E), scaled.E, scaled.Ea)
-    history = []
-
-    def log(row):
-        history.append(row)
-        if progress is not None:
-            progress(row)
-
-    M, t = metric_step(nominal_fields(n, K, max(1.0, 2.0 * g)), g, solver=solver)
-    C, cost = field_step(data, M, g, min(margin, t), solver)
-    log({"step": "field", "cost": cost, "margin": min(margin, t)})
-    for _ in range(max_iter):
-        M, t = metric_step(C, g, M, prox, solver=solver)
-        C_new, new = field_step(data, M, g, min(margin, t), solver)
-        log({"step": "metric+field", "cost": new, "metric_margin": t, "cond_M": float(np.linalg.cond(M))})
-        if new > cost:          # round-off: the old fields are feasible (margin t) under the new M
-            break
-        C, cost, gain = C_new, new, cost - new
-        if gain <= tol * max(cost, 1e-12):
-            break
-    return SecondOrderFit(scaled, mixture, C, M, min(margin, t), history)

@@ -21,7 +21,8 @@ from ..data.demonstrations import check_demonstrations, sample_step
 from ..data.poses import PoseDemonstrations
 from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.params import check_params, check_solver, resolve_seed
-from ..fit.second_order import acceleration_at, fit_gating, fit_second_order, scaled_samples
+from ..fit.second_order import acceleration_at, fit_gating, scaled_samples
+from ..fit.second_order_fit import METHODS, fit_second_order
 from ..fit.second_order_check import check_second_order, energy_violations, excursion_bound
 from ..rollout import Trajectory, as_vector
 from ..rollout import rollout as integrate
@@ -31,8 +32,8 @@ from .cdsp import DEFAULTS as FIRST_ORDER_DEFAULTS
 from .fileformat import write_model_file
 
 SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION = "sosdyn-second-order", 1
-PARAMS = ("n_components", "gamma", "margin", "max_iter", "tol", "metric_prox", "max_samples", "random_state",
-          "verify_samples", "solver")
+PARAMS = ("n_components", "gamma", "margin", "max_iter", "tol", "metric_prox", "method", "max_samples",
+          "random_state", "verify_samples", "solver")
 
 
 class SecondOrderCDSP:
@@ -41,7 +42,8 @@ class SecondOrderCDSP:
     **Parameters**: ``n_components`` (int or "bic": Gaussians of the gating GMM on (x, v)),
     ``gamma`` (1/s: the certified decay rate of ||(x - g, v)||_M), ``margin`` (the fields' LMI
     margin, scaled units), ``max_iter`` / ``tol`` (alternations, relative cost decrease),
-    ``metric_prox`` (proximal weight of the metric step), ``max_samples``, ``random_state`` (EM and
+    ``metric_prox`` (proximal weight of the metric step; the joint step uses 1 % of it), ``method``
+    ("ica": joint convex steps in (C, M), or "alternating": metric / field steps), ``max_samples``, ``random_state`` (EM and
     the sampled check), ``verify_samples`` (states of the sampled check), ``solver``.
 
     **Learned**: ``goal_``, ``dim_``, ``dt_``, ``length_scale_`` (s), ``time_scale_`` (T),
@@ -54,13 +56,14 @@ class SecondOrderCDSP:
     name = "CDSP-2"
 
     def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=20, tol=1e-4, metric_prox=1e-2,
-                 max_samples=3000, random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
+                 method="ica", max_samples=3000, random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
         self.n_components = n_components
         self.gamma = gamma
         self.margin = margin
         self.max_iter = max_iter
         self.tol = tol
         self.metric_prox = metric_prox
+        self.method = method
         self.max_samples = max_samples
         self.random_state = random_state
         self.verify_samples = verify_samples
@@ -79,6 +82,8 @@ class SecondOrderCDSP:
         """Types and ranges (the first-order checks of the shared parameters; InputError with a hint)."""
         check_params({**FIRST_ORDER_DEFAULTS, **self.get_params()}, {**FIRST_ORDER_DEFAULTS, **DEFAULTS})
         check_solver(self.solver)
+        if not isinstance(self.method, str) or self.method not in METHODS:
+            raise InputError(f"method must be one of {METHODS}, got {self.method!r}. Try: the default, method='ica'.")
 
     # ------------------------------------------------------------------ fitting
     def fit(self, demos):
@@ -100,7 +105,7 @@ class SecondOrderCDSP:
         scaled = scaled_samples(demos, K, self.max_samples)
         mixture = fit_gating(scaled.E, self.n_components, seed)
         result = fit_second_order(scaled, mixture, float(self.gamma), float(self.margin), int(self.max_iter),
-                                  float(self.tol), float(self.metric_prox), self.solver)
+                                  float(self.tol), float(self.metric_prox), self.method, self.solver)
         report = check_second_order(result.C, result.M, self.gamma, scaled.time, mixture, self.verify_samples, seed)
         if not report.passed:
             raise NotCertifiedError(f"the second-order certificate failed its independent check: {report}",
