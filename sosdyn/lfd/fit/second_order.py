@@ -31,11 +31,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sosdyn.errors import InputError
+from sosdyn.errors import InputError, SolverError
 from sosdyn.poly import PolyMatrix, Polynomial
 from sosdyn.sos import SOSProgram, svec_to_matrix
-from ..data.demonstrations import Demonstrations
+from ..data.demonstrations import Demonstrations, sample_step
 from ..data.preprocess import MIN_WINDOW, resample_uniform, savgol_derivatives, smoothing_window
+from ..rollout import euler_until_rest
+from ..rollout.quality import deviation
 from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm
 from .learner import subsample
 from .steps import LeastSquaresData, solve_with_fallback
@@ -48,7 +50,8 @@ T_MAX = 10.0                    # the metric step's margin bound
 
 @dataclass(frozen=True)
 class Scaled:
-    """Samples in scaled units: E (N, 2n) = (e_x, e_v), Ea (N, n) = a T^2 / s; goal g, s, T."""
+    """Samples in scaled units: E (N, 2n) = (e_x, e_v), Ea (N, n) = a T^2 / s; goal g, s, T; per
+    demo its first state (``starts`` (m, 2n)), its positions e_x (``paths``) and the step dt / T."""
 
     goal: np.ndarray
     length: float
@@ -56,6 +59,9 @@ class Scaled:
     E: np.ndarray
     Ea: np.ndarray
     window: int
+    starts: np.ndarray
+    paths: list
+    dt: float
 
 
 def demo_derivatives(demos: Demonstrations, window: int | None = None):
@@ -86,7 +92,9 @@ def scaled_samples(demos: Demonstrations, n_components: int, max_samples, window
     if not v_rms > 0:
         raise InputError("the demonstrations do not move (zero velocity everywhere); nothing to learn.")
     T = s / v_rms
-    return Scaled(goal, s, T, np.hstack([(X - goal) / s, V * T / s]), A * T * T / s, window)
+    starts = np.array([np.concatenate([(p[0][0] - goal) / s, p[1][0] * T / s]) for p in parts])
+    return Scaled(goal, s, T, np.hstack([(X - goal) / s, V * T / s]), A * T * T / s, window, starts,
+                  [(p[0] - goal) / s for p in parts], sample_step(demos) / T)
 
 
 def fit_gating(E: np.ndarray, n_components: int, seed: int) -> PositionMixture:
@@ -122,6 +130,23 @@ def acceleration_at(X, V, goal, length, time, mixture: PositionMixture, C) -> np
     goal change translates the motion."""
     E = np.hstack([(X - goal) / length, V * (time / length)])
     return accelerations(C, mixture.responsibilities(E), E) * (length / time ** 2)
+
+
+def training_deviation(C, mixture: PositionMixture, scaled: Scaled) -> float:
+    """Mean over the training demos of the mean distance (scaled units) from each demo position
+    to the nearest point of the model's rollout from the demo's first (x, v): explicit Euler with
+    the data's step for the demo's duration (:func:`~sosdyn.lfd.rollout.euler_until_rest`, all
+    demos at once). A rollout that stops being finite scores inf."""
+    n = C.shape[1]
+
+    def rhs(E):
+        return np.hstack([E[:, n:], accelerations(C, mixture.responsibilities(E), E)])
+    steps = max(len(p) for p in scaled.paths) + 1
+    try:
+        paths = euler_until_rest(rhs, scaled.starts, dt=scaled.dt, max_steps=steps, vel_tol=0.0, window=1)
+    except (SolverError, InputError):
+        return float("inf")
+    return float(np.mean([deviation(p, q[:, :n]).mean() for p, q in zip(scaled.paths, paths)]))
 
 
 def decision_companion(ids: np.ndarray, n: int) -> PolyMatrix:

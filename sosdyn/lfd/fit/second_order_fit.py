@@ -26,7 +26,7 @@ from sosdyn.poly import PolyMatrix
 from sosdyn.sos import SOSProgram, svec_to_matrix
 from .gmm import PositionMixture
 from .second_order import (METRIC_EPS, Scaled, companion, decision_companion, field_step, lmi, metric_step,
-                           nominal_fields)
+                           nominal_fields, training_deviation)
 from .steps import LeastSquaresData, solve_with_fallback
 from .steps.common import proximal
 
@@ -75,7 +75,7 @@ def ica_step(data: LeastSquaresData, C0, M0, gamma, margin, alpha=1.0, prox=1e-4
 @dataclass
 class SecondOrderFit:
     """The result of :func:`fit_second_order`: fields C (K, n, 2n), metric M, margin, the gating
-    mixture on e, the scales, and one history row per step."""
+    mixture on e, the scales, one history row per iterate and the row of the iterate chosen."""
 
     scaled: Scaled
     mixture: PositionMixture
@@ -83,9 +83,11 @@ class SecondOrderFit:
     M: np.ndarray
     margin: float
     history: list = field(default_factory=list)
+    chosen: int = 0
 
 
 METHODS = ("ica", "alternating")
+ALPHA_MIN = 1e-3                # Young's weight a stays in [1e-3, 1e3]
 
 
 def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, margin: float, max_iter: int,
@@ -95,9 +97,13 @@ def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, mar
 
     Start: M of the critically damped nominal fields (:func:`~.second_order.metric_step`), then the
     field step under it. Each iteration is, for ``method`` "ica", a joint step (:func:`ica_step`,
-    Young weight a = 1) followed by a field step under its M; for "alternating", a metric step
+    Young weight a = 1) followed by a field step under its M (a = |dM| / |dC| of the previous joint step, the
+    weight that makes Young's bound tight for a step like it); for "alternating", a metric step
     (max margin, proximal) then a field step. Every step keeps the current fields feasible, so
     the cost never increases; stop when it falls by less than ``tol`` (relative) in an iteration.
+    Every iterate is certified; the one returned is the one whose rollouts from the training
+    demos' first states deviate least from them (:func:`~.second_order.training_deviation`): the
+    acceleration cost is a poor proxy for a twice-integrated path near a crossing.
     """
     g = gamma * scaled.time
     n = scaled.Ea.shape[1]
@@ -112,21 +118,30 @@ def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, mar
 
     M, t = metric_step(nominal_fields(n, K, max(1.0, 2.0 * g)), g, solver=solver)
     C, cost = field_step(data, M, g, min(margin, t), solver)
-    log({"step": "start", "cost": cost, "margin": min(margin, t)})
+    best = (training_deviation(C, mixture, scaled), C, M, 0)
+    log({"step": "start", "cost": cost, "margin": min(margin, t), "deviation": best[0]})
+    alpha = 1.0
     for _ in range(max_iter):
         if method == "ica":
-            C1, M1, _ = ica_step(data, C, M, g, min(margin, lmi_margin(C, M, g)), prox=prox * 1e-2, solver=solver)
+            C1, M1, _ = ica_step(data, C, M, g, min(margin, lmi_margin(C, M, g)), alpha, prox * 1e-2, solver=solver)
             t = lmi_margin(C1, M1, g)
+            dC, dM = np.linalg.norm(C1 - C), np.linalg.norm(M1 - M)
+            if dC > 0 and dM > 0:       # Young's bound is tightest for a = |dM| / |dC|
+                alpha = float(np.clip(dM / dC, ALPHA_MIN, 1.0 / ALPHA_MIN))
         else:
             M1, t = metric_step(C, g, M, prox, solver=solver)
             C1 = C
         if t <= 0:              # round-off broke the inner approximation's guarantee: stop here
             break
         C_new, new = field_step(data, M1, g, min(margin, t), solver)
-        log({"step": method, "cost": new, "margin": t, "cond_M": float(np.linalg.cond(M1))})
         if new > cost:          # round-off: the current fields stay (they are feasible under M1)
             break
         C, M, cost, gain = C_new, M1, new, cost - new
+        dev = training_deviation(C, mixture, scaled)
+        log({"step": method, "cost": new, "margin": t, "cond_M": float(np.linalg.cond(M1)), "deviation": dev})
+        if dev < best[0]:
+            best = (dev, C, M, len(history) - 1)
         if gain <= tol * max(cost, 1e-12):
             break
-    return SecondOrderFit(scaled, mixture, C, M, lmi_margin(C, M, g), history)
+    dev, C, M, chosen = best
+    return SecondOrderFit(scaled, mixture, C, M, lmi_margin(C, M, g), history, chosen)

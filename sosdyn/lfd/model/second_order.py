@@ -50,7 +50,8 @@ class SecondOrderCDSP:
     ``mixture_`` (the gating on e), ``C_`` (K, n, 2n) = [A_k, B_k] in scaled units, ``M_`` (2n, 2n),
     ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`),
     ``energy_violations_`` (how often the training demos themselves break the certified decrease),
-    ``history_``, ``fit_seconds_``, ``seed_``. In data units A_k / T^2 and B_k / T: :meth:`fields`.
+    ``history_`` (one row per certified iterate), ``chosen_iter_`` (the row returned: least training
+    rollout deviation), ``fit_seconds_``, ``seed_``. In data units A_k / T^2 and B_k / T: :meth:`fields`.
     """
 
     name = "CDSP-2"
@@ -114,7 +115,7 @@ class SecondOrderCDSP:
         self.seed_, self.dim_, self.goal_, self.dt_ = seed, n, scaled.goal, sample_step(demos)
         self.length_scale_, self.time_scale_, self.window_ = scaled.length, scaled.time, scaled.window
         self.mixture_, self.C_, self.M_, self.margin_ = mixture, result.C, result.M, result.margin
-        self.certificate_, self.history_ = report, result.history
+        self.certificate_, self.history_, self.chosen_iter_ = report, result.history, result.chosen
         self.energy_violations_ = energy_violations(result.M, report.gamma_scaled, scaled.E,
                                                     np.hstack([scaled.E[:, n:], scaled.Ea]))
         self.fit_seconds_ = time.perf_counter() - start
