@@ -34,6 +34,7 @@ import numpy as np
 from sosdyn.errors import InputError, SolverError
 from sosdyn.poly import PolyMatrix, Polynomial
 from sosdyn.sos import SOSProgram, svec_to_matrix
+from sosdyn.sos.gram import matrix_to_svec
 from ..data.demonstrations import Demonstrations, sample_step
 from ..data.preprocess import MIN_WINDOW, resample_uniform, savgol_derivatives, smoothing_window
 from ..rollout import euler_until_rest
@@ -97,6 +98,20 @@ def scaled_samples(demos: Demonstrations, n_components: int, max_samples, window
                   [(p[0] - goal) / s for p in parts], sample_step(demos) / T)
 
 
+def tracking_samples(scaled: Scaled, copies: int, sigma: float, omega: float, seed: int):
+    """(E, Ea) of the samples and ``copies`` perturbed copies of each: e + d, d ~ N(0, sigma^2 I)
+    (scaled units), labelled a - w^2 d_x - 2 w d_v (a critically damped pull back to the demo at
+    rate w). They teach the fields to return to a demonstration they were pushed off, which the
+    accelerations along the demos alone do not say; ``copies`` 0: the samples alone."""
+    if copies == 0:
+        return scaled.E, scaled.Ea
+    n = scaled.Ea.shape[1]
+    d = np.random.default_rng(seed).normal(0.0, sigma, size=(copies,) + scaled.E.shape)
+    E = np.vstack([scaled.E] + [scaled.E + di for di in d])
+    Ea = np.vstack([scaled.Ea] + [scaled.Ea - omega ** 2 * di[:, :n] - 2 * omega * di[:, n:] for di in d])
+    return E, Ea
+
+
 def fit_gating(E: np.ndarray, n_components: int, seed: int) -> PositionMixture:
     """A full-covariance GMM on the scaled states e = (e_x, e_v) (EM, :func:`~.gmm.fit_joint_gmm`):
     h_k(e) are its responsibilities."""
@@ -143,7 +158,8 @@ def training_deviation(C, mixture: PositionMixture, scaled: Scaled) -> float:
         return np.hstack([E[:, n:], accelerations(C, mixture.responsibilities(E), E)])
     steps = max(len(p) for p in scaled.paths) + 1
     try:
-        paths = euler_until_rest(rhs, scaled.starts, dt=scaled.dt, max_steps=steps, vel_tol=0.0, window=1)
+        paths = euler_until_rest(rhs, scaled.starts, dt=scaled.dt, max_steps=steps,
+                                 vel_tol=np.finfo(float).tiny, window=1)
     except (SolverError, InputError):
         return float("inf")
     return float(np.mean([deviation(p, q[:, :n]).mean() for p, q in zip(scaled.paths, paths)]))
@@ -196,6 +212,36 @@ def metric_step(C, gamma, M0=None, prox=0.0, eps=METRIC_EPS, solver="CLARABEL"):
         prog.maximize(t)
     sol = solve_with_fallback(prog, solver, affine_psd=True)
     return svec_to_matrix(sol.values_of(M.ids), m), float(sol.value(t))
+
+
+def energy_metric_step(C, gamma, E, Edot, margin, M0, prox=0.0, eps=METRIC_EPS, solver="CLARABEL"):
+    """C fixed: the metric along which the demonstrations themselves best obey the certified
+    decrease. With S_t = (e_t de_t^T + de_t e_t^T + 2 gamma e_t e_t^T) / |e_t|^2 (rows of E, Edot),
+    minimise mean_t max(0, tr(M S_t)) (+ prox |M - M0|^2) subject to -L_k - margin I PSD for the
+    current fields (so they stay feasible), M >= eps I, trace M = 2n. Returns M."""
+    F = companion(C)
+    m = F.shape[1]
+    prog = SOSProgram("second-order energy metric step")
+    M = prog.new_psd(m, name="M")
+    I = PolyMatrix.identity(m)
+    prog.add_sos_matrix(M - I * eps, name="metric positive")
+    prog.add_eq(sum(M[a, a] for a in range(m)), float(m), name="trace M = 2n")
+    for k in range(F.shape[0]):
+        prog.add_sos_matrix(-lmi(F[k], M, gamma) - I * margin, name=f"contraction[{k}]")
+    S = (np.einsum("ti,tj->tij", E, Edot) + np.einsum("ti,tj->tij", Edot, E) + 2 * gamma * np.einsum("ti,tj->tij", E, E))
+    S /= np.einsum("ti,ti->t", E, E)[:, None, None]
+    sv = np.array([matrix_to_svec(St) for St in S])               # tr(M S_t) = svec(M) . svec(S_t)
+    slack = prog.new_ids(len(S), name="violations")
+    for t, (row, sid) in enumerate(zip(sv, slack)):
+        prog.add_ge(Polynomial.affine([sid], [1.0]), 0.0, name=f"slack[{t}]")
+        prog.add_ge(Polynomial.affine(np.concatenate([[sid], M.ids]), np.concatenate([[1.0], -row])), 0.0,
+                    name=f"violation[{t}]")
+    mean = Polynomial.affine(slack, np.full(len(slack), 1.0 / len(slack)))
+    sv0 = matrix_to_svec(M0)
+    order = np.argsort(M.ids)
+    prog.minimize(proximal(M.ids[order], sv0[order], prox) + mean)
+    sol = solve_with_fallback(prog, solver, affine_psd=True)
+    return svec_to_matrix(sol.values_of(M.ids), m)
 
 
 def nominal_fields(n: int, K: int, omega: float) -> np.ndarray:

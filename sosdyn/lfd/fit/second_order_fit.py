@@ -25,8 +25,9 @@ import numpy as np
 from sosdyn.poly import PolyMatrix
 from sosdyn.sos import SOSProgram, svec_to_matrix
 from .gmm import PositionMixture
-from .second_order import (METRIC_EPS, Scaled, companion, decision_companion, field_step, lmi, metric_step,
-                           nominal_fields, training_deviation)
+from .second_order import (METRIC_EPS, Scaled, companion, decision_companion, energy_metric_step, field_step, lmi,
+                           metric_step,
+                           nominal_fields, tracking_samples, training_deviation)
 from .steps import LeastSquaresData, solve_with_fallback
 from .steps.common import proximal
 
@@ -86,13 +87,14 @@ class SecondOrderFit:
     chosen: int = 0
 
 
-METHODS = ("ica", "alternating")
+METHODS = ("ica", "alternating", "energy")
+ENERGY_ROWS = 500               # demo samples in the energy metric step
 ALPHA_MIN = 1e-3                # Young's weight a stays in [1e-3, 1e3]
 
 
 def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, margin: float, max_iter: int,
                      tol: float, prox: float = 1e-2, method: str = "ica", solver="CLARABEL",
-                     progress=None) -> SecondOrderFit:
+                     progress=None, tracking=None) -> SecondOrderFit:
     """Fit C and M in scaled units (``gamma`` in 1/s of the data, gamma' = gamma T).
 
     Start: M of the critically damped nominal fields (:func:`~.second_order.metric_step`), then the
@@ -108,7 +110,8 @@ def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, mar
     g = gamma * scaled.time
     n = scaled.Ea.shape[1]
     K = mixture.n_components
-    data = LeastSquaresData(mixture.responsibilities(scaled.E), scaled.E, scaled.Ea)
+    E, Ea = tracking_samples(scaled, *tracking) if tracking else (scaled.E, scaled.Ea)
+    data = LeastSquaresData(mixture.responsibilities(E), E, Ea)
     history = []
 
     def log(row):
@@ -116,6 +119,9 @@ def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, mar
         if progress is not None:
             progress(row)
 
+    live = np.flatnonzero(np.linalg.norm(scaled.E, axis=1) > 1e-3)
+    pick = live[::max(1, len(live) // ENERGY_ROWS)]
+    demo = (scaled.E[pick], np.hstack([scaled.E[pick, n:], scaled.Ea[pick]]))
     M, t = metric_step(nominal_fields(n, K, max(1.0, 2.0 * g)), g, solver=solver)
     C, cost = field_step(data, M, g, min(margin, t), solver)
     best = (training_deviation(C, mixture, scaled), C, M, 0)
@@ -128,9 +134,11 @@ def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, mar
             dC, dM = np.linalg.norm(C1 - C), np.linalg.norm(M1 - M)
             if dC > 0 and dM > 0:       # Young's bound is tightest for a = |dM| / |dC|
                 alpha = float(np.clip(dM / dC, ALPHA_MIN, 1.0 / ALPHA_MIN))
+        elif method == "energy":
+            M1 = energy_metric_step(C, g, *demo, min(margin, lmi_margin(C, M, g)), M, prox, solver=solver)
+            t = lmi_margin(C, M1, g)
         else:
             M1, t = metric_step(C, g, M, prox, solver=solver)
-            C1 = C
         if t <= 0:              # round-off broke the inner approximation's guarantee: stop here
             break
         C_new, new = field_step(data, M1, g, min(margin, t), solver)

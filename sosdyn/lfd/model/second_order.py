@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import inspect
 import time
+from numbers import Integral
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,7 @@ from ..fit.second_order import acceleration_at, fit_gating, scaled_samples
 from ..fit.second_order_fit import METHODS, fit_second_order
 from ..fit.second_order_check import check_second_order, energy_violations, excursion_bound
 from ..rollout import Trajectory, as_vector
+from ..rollout.events import is_positive_number
 from ..rollout import rollout as integrate
 from ..runtime.second_order import SecondOrderPredictor
 from ..runtime.states import as_state, as_states
@@ -32,8 +34,9 @@ from .cdsp import DEFAULTS as FIRST_ORDER_DEFAULTS
 from .fileformat import write_model_file
 
 SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION = "sosdyn-second-order", 1
-PARAMS = ("n_components", "gamma", "margin", "max_iter", "tol", "metric_prox", "method", "max_samples",
-          "random_state", "verify_samples", "solver")
+MAX_COPIES = 20                 # perturbed copies per sample (each multiplies the data term's rows)
+PARAMS = ("n_components", "gamma", "margin", "max_iter", "tol", "metric_prox", "method", "tracking_copies",
+          "tracking_sigma", "tracking_rate", "max_samples", "random_state", "verify_samples", "solver")
 
 
 class SecondOrderCDSP:
@@ -43,7 +46,10 @@ class SecondOrderCDSP:
     ``gamma`` (1/s: the certified decay rate of ||(x - g, v)||_M), ``margin`` (the fields' LMI
     margin, scaled units), ``max_iter`` / ``tol`` (alternations, relative cost decrease),
     ``metric_prox`` (proximal weight of the metric step; the joint step uses 1 % of it), ``method``
-    ("ica": joint convex steps in (C, M), or "alternating": metric / field steps), ``max_samples``, ``random_state`` (EM and
+    ("ica": joint convex steps in (C, M), or "alternating": metric / field steps),
+    ``tracking_copies`` / ``tracking_sigma`` / ``tracking_rate`` (perturbed copies of each sample,
+    their spread in scaled units and the rate w of their pull-back labels a - w^2 dx - 2 w dv:
+    :func:`~sosdyn.lfd.fit.second_order.tracking_samples`; 0 copies: the demos alone), ``max_samples``, ``random_state`` (EM and
     the sampled check), ``verify_samples`` (states of the sampled check), ``solver``.
 
     **Learned**: ``goal_``, ``dim_``, ``dt_``, ``length_scale_`` (s), ``time_scale_`` (T),
@@ -57,7 +63,7 @@ class SecondOrderCDSP:
     name = "CDSP-2"
 
     def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=20, tol=1e-4, metric_prox=1e-2,
-                 method="ica", max_samples=3000, random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
+                 method="ica", tracking_copies=2, tracking_sigma=0.1, tracking_rate=3.0, max_samples=3000, random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
         self.n_components = n_components
         self.gamma = gamma
         self.margin = margin
@@ -65,6 +71,9 @@ class SecondOrderCDSP:
         self.tol = tol
         self.metric_prox = metric_prox
         self.method = method
+        self.tracking_copies = tracking_copies
+        self.tracking_sigma = tracking_sigma
+        self.tracking_rate = tracking_rate
         self.max_samples = max_samples
         self.random_state = random_state
         self.verify_samples = verify_samples
@@ -85,6 +94,13 @@ class SecondOrderCDSP:
         check_solver(self.solver)
         if not isinstance(self.method, str) or self.method not in METHODS:
             raise InputError(f"method must be one of {METHODS}, got {self.method!r}. Try: the default, method='ica'.")
+        c = self.tracking_copies
+        if isinstance(c, (bool, np.bool_)) or not isinstance(c, Integral) or not 0 <= c <= MAX_COPIES:
+            raise InputError(f"tracking_copies must be an integer in [0, {MAX_COPIES}], got {c!r}. Try: the default, 2.")
+        for name in ("tracking_sigma", "tracking_rate"):
+            if not is_positive_number(getattr(self, name)):
+                raise InputError(f"{name} must be a finite number > 0, got {getattr(self, name)!r}. "
+                                 f"Try: the default, {DEFAULTS[name]}.")
 
     # ------------------------------------------------------------------ fitting
     def fit(self, demos):
@@ -106,7 +122,9 @@ class SecondOrderCDSP:
         scaled = scaled_samples(demos, K, self.max_samples)
         mixture = fit_gating(scaled.E, self.n_components, seed)
         result = fit_second_order(scaled, mixture, float(self.gamma), float(self.margin), int(self.max_iter),
-                                  float(self.tol), float(self.metric_prox), self.method, self.solver)
+                                  float(self.tol), float(self.metric_prox), self.method, self.solver,
+                                  tracking=(int(self.tracking_copies), float(self.tracking_sigma),
+                                            float(self.tracking_rate), seed))
         report = check_second_order(result.C, result.M, self.gamma, scaled.time, mixture, self.verify_samples, seed)
         if not report.passed:
             raise NotCertifiedError(f"the second-order certificate failed its independent check: {report}",

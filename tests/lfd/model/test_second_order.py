@@ -1,0 +1,168 @@
+"""SecondOrderCDSP: known answer, a crossing shape first order cannot follow, convergence from far
+away, the certificate refusing forged models, model files and bad input."""
+import json
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import sosdyn as sd
+from sosdyn.errors import DemonstrationError, InputError, ModelFileError, NotFittedError
+from sosdyn.evaluation.metrics import dtwd
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
+from sosdyn.lfd.fit.second_order_check import check_second_order, energy_violations, excursion_bound
+
+A_TRUE = np.array([[-4.0, 1.0], [0.0, -3.0]])
+B_TRUE = np.array([[-3.0, 0.5], [-0.5, -2.5]])
+GOAL = np.array([5.0, -2.0])
+
+
+def linear_demos():
+    """Four exact demos of x'' = A (x - g) + B x' (eigenvalues with real parts <= -1)."""
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.0, 10.0, 401)
+    out = []
+    for _ in range(4):
+        y0 = np.concatenate([rng.uniform(-10, 10, 2), rng.uniform(-20, 20, 2)])
+        sol = solve_ivp(lambda _, y: np.concatenate([y[2:], A_TRUE @ y[:2] + B_TRUE @ y[2:]]), (0, 10), y0,
+                        t_eval=t, rtol=1e-10, atol=1e-12)
+        out.append(Demonstration.from_positions(t, sol.y[:2].T + GOAL))
+    return Demonstrations(out, name="linear-2nd")
+
+
+def alpha_demos(k=4, T=200, duration=4.0):
+    """An "alpha": the nodal cubic (u^2 - 1, u (u^2 - 1)) x 50 for u from about -1.6 to 1.2 on a
+    minimum-jerk time law (rest at both ends); it crosses itself at u = -1, 1."""
+    rng = np.random.default_rng(0)
+    out = []
+    for _ in range(k):
+        t = np.linspace(0.0, duration, T)
+        s = t / duration
+        u = -(1.6 + 0.1 * rng.standard_normal()) + (2.8 + 0.1 * rng.standard_normal()) * (10 * s**3 - 15 * s**4 + 6 * s**5)
+        x = np.column_stack([u**2 - 1, u * (u**2 - 1)]) * 50 * (1 + 0.05 * rng.standard_normal())
+        out.append(Demonstration.from_positions(t, x - x[-1]))
+    return Demonstrations(out, name="alpha")
+
+
+@pytest.fixture(scope="module")
+def linear_model():
+    return sd.SecondOrderCDSP(n_components=1, tracking_copies=0, max_iter=5).fit(linear_demos())
+
+
+@pytest.fixture(scope="module")
+def alpha():
+    return alpha_demos()
+
+
+@pytest.fixture(scope="module")
+def alpha_model(alpha):
+    return sd.SecondOrderCDSP().fit(alpha)
+
+
+def test_exported_names():
+    assert sd.SecondOrderCDSP is sd.lfd.SecondOrderCDSP
+
+
+def test_known_linear_system_is_recovered_and_certified(linear_model):
+    A, B = linear_model.fields()
+    assert np.abs(A[0] - A_TRUE).max() < 0.1 and np.abs(B[0] - B_TRUE).max() < 0.1
+    assert np.allclose(linear_model.goal_, GOAL, atol=1e-3)
+    cert = linear_model.certificate_
+    assert cert.passed and min(cert.proven_margins) > 0 and cert.metric_min_eig > 0 and max(cert.lmi_max_eigs) < 0
+    # the true system's demos never gain energy in the learned metric
+    assert linear_model.energy_violations_["energy_gain"] == 0.0
+
+
+def test_crossing_shape_second_order_follows_first_order_cannot(alpha, alpha_model):
+    assert len(sd.lfd.data.crossing.find_crossings(alpha)) > 0
+    first = sd.CDSP(warp="none").fit(alpha)
+    second = [dtwd(alpha_model.rollout(d.pos[0], 1.5 * d.duration, v0=d.vel[0]).pos, d.pos).per_point for d in alpha]
+    one = [dtwd(first.rollout(d.pos[0], 1.5 * d.duration).pos, d.pos).per_point for d in alpha]
+    assert alpha_model.certificate_.passed
+    assert np.mean(second) < 8.0 < 10.0 < np.mean(one)        # the shape spans ~250 units
+
+
+def test_converges_from_far_states_within_the_excursion_bound(alpha_model):
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        x0, v0 = rng.normal(0, 2000, 2), rng.normal(0, 2000, 2)
+        tr = alpha_model.rollout(x0, 200.0, v0=v0, dt=0.5)
+        bound = alpha_model.excursion_bound(x0, v0)
+        assert np.linalg.norm(tr.pos - alpha_model.goal_, axis=1).max() <= bound * (1 + 1e-6)
+        assert np.linalg.norm(tr.pos[-1] - alpha_model.goal_) < 1e-3 * np.linalg.norm(x0)
+        assert np.linalg.norm(tr.vel[-1]) < 1e-3 * np.linalg.norm(v0)
+
+
+def test_pushes_and_goal_changes(linear_model):
+    new_goal = GOAL + [3.0, 4.0]
+    tr = linear_model.rollout(GOAL + 10, 10.0, perturbations=[(1.0, [1, 1]), (2.0, [0, 0, 5, -5])],
+                              goal_changes=[(3.0, new_goal)])
+    assert [e["kind"] for e in tr.events] == ["push", "push", "goal_change"]
+    assert tr.events[1]["after"][2] - tr.events[1]["before"][2] == 5.0
+    assert np.linalg.norm(tr.pos[-1] - new_goal) < 1e-3 and tr.vel.shape == tr.pos.shape
+    assert np.allclose(tr.goal_history[-1], new_goal)
+
+
+def test_predictor_matches_predict(linear_model):
+    x, v = GOAL + [1.0, -2.0], np.array([0.5, 3.0])
+    step = linear_model.predictor()
+    assert np.allclose(step(x, v), linear_model.predict(x, v)[0])
+    assert np.allclose(step(x, v), A_TRUE @ (x - GOAL) + B_TRUE @ v, atol=0.2)
+    assert np.allclose(step(x + 7, v, goal=GOAL + 7), step(x, v))          # a goal change translates
+
+
+def test_certificate_refuses_forged_fields(linear_model, tmp_path):
+    C = linear_model.C_.copy()
+    C[0, :, 2:] = np.eye(2)            # B = +I: the velocity grows, no metric can certify it
+    rep = check_second_order(C, linear_model.M_, linear_model.gamma, linear_model.time_scale_,
+                             linear_model.mixture_, 1000, 0)
+    assert not rep.passed and max(rep.lmi_max_eigs) > 0 and rep.max_sampled_rate > 0
+    path = linear_model.save(tmp_path / "m.json")
+    doc = json.loads(path.read_text())
+    doc["state"]["C"] = C.tolist()
+    from sosdyn.lfd.model.fileformat import write_model_file
+    write_model_file({k: doc[k] for k in ("format", "version", "params", "state")}, path)   # a valid checksum
+    with pytest.raises(ModelFileError, match="does not check out"):
+        sd.load_model(path)
+
+
+def test_model_file_round_trip(linear_model, tmp_path):
+    path = linear_model.save(tmp_path / "m.json")
+    loaded = sd.load_model(path)
+    assert isinstance(loaded, sd.SecondOrderCDSP) and loaded.certificate_.passed
+    X, V = np.random.default_rng(2).normal(0, 5, (2, 10, 2))
+    assert np.array_equal(loaded.predict(X, V), linear_model.predict(X, V))
+    text = path.read_text()
+    path.write_text(text.replace('"time_scale": ', '"time_scale": 1'))
+    with pytest.raises(ModelFileError):
+        sd.load_model(path)
+
+
+def test_excursion_bound_and_energy_measure():
+    assert excursion_bound(np.eye(4), np.array([3.0, 4.0, 0.0, 0.0])) == pytest.approx(5.0)
+    E = np.array([[1.0, 0.0, 1.0, 0.0], [1.0, 0.0, -1.0, 0.0]])     # moving away, moving back
+    Edot = np.array([[1.0, 0.0, 0.0, 0.0], [-1.0, 0.0, 0.0, 0.0]])
+    out = energy_violations(np.eye(4), 0.1, E, Edot)
+    assert out == {"samples": 2, "slower_than_certified": 0.5, "energy_gain": 0.5}
+
+
+@pytest.mark.parametrize("params", [dict(gamma=-1.0), dict(method="newton"), dict(tracking_copies=1.5),
+                                    dict(tracking_sigma=0.0), dict(n_components=0), dict(solver="")])
+def test_bad_parameters_are_refused_before_fitting(params):
+    with pytest.raises(InputError):
+        sd.SecondOrderCDSP(**params).fit(linear_demos())
+
+
+def test_bad_input(linear_model):
+    with pytest.raises(NotFittedError):
+        sd.SecondOrderCDSP().predict([0, 0], [0, 0])
+    with pytest.raises(DemonstrationError):
+        sd.SecondOrderCDSP().fit([])
+    with pytest.raises(InputError):
+        linear_model.predict(np.zeros((3, 2)), np.zeros((2, 2)))
+    with pytest.raises(InputError):
+        linear_model.predict([0, np.nan], [0, 0])
+    with pytest.raises(InputError):
+        linear_model.rollout([0, 0], 1.0, perturbations=[(0.5, [1, 2, 3])])
+    with pytest.raises(InputError):
+        linear_model.rollout([0, 0], 1.0, goal_changes=[(0.5, [1, 2, 3, 4])])
