@@ -54,7 +54,8 @@ class SecondOrderCDSP:
 
     **Learned**: ``goal_``, ``dim_``, ``dt_``, ``length_scale_`` (s), ``time_scale_`` (T),
     ``mixture_`` (the gating on e), ``C_`` (K, n, 2n) = [A_k, B_k] in scaled units, ``M_`` (2n, 2n),
-    ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`),
+    ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`; also
+    ``verification_``, with ``certified_`` True, as for CDSP),
     ``energy_violations_`` (how often the training demos themselves break the certified decrease),
     ``history_`` (one row per certified iterate), ``chosen_iter_`` (the row returned: least training
     rollout deviation), ``fit_seconds_``, ``seed_``. In data units A_k / T^2 and B_k / T: :meth:`fields`.
@@ -85,7 +86,7 @@ class SecondOrderCDSP:
     def __repr__(self) -> str:
         changed = [f"{k}={v!r}" for k, v in self.get_params().items() if not (v is DEFAULTS[k] or v == DEFAULTS[k])]
         if hasattr(self, "C_"):
-            changed.append(f"fitted: K={self.C_.shape[0]}, n={self.dim_}, certified={self.certificate_.passed}")
+            changed.append(f"fitted: K={self.C_.shape[0]}, n={self.dim_}, certified={self.verification_.passed}")
         return f"SecondOrderCDSP({', '.join(changed)})"
 
     def check_params(self) -> None:
@@ -133,11 +134,19 @@ class SecondOrderCDSP:
         self.seed_, self.dim_, self.goal_, self.dt_ = seed, n, scaled.goal, sample_step(demos)
         self.length_scale_, self.time_scale_, self.window_ = scaled.length, scaled.time, scaled.window
         self.mixture_, self.C_, self.M_, self.margin_ = mixture, result.C, result.M, result.margin
-        self.certificate_, self.history_, self.chosen_iter_ = report, result.history, result.chosen
+        self.verification_, self.certified_ = report, True
+        self.history_, self.chosen_iter_ = result.history, result.chosen
         self.energy_violations_ = energy_violations(result.M, report.gamma_scaled, scaled.E,
                                                     np.hstack([scaled.E[:, n:], scaled.Ea]))
         self.fit_seconds_ = time.perf_counter() - start
         return self
+
+    @property
+    def certificate_(self):
+        """The certificate as last checked (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`:
+        M, gamma, per-LMI margins, the verdict); ``verification_`` under the first-order name."""
+        self._check_fitted()
+        return self.verification_
 
     # ------------------------------------------------------------------ prediction
     def _check_fitted(self):
@@ -194,9 +203,8 @@ class SecondOrderCDSP:
         self._check_fitted()
         n = self.dim_
         x0, v0, goal = self._start(x0, v0, goal)
-        pushes = [(t, np.concatenate([d, np.zeros(n)]) if d.size == n else d)
-                  for t, d in _pairs(perturbations, "perturbation", (n, 2 * n))]
-        goals = [(t, np.concatenate([g, np.zeros(n)])) for t, g in _pairs(goal_changes, "goal change", (n,))]
+        pushes = _lifted(perturbations, n, "perturbation", (n, 2 * n))
+        goals = _lifted(goal_changes, n, "goal change", (n,))
 
         def field(Y, G):
             return np.hstack([Y[:, n:], self.acceleration(Y[:, :n], Y[:, n:], G[:n])])
@@ -233,23 +241,20 @@ class SecondOrderCDSP:
                                  "params": params, "state": self.state()}, path, key)
 
 
-def _pairs(items, kind: str, sizes: tuple) -> list:
-    """``[(time, vector)]`` with vectors of a length in ``sizes`` (times are checked by the integrator)."""
-    if isinstance(items, (str, bytes, dict)) or not hasattr(items, "__iter__"):
-        raise InputError(f"{kind}s must be a list of pairs (time, vector), got {type(items).__name__}.")
-    out = []
-    for i, item in enumerate(items):
-        try:
-            t, vector = item
-        except (TypeError, ValueError):
-            raise InputError(f"{kind} {i} must be a pair (time, vector), got {item!r}.") from None
-        vector = as_vector(vector, None, f"{kind} {i} vector")
-        if vector.size not in sizes:
-            raise InputError(f"{kind} {i} vector has {vector.size} entries; expected "
-                             f"{' or '.join(map(str, sizes))} (position" + (", or position and velocity)."
-                                                                          if len(sizes) > 1 else ")."))
-        out.append((t, vector))
-    return out
+def _lifted(items, n: int, kind: str, sizes: tuple) -> list:
+    """``[(time, vector)]`` with vectors of a length in ``sizes``, an n-vector lifted to (vector, 0) in
+    the state (x, v) (times are checked by the integrator's :func:`~sosdyn.lfd.rollout.parse_events`)."""
+    try:
+        pairs = [(t, as_vector(v, None, f"{kind} {i} vector")) for i, (t, v) in enumerate(items)]
+    except InputError:
+        raise
+    except (TypeError, ValueError):
+        raise InputError(f"{kind}s must be a list of pairs (time, vector), got {items!r}.") from None
+    bad = [i for i, (_, v) in enumerate(pairs) if v.size not in sizes]
+    if bad:
+        raise InputError(f"{kind} {bad[0]} vector has {pairs[bad[0]][1].size} entries; expected "
+                         + (f"{n} (position) or {2 * n} (position and velocity)." if len(sizes) > 1 else f"{n}."))
+    return [(t, np.concatenate([v, np.zeros(n)]) if v.size == n else v) for t, v in pairs]
 
 
 DEFAULTS = {name: p.default for name, p in inspect.signature(SecondOrderCDSP).parameters.items()}

@@ -1,8 +1,8 @@
 """Reading a second-order model file (format ``sosdyn-second-order``, written by
-:meth:`~.second_order.SecondOrderCDSP.save`): every field's shape and values checked, then the
-certificate re-checked from the stored fields and metric (exact LMIs and DEFAULT_SAMPLES sampled
-states with a fixed seed, whatever the file's ``verify_samples`` says). Every failure is a
-ModelFileError; :func:`~.files.load_model` dispatches here on the format field.
+:meth:`~.second_order.SecondOrderCDSP.save`): every field's shape and values checked. Then
+:func:`~.files.load_model` (which dispatches here on the format field) re-checks the certificate from
+the stored fields and metric (exact LMIs and DEFAULT_SAMPLES sampled states with a fixed seed,
+whatever the file's ``verify_samples`` says). Every failure is a ModelFileError.
 """
 from __future__ import annotations
 
@@ -10,13 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from sosdyn.errors import InputError, ModelFileError, SosdynError
-from ..fit.certificate import DEFAULT_SAMPLES
+from sosdyn.errors import InputError, ModelFileError
 from ..fit.gmm import PositionMixture
 from .fileformat import REFIT_HINT, read_model_file
-from .second_order import DEFAULTS, PARAMS, SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION, SecondOrderCDSP
-
-LOAD_SEED = 0
+from .second_order import PARAMS, SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION, SecondOrderCDSP
 
 
 def _array(state: dict, name: str, shape: tuple) -> np.ndarray:
@@ -62,23 +59,15 @@ def model_from_state(params: dict, state: dict) -> SecondOrderCDSP:
     return model
 
 
-def load_second_order(path, key=None) -> SecondOrderCDSP:
-    """The model in ``path`` with its certificate re-checked (``certificate_`` set), or ModelFileError."""
+def second_order_from_file(path, key=None) -> SecondOrderCDSP:
+    """The (not yet verified) model in ``path``: file checks and every field, or ModelFileError
+    naming ``path``; :func:`~.files.load_model` then re-checks its certificate."""
     path = Path(path)
     content = read_model_file(path, key, SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION)
     try:
-        model = model_from_state(content.get("params"), content.get("state"))
-        report = model.verify(DEFAULT_SAMPLES, LOAD_SEED)
+        return model_from_state(content.get("params"), content.get("state"))
     except ModelFileError as exc:
         raise ModelFileError(f"{path}: {exc}. {REFIT_HINT}") from None
-    except (SosdynError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-        raise ModelFileError(f"{path}: its certificate cannot be re-checked ({type(exc).__name__}: {exc}). "
-                             f"{REFIT_HINT}") from None
-    if not report.passed:
-        raise ModelFileError(f"{path}: the stored certificate does not check out; refusing to load.\n{report}\n"
-                             f"{REFIT_HINT}")
-    model.certificate_ = report
-    return model
 
 
-__all__ = ["DEFAULTS", "LOAD_SEED", "load_second_order", "model_from_state"]
+__all__ = ["model_from_state", "second_order_from_file"]
