@@ -47,6 +47,7 @@ from .steps.common import proximal
 DERIV_WINDOW = 9                # Savitzky-Golay window for smooth data (as estimate_velocity)
 METRIC_EPS = 1e-3               # M >= eps I (trace M = 2n)
 T_MAX = 10.0                    # the metric step's margin bound
+ROLLOUT_STEPS, DEVIATION_POINTS = 500, 250      # training_deviation's work bounds
 
 
 @dataclass(frozen=True)
@@ -149,20 +150,25 @@ def acceleration_at(X, V, goal, length, time, mixture: PositionMixture, C) -> np
 
 def training_deviation(C, mixture: PositionMixture, scaled: Scaled) -> float:
     """Mean over the training demos of the mean distance (scaled units) from each demo position
-    to the nearest point of the model's rollout from the demo's first (x, v): explicit Euler with
-    the data's step for the demo's duration (:func:`~sosdyn.lfd.rollout.euler_until_rest`, all
-    demos at once). A rollout that stops being finite scores inf."""
+    to the nearest point of the model's rollout from the demo's first (x, v): explicit Euler for
+    the demo's duration (:func:`~sosdyn.lfd.rollout.euler_until_rest`, all demos at once) with the
+    data's step times ceil(steps / ROLLOUT_STEPS), both curves thinned to at most DEVIATION_POINTS
+    points. A rollout that stops being finite scores inf."""
     n = C.shape[1]
 
     def rhs(E):
         return np.hstack([E[:, n:], accelerations(C, mixture.responsibilities(E), E)])
-    steps = max(len(p) for p in scaled.paths) + 1
+    longest = max(len(p) for p in scaled.paths)
+    stride = -(-longest // ROLLOUT_STEPS)
     try:
-        paths = euler_until_rest(rhs, scaled.starts, dt=scaled.dt, max_steps=steps,
+        paths = euler_until_rest(rhs, scaled.starts, dt=scaled.dt * stride, max_steps=longest // stride + 2,
                                  vel_tol=np.finfo(float).tiny, window=1)
     except (SolverError, InputError):
         return float("inf")
-    return float(np.mean([deviation(p, q[:, :n]).mean() for p, q in zip(scaled.paths, paths)]))
+
+    def thin(a):
+        return a[::-(-len(a) // DEVIATION_POINTS)]
+    return float(np.mean([deviation(thin(p), thin(q[:, :n])).mean() for p, q in zip(scaled.paths, paths)]))
 
 
 def decision_companion(ids: np.ndarray, n: int) -> PolyMatrix:

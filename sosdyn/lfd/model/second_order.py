@@ -63,7 +63,7 @@ class SecondOrderCDSP:
 
     name = "CDSP-2"
 
-    def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=20, tol=1e-4, metric_prox=1e-2,
+    def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=50, tol=1e-4, metric_prox=1e-2,
                  method="ica", tracking_copies=2, tracking_sigma=0.1, tracking_rate=3.0, max_samples=3000, random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
         self.n_components = n_components
         self.gamma = gamma
