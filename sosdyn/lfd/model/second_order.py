@@ -29,6 +29,7 @@ from ..rollout import Trajectory, as_vector
 from ..rollout.events import is_positive_number
 from ..rollout import rollout as integrate
 from ..runtime.second_order import SecondOrderPredictor
+from ..runtime.second_order_export import to_python
 from ..runtime.states import as_state, as_states
 from .cdsp import DEFAULTS as FIRST_ORDER_DEFAULTS
 from .fileformat import write_model_file
@@ -180,6 +181,11 @@ class SecondOrderCDSP:
         """A one-state evaluator ``step(x, v, goal=None) -> acceleration`` (:mod:`~sosdyn.lfd.runtime.second_order`)."""
         self._check_fitted()
         return SecondOrderPredictor(self.goal_, self.length_scale_, self.time_scale_, self.mixture_, self.C_)
+
+    def export(self) -> str:
+        """A standalone Python module (numpy only) with ``acceleration(X, V, goal=None)``
+        (:mod:`~sosdyn.lfd.runtime.second_order_export`)."""
+        return to_python(self)
 
     def excursion_bound(self, x0, v0=None, goal=None) -> float:
         """The certified bound on max_t |x(t) - goal| (data units) from (x0, v0): the projection on x

@@ -89,6 +89,35 @@ def _header(model, comment: str, max_speed: float | None) -> str:
         f"speed limit {max_speed!r} units/s: xdot scaled by min(1, max_speed / |xdot|).")))
 
 
+#: The generated Python's mixture: its Cholesky factors, log normalisers and h_k(z) (shared by the
+#: first- and second-order exports; WEIGHTS, MEANS, COVARIANCES defined before it).
+MIXTURE_PY = """_CHOL = np.linalg.cholesky(COVARIANCES)
+_INV = np.linalg.inv(_CHOL)
+_LOGNORM = (np.log(WEIGHTS) - np.log(np.diagonal(_CHOL, axis1=1, axis2=2)).sum(axis=1)
+            - 0.5 * MEANS.shape[1] * np.log(2 * np.pi))
+"""
+RESPONSIBILITIES_PY = '''def responsibilities(Z):
+    """h_k(z), (N, K): softmax of log pi_k + log N(z; mu_k, S_k); one-hot on the nearest
+    component (Mahalanobis) where every term under- or overflows."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        d = np.einsum("kij,mkj->mki", _INV, Z[:, None, :] - MEANS[None])
+        lj = _LOGNORM[None, :] - 0.5 * np.einsum("mki,mki->mk", d, d)
+    far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
+    lj[far] = 0.0
+    top = lj.max(axis=1, keepdims=True)
+    lse = top + np.log(np.exp(lj - top).sum(axis=1, keepdims=True))
+    h = np.exp(lj - lse)
+    if far.any():
+        Zf = Z[far]
+        c = np.maximum(np.abs(Zf).max(axis=1), 1.0)[:, None, None]
+        d = np.einsum("kij,mkj->mki", _INV, Zf[:, None, :] / c - MEANS[None] / c)
+        with np.errstate(divide="ignore"):
+            logdist = np.log(c[:, :, 0]) + 0.5 * np.log(np.einsum("mki,mki->mk", d, d))
+        h[far] = np.eye(WEIGHTS.size)[np.argmin(logdist, axis=1)]
+    return h
+'''
+
+
 def to_python(model, max_speed: float | None = None) -> str:
     """Source of a standalone Python module (numpy only) with ``predict(X, goal=None) -> ndarray``:
     X of shape (m, n) gives (m, n), X of shape (n,) gives (n,); ``goal`` (n,) moves the goal;
@@ -138,11 +167,7 @@ EXPONENTS = np.array({_literal(model.field_exps_)}, dtype=np.int64)
 COEFFICIENTS = np.array({_literal(model.C_)})     # (K, n, m): f_k,i(z) = sum_j C[k, i, j] z^e_j
 
 DIM = GOAL.size
-_CHOL = np.linalg.cholesky(COVARIANCES)
-_INV = np.linalg.inv(_CHOL)
-_LOGNORM = (np.log(WEIGHTS) - np.log(np.diagonal(_CHOL, axis1=1, axis2=2)).sum(axis=1)
-            - 0.5 * DIM * np.log(2 * np.pi))
-{warp_defs}
+{MIXTURE_PY}{warp_defs}
 
 def monomials(Z):
     """(N, m) values z^e_j at the rows of Z."""
@@ -153,26 +178,7 @@ def monomials(Z):
     return out
 
 
-def responsibilities(Z):
-    """h_k(z), (N, K): softmax of log pi_k + log N(z; mu_k, S_k); one-hot on the nearest
-    component (Mahalanobis) where every term under- or overflows."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        d = np.einsum("kij,mkj->mki", _INV, Z[:, None, :] - MEANS[None])
-        lj = _LOGNORM[None, :] - 0.5 * np.einsum("mki,mki->mk", d, d)
-    far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
-    lj[far] = 0.0
-    top = lj.max(axis=1, keepdims=True)
-    lse = top + np.log(np.exp(lj - top).sum(axis=1, keepdims=True))
-    h = np.exp(lj - lse)
-    if far.any():
-        Zf = Z[far]
-        c = np.maximum(np.abs(Zf).max(axis=1), 1.0)[:, None, None]
-        d = np.einsum("kij,mkj->mki", _INV, Zf[:, None, :] / c - MEANS[None] / c)
-        with np.errstate(divide="ignore"):
-            logdist = np.log(c[:, :, 0]) + 0.5 * np.log(np.einsum("mki,mki->mk", d, d))
-        h[far] = np.eye(WEIGHTS.size)[np.argmin(logdist, axis=1)]
-    return h
-
+{RESPONSIBILITIES_PY}
 
 def predict(X, goal=None):
     """Velocities at the states X: shape (m, n) -> (m, n), or (n,) -> (n,); towards ``goal``
