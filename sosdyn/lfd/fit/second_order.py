@@ -36,7 +36,7 @@ from sosdyn.poly import PolyMatrix, Polynomial
 from sosdyn.sos import SOSProgram, svec_to_matrix
 from sosdyn.sos.gram import matrix_to_svec
 from ..data.demonstrations import Demonstrations, sample_step
-from ..data.preprocess import MIN_WINDOW, resample_uniform, savgol_derivatives, smoothing_window
+from ..data.preprocess import resample_uniform, savgol_derivatives, smoothing_window
 from ..rollout import semi_implicit_euler
 from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm
 from .learner import subsample
