@@ -179,3 +179,29 @@ def test_bad_input(linear_model):
         linear_model.rollout([0, 0], 1.0, perturbations=[(0.5, [1, 2, 3])])
     with pytest.raises(InputError):
         linear_model.rollout([0, 0], 1.0, goal_changes=[(0.5, [1, 2, 3, 4])])
+
+
+def alpha_demos(k=5, T=300, duration=4.0):
+    """An "alpha": the nodal cubic (u^2 - 1, u (u^2 - 1)) x 50 for u from about -1.6 to 1.2 on a
+    minimum-jerk time law (rest at both ends); it crosses itself near u = -1, 1 (15 crossing pairs)."""
+    rng = np.random.default_rng(0)
+    out = []
+    for _ in range(k):
+        t = np.linspace(0.0, duration, T)
+        s = t / duration
+        a = 1.6 + 0.1 * rng.standard_normal()
+        u = -a + (a + 1.2) * (10 * s**3 - 15 * s**4 + 6 * s**5)
+        x = np.column_stack([u**2 - 1, u * (u**2 - 1)]) * 50 * (1.0 + 0.05 * rng.standard_normal())
+        out.append(Demonstration.from_positions(t, x - x[-1]))
+    return Demonstrations(out, name="alpha")
+
+
+@pytest.mark.slow
+def test_alpha_second_order_beats_first_order():
+    """docs/theory.md "Second order": DTWD per point 8.0 (second order, K = 8) against 10.2 (CDSP())."""
+    demos = alpha_demos()
+    second_model, first_model = sd.SecondOrderCDSP().fit(demos), sd.CDSP().fit(demos)
+    second = [dtwd(second_model.rollout(d.pos[0], 1.5 * d.duration, v0=d.vel[0]).pos, d.pos).per_point for d in demos]
+    first = [dtwd(first_model.rollout(d.pos[0], 1.5 * d.duration).pos, d.pos).per_point for d in demos]
+    assert second_model.certificate_.passed
+    assert np.mean(second) < 9.0 < 9.5 < np.mean(first), (second, first)
