@@ -21,7 +21,7 @@ from sosdyn.errors import InputError, NotCertifiedError, NotFittedError
 from ..data.demonstrations import check_demonstrations, sample_step
 from ..data.poses import PoseDemonstrations
 from ..fit.certificate import DEFAULT_SAMPLES
-from ..fit.params import check_params, check_solver, resolve_seed
+from ..fit.params import MAX_SEED, check_params, check_solver, resolve_seed
 from ..fit.second_order import acceleration_at, fit_gating, scaled_samples
 from ..fit.second_order_fit import METHODS, fit_second_order
 from ..fit.second_order_check import check_second_order, energy_violations, excursion_bound
@@ -227,6 +227,9 @@ class SecondOrderCDSP:
         """The independent check again (exact LMIs, sampled decrease at ``n_samples`` states drawn
         with ``seed``; defaults ``verify_samples`` and ``seed_``)."""
         self._check_fitted()
+        if seed is not None and (isinstance(seed, (bool, np.bool_)) or not isinstance(seed, Integral)
+                                 or not 0 <= seed <= MAX_SEED):
+            raise InputError(f"seed must be None or an integer in [0, {MAX_SEED}], got {seed!r}")
         return check_second_order(self.C_, self.M_, self.gamma, self.time_scale_, self.mixture_,
                                   self.verify_samples if n_samples is None else n_samples,
                                   self.seed_ if seed is None else seed)

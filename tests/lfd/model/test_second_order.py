@@ -179,6 +179,10 @@ def test_bad_input(linear_model):
         linear_model.rollout([0, 0], 1.0, perturbations=[(0.5, [1, 2, 3])])
     with pytest.raises(InputError):
         linear_model.rollout([0, 0], 1.0, goal_changes=[(0.5, [1, 2, 3, 4])])
+    with pytest.raises(InputError):
+        linear_model.verify(n_samples=10)
+    with pytest.raises(InputError):
+        linear_model.verify(seed=-1)
 
 
 def alpha_demos(k=5, T=300, duration=4.0):
