@@ -106,7 +106,9 @@ class SecondOrderCDSP:
 
     # ------------------------------------------------------------------ fitting
     def fit(self, demos):
-        """Learn from Demonstrations (validated first, as :meth:`CDSP.fit`); returns self.
+        """Learn from Demonstrations (validated first, as :meth:`CDSP.fit`); returns self. Velocities
+        and accelerations are derived from the positions and times (one Savitzky-Golay fit per demo);
+        a demo's stored velocities are not used.
 
         Raises NotCertifiedError when the independent check fails (no model is returned then)."""
         with threadpool_limits(limits=1, user_api="blas"):
