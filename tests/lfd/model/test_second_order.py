@@ -12,24 +12,6 @@ from sosdyn.evaluation.metrics import dtwd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.fit.second_order_check import check_second_order, energy_violations, excursion_bound
 
-A_TRUE = np.array([[-4.0, 1.0], [0.0, -3.0]])
-B_TRUE = np.array([[-3.0, 0.5], [-0.5, -2.5]])
-GOAL = np.array([5.0, -2.0])
-
-
-def linear_demos():
-    """Four exact demos of x'' = A (x - g) + B x' (eigenvalues with real parts <= -1)."""
-    rng = np.random.default_rng(0)
-    t = np.linspace(0.0, 10.0, 401)
-    out = []
-    for _ in range(4):
-        y0 = np.concatenate([rng.uniform(-10, 10, 2), rng.uniform(-20, 20, 2)])
-        sol = solve_ivp(lambda _, y: np.concatenate([y[2:], A_TRUE @ y[:2] + B_TRUE @ y[2:]]), (0, 10), y0,
-                        t_eval=t, rtol=1e-10, atol=1e-12)
-        out.append(Demonstration.from_positions(t, sol.y[:2].T + GOAL))
-    return Demonstrations(out, name="linear-2nd")
-
-
 A_OSC = np.diag([-9.0, -4.0])           # a lightly damped anisotropic oscillator: frequencies 3 and 2,
 B_OSC = -0.6 * np.eye(2)                # decay 0.3/s; its path crosses itself (a damped Lissajous figure)
 
@@ -46,8 +28,8 @@ def oscillator_demos(k=3):
 
 
 @pytest.fixture(scope="module")
-def linear_model():
-    return sd.SecondOrderCDSP(n_components=1, tracking_copies=0, max_iter=5).fit(linear_demos())
+def linear_model(second_order_system):
+    return sd.SecondOrderCDSP(n_components=1, tracking_copies=0, max_iter=5).fit(second_order_system[3])
 
 
 @pytest.fixture(scope="module")
@@ -64,10 +46,11 @@ def test_exported_names():
     assert sd.SecondOrderCDSP is sd.lfd.SecondOrderCDSP
 
 
-def test_known_linear_system_is_recovered_and_certified(linear_model):
+def test_known_linear_system_is_recovered_and_certified(linear_model, second_order_system):
+    a_true, b_true, goal, _ = second_order_system
     A, B = linear_model.fields()
-    assert np.abs(A[0] - A_TRUE).max() < 0.1 and np.abs(B[0] - B_TRUE).max() < 0.1
-    assert np.allclose(linear_model.goal_, GOAL, atol=1e-3)
+    assert np.abs(A[0] - a_true).max() < 0.1 and np.abs(B[0] - b_true).max() < 0.1
+    assert np.allclose(linear_model.goal_, goal, atol=1e-3)
     cert = linear_model.certificate_
     assert cert.passed and min(cert.proven_margins) > 0 and cert.metric_min_eig > 0 and max(cert.lmi_max_eigs) < 0
     # the true system's demos never gain energy in the learned metric
@@ -96,9 +79,10 @@ def test_converges_from_far_states_within_the_excursion_bound(crossing_model):
         assert np.linalg.norm(tr.vel[-1]) < 1e-3 * np.linalg.norm(v0)
 
 
-def test_pushes_and_goal_changes(linear_model):
-    new_goal = GOAL + [3.0, 4.0]
-    tr = linear_model.rollout(GOAL + 10, 10.0, perturbations=[(1.0, [1, 1]), (2.0, [0, 0, 5, -5])],
+def test_pushes_and_goal_changes(linear_model, second_order_system):
+    goal = second_order_system[2]
+    new_goal = goal + [3.0, 4.0]
+    tr = linear_model.rollout(goal + 10, 10.0, perturbations=[(1.0, [1, 1]), (2.0, [0, 0, 5, -5])],
                               goal_changes=[(3.0, new_goal)])
     assert [e["kind"] for e in tr.events] == ["push", "push", "goal_change"]
     assert tr.events[1]["after"][2] - tr.events[1]["before"][2] == 5.0
@@ -106,22 +90,24 @@ def test_pushes_and_goal_changes(linear_model):
     assert np.allclose(tr.goal_history[-1], new_goal)
 
 
-def test_predictor_matches_predict(linear_model):
-    x, v = GOAL + [1.0, -2.0], np.array([0.5, 3.0])
+def test_predictor_matches_predict(linear_model, second_order_system):
+    a_true, b_true, goal, _ = second_order_system
+    x, v = goal + [1.0, -2.0], np.array([0.5, 3.0])
     step = linear_model.predictor()
     assert np.allclose(step(x, v), linear_model.predict(x, v)[0])
-    assert np.allclose(step(x, v), A_TRUE @ (x - GOAL) + B_TRUE @ v, atol=0.2)
-    assert np.allclose(step(x + 7, v, goal=GOAL + 7), step(x, v))          # a goal change translates
+    assert np.allclose(step(x, v), a_true @ (x - goal) + b_true @ v, atol=0.2)
+    assert np.allclose(step(x + 7, v, goal=goal + 7), step(x, v))          # a goal change translates
 
 
-def test_python_export_matches_predict(linear_model, tmp_path):
+def test_python_export_matches_predict(linear_model, second_order_system, tmp_path):
+    goal = second_order_system[2]
     path = tmp_path / "acc.py"
     path.write_text(linear_model.export())
     space = {}
     exec(compile(path.read_text(), str(path), "exec"), space)
     X, V = np.random.default_rng(3).normal(0, 5, (2, 7, 2))
     assert np.allclose(space["acceleration"](X, V), linear_model.predict(X, V), rtol=1e-12, atol=1e-12)
-    assert np.allclose(space["acceleration"](X[0], V[0], goal=GOAL + 1), linear_model.predictor()(X[0], V[0], goal=GOAL + 1))
+    assert np.allclose(space["acceleration"](X[0], V[0], goal=goal + 1), linear_model.predictor()(X[0], V[0], goal=goal + 1))
 
 
 def test_certificate_refuses_forged_fields(linear_model, tmp_path):
@@ -161,9 +147,9 @@ def test_excursion_bound_and_energy_measure():
 
 @pytest.mark.parametrize("params", [dict(gamma=-1.0), dict(method="newton"), dict(tracking_copies=1.5),
                                     dict(tracking_sigma=0.0), dict(n_components=0), dict(solver="")])
-def test_bad_parameters_are_refused_before_fitting(params):
+def test_bad_parameters_are_refused_before_fitting(params, second_order_system):
     with pytest.raises(InputError):
-        sd.SecondOrderCDSP(**params).fit(linear_demos())
+        sd.SecondOrderCDSP(**params).fit(second_order_system[3])
 
 
 def test_bad_input(linear_model):
