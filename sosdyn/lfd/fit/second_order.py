@@ -66,7 +66,8 @@ class Scaled:
 
 
 def demo_derivatives(demos: Demonstrations, window: int | None = None):
-    """Per demo (pos, vel, acc) from one cubic Savitzky-Golay fit (:func:`~sosdyn.lfd.data.preprocess.savgol_derivatives`)
+    """Per demo (pos, vel, acc) from one cubic Savitzky-Golay fit
+    (:func:`~sosdyn.lfd.data.preprocess.savgol_derivatives`)
     after resampling to uniform steps; ``window`` None: the preprocess "auto" window, or
     DERIV_WINDOW when the data are smooth. Returns (list of (pos, vel, acc), window)."""
     uniform = [resample_uniform(d) for d in demos]
@@ -233,7 +234,8 @@ def energy_metric_step(C, gamma, E, Edot, margin, M0, prox=0.0, eps=METRIC_EPS, 
     prog.add_eq(sum(M[a, a] for a in range(m)), float(m), name="trace M = 2n")
     for k in range(F.shape[0]):
         prog.add_sos_matrix(-lmi(F[k], M, gamma) - I * margin, name=f"contraction[{k}]")
-    S = (np.einsum("ti,tj->tij", E, Edot) + np.einsum("ti,tj->tij", Edot, E) + 2 * gamma * np.einsum("ti,tj->tij", E, E))
+    S = np.einsum("ti,tj->tij", E, Edot)
+    S = S + S.transpose(0, 2, 1) + 2 * gamma * np.einsum("ti,tj->tij", E, E)
     S /= np.einsum("ti,ti->t", E, E)[:, None, None]
     sv = np.array([matrix_to_svec(St) for St in S])               # tr(M S_t) = svec(M) . svec(S_t)
     slack = prog.new_ids(len(S), name="violations")

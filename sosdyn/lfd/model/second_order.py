@@ -50,8 +50,9 @@ class SecondOrderCDSP:
     ("ica": joint convex steps in (C, M), or "alternating": metric / field steps),
     ``tracking_copies`` / ``tracking_sigma`` / ``tracking_rate`` (perturbed copies of each sample,
     their spread in scaled units and the rate w of their pull-back labels a - w^2 dx - 2 w dv:
-    :func:`~sosdyn.lfd.fit.second_order.tracking_samples`; 0 copies: the demos alone), ``max_samples``, ``random_state`` (EM and
-    the sampled check), ``verify_samples`` (states of the sampled check), ``solver``.
+    :func:`~sosdyn.lfd.fit.second_order.tracking_samples`; 0 copies: the demos alone),
+    ``max_samples``, ``random_state`` (EM and the sampled check), ``verify_samples`` (states of the
+    sampled check), ``solver``.
 
     **Learned**: ``goal_``, ``dim_``, ``dt_``, ``length_scale_`` (s), ``time_scale_`` (T),
     ``mixture_`` (the gating on e), ``C_`` (K, n, 2n) = [A_k, B_k] in scaled units, ``M_`` (2n, 2n),
@@ -59,13 +60,16 @@ class SecondOrderCDSP:
     ``verification_``, with ``certified_`` True, as for CDSP),
     ``energy_violations_`` (how often the training demos themselves break the certified decrease),
     ``history_`` (one row per certified iterate), ``chosen_iter_`` (the row returned: least training
-    rollout deviation), ``fit_seconds_``, ``seed_``. In data units A_k / T^2 and B_k / T: :meth:`fields`.
+    rollout deviation), ``fit_seconds_``, ``seed_``. Set by ``fit`` only (not in a model file):
+    ``energy_violations_``, ``chosen_iter_``, ``fit_seconds_`` and the rows of ``history_``. In data
+    units A_k / T^2 and B_k / T: :meth:`fields`.
     """
 
     name = "CDSP-2"
 
     def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=50, tol=1e-4, metric_prox=1e-2,
-                 method="ica", tracking_copies=2, tracking_sigma=0.1, tracking_rate=3.0, max_samples=3000, random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
+                 method="ica", tracking_copies=2, tracking_sigma=0.1, tracking_rate=3.0, max_samples=3000,
+                 random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
         self.n_components = n_components
         self.gamma = gamma
         self.margin = margin
@@ -98,7 +102,8 @@ class SecondOrderCDSP:
             raise InputError(f"method must be one of {METHODS}, got {self.method!r}. Try: the default, method='ica'.")
         c = self.tracking_copies
         if isinstance(c, (bool, np.bool_)) or not isinstance(c, Integral) or not 0 <= c <= MAX_COPIES:
-            raise InputError(f"tracking_copies must be an integer in [0, {MAX_COPIES}], got {c!r}. Try: the default, 2.")
+            raise InputError(f"tracking_copies must be an integer in [0, {MAX_COPIES}], got {c!r}. "
+                             "Try: the default, 2.")
         for name in ("tracking_sigma", "tracking_rate"):
             if not is_positive_number(getattr(self, name)):
                 raise InputError(f"{name} must be a finite number > 0, got {getattr(self, name)!r}. "

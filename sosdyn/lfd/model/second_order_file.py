@@ -52,7 +52,8 @@ def model_from_state(params: dict, state: dict) -> SecondOrderCDSP:
     if any(np.linalg.eigvalsh(0.5 * (S + S.T))[0] <= 0 for S in covs):
         raise ModelFileError("a gating covariance is not positive definite")
     model.seed_, model.dim_, model.goal_, model.dt_ = int(params["random_state"]), n, goal, scalars["dt"]
-    model.length_scale_, model.time_scale_, model.margin_ = (scalars[k] for k in ("length_scale", "time_scale", "margin"))
+    model.length_scale_, model.time_scale_ = scalars["length_scale"], scalars["time_scale"]
+    model.margin_ = scalars["margin"]
     model.window_ = int(_array(state, "window", ()))
     model.mixture_ = PositionMixture(weights / weights.sum(), means, covs)
     model.C_, model.M_, model.history_ = C, M, []

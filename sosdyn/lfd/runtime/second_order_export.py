@@ -47,7 +47,8 @@ def acceleration(X, V, goal=None):
     single = X.ndim == 1
     X, V = (X[None, :], V[None, :]) if single else (X, V)
     if X.ndim != 2 or X.shape[1] != DIM or V.shape != X.shape:
-        raise ValueError(f"X and V must both have shape (m, {{DIM}}) or ({{DIM}},), got {{np.shape(X)}}, {{np.shape(V)}}")
+        raise ValueError(f"X and V must both have shape (m, {{DIM}}) or ({{DIM}},), "
+                         f"got {{np.shape(X)}}, {{np.shape(V)}}")
     goal = GOAL if goal is None else np.asarray(goal, dtype=float)
     if not (np.isfinite(X).all() and np.isfinite(V).all() and goal.shape == GOAL.shape and np.isfinite(goal).all()):
         raise ValueError("X, V and goal must be finite, goal of shape ({{DIM}},)")

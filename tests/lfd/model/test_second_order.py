@@ -107,7 +107,8 @@ def test_python_export_matches_predict(linear_model, second_order_system, tmp_pa
     exec(compile(path.read_text(), str(path), "exec"), space)
     X, V = np.random.default_rng(3).normal(0, 5, (2, 7, 2))
     assert np.allclose(space["acceleration"](X, V), linear_model.predict(X, V), rtol=1e-12, atol=1e-12)
-    assert np.allclose(space["acceleration"](X[0], V[0], goal=goal + 1), linear_model.predictor()(X[0], V[0], goal=goal + 1))
+    step = linear_model.predictor()
+    assert np.allclose(space["acceleration"](X[0], V[0], goal=goal + 1), step(X[0], V[0], goal=goal + 1))
 
 
 def test_certificate_refuses_forged_fields(linear_model, tmp_path):
