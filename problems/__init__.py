@@ -17,6 +17,8 @@ EXPERIMENTS = {
     "fig1": "fig1", "fig2": "fig2", "fig3": "fig3", "fig4": "fig4",
     "lasa-all": "lasa_all",
     "lasa-dsopt": "lasa_dsopt",        # CDSP variants on the LPV-DS (ds-opt) LASA protocol
+    "crossing-shapes": "crossing_shapes",   # writes the synthesised hand-drawn crossing set
+    "second-order": "second_order",    # first- against second-order CDSP: crossing shapes and LASA
     "real-data": "real_data",          # held-out accuracy on the shipped real demonstration sets
     "real-data-configs": "real_data_configs",   # CDSP configurations on the real sets' training data
     "lasa-dsopt-report": "lasa_dsopt_report",   # its pages redrawn from results.json (no fits)

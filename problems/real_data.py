@@ -70,18 +70,19 @@ def cache_file(cache_dir: Path, name: str, method: str, quick: bool) -> Path:
     return Path(cache_dir) / f"{safe}{'__quick' if quick else ''}.json"
 
 
-def run_job(name: str, method: str, quick: bool, cache_dir: Path, force: bool) -> dict:
-    """:func:`sosdyn.evaluation.realdata.evaluate_set` of one (set, method), cached; a fit that
-    raises a SosdynError gives an entry with ``error`` and no scores."""
-    key = key_hash({"version": CACHE_VERSION, "set": name, "method": METHODS[method], "quick": quick})
+def cached_job(cache_dir: Path, name: str, method: str, quick: bool, key: dict, force: bool, compute) -> dict:
+    """The cached entry of (set ``name``, ``method``) when its key hash is ``key``'s (and not
+    ``force``), else ``compute()``'s scores, written to the cache: a SosdynError gives an entry
+    with ``error``, no scores and ``certified`` False. ``from_cache`` says which."""
+    digest = key_hash(key)
     path = cache_file(cache_dir, name, method, quick)
     if not force and path.is_file():
         entry = json.loads(path.read_text())
-        if entry.get("key_hash") == key:
+        if entry.get("key_hash") == digest:
             return dict(entry, from_cache=True)
-    entry = {"set": name, "method": method, "key_hash": key, "error": None}
+    entry = {"set": name, "method": method, "key_hash": digest, "error": None}
     try:
-        entry.update(realdata.evaluate_set(fitter(method, quick), load(name)))
+        entry.update(compute())
         entry["paths"] = [rounded(p) for p in entry.get("paths", [])]
     except SosdynError as exc:
         entry.update(error=f"{type(exc).__name__}: {exc}", certified=False)
@@ -91,13 +92,21 @@ def run_job(name: str, method: str, quick: bool, cache_dir: Path, force: bool) -
     return dict(entry, from_cache=False)
 
 
-def job_label(e: dict) -> str:
-    head = f"{e['set']:<32} {e['method']:<13}"
+def run_job(name: str, method: str, quick: bool, cache_dir: Path, force: bool) -> dict:
+    """:func:`sosdyn.evaluation.realdata.evaluate_set` of one (set, method), cached (:func:`cached_job`)."""
+    return cached_job(cache_dir, name, method, quick,
+                      {"version": CACHE_VERSION, "set": name, "method": METHODS[method], "quick": quick}, force,
+                      lambda: realdata.evaluate_set(fitter(method, quick), load(name)))
+
+
+def job_label(e: dict, widths: tuple[int, int] = (32, 13)) -> str:
+    """One progress line of a (set, method) entry; ``widths`` of the set and method columns."""
+    head = f"{e['set']:<{widths[0]}} {e['method']:<{widths[1]}}"
     if e["error"] or e.get("failure"):
         return f"{head} FAILED: {(e['error'] or e['failure'])[:120]}"
     src = "cache" if e["from_cache"] else f"fit {e['fit_s']:.1f} s"
     return (f"{head} test DTWD/copy {e['ratio']:6.2f}  excursion {e['excursion']:.3f}  arrival "
-            f"{e['arrival_ratio']:.2f}x  ({src})")
+            f"{e['arrival_ratio']:.2f}x  certified {e['certified']}  ({src})")
 
 
 SUMMARY_KEYS = ("ratio", "dtwd_mean", "copy_mean", "excursion", "start_excursion", "excursion_bound", "arrival_ratio", "final_error", "fit_s",
@@ -139,16 +148,21 @@ def run(sets=SETS, methods=tuple(METHODS), *, quick: bool = False, out_dir=OUT, 
     return {"results": out_dir / "results.json", "html": write_html(results, out_dir)}
 
 
-def parse_args(argv) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="python -m problems real-data",
-                                description="held-out accuracy on the shipped real demonstration sets")
-    p.add_argument("--quick", action="store_true", help="hammer only, small fits (CI)")
+def parser(prog: str, description: str, quick_help: str, sets, methods, out: Path) -> argparse.ArgumentParser:
+    """The command line shared by the held-out experiments (real-data, second-order)."""
+    p = argparse.ArgumentParser(prog=prog, description=description)
+    p.add_argument("--quick", action="store_true", help=quick_help)
     p.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
-    p.add_argument("--sets", nargs="*", default=None, choices=SETS, help="sets (default: all)")
-    p.add_argument("--methods", nargs="*", default=None, choices=tuple(METHODS), help="methods (default: all)")
+    p.add_argument("--sets", nargs="*", default=None, choices=sets, help="sets (default: all)")
+    p.add_argument("--methods", nargs="*", default=None, choices=methods, help="methods (default: all)")
     p.add_argument("--force", action="store_true", help="refit even when cached")
-    p.add_argument("--out", type=Path, default=OUT, help="output folder (default reports/real_data)")
-    return p.parse_args(list(argv or []))
+    p.add_argument("--out", type=Path, default=out, help=f"output folder (default {out.relative_to(REPORTS.parent)})")
+    return p
+
+
+def parse_args(argv) -> argparse.Namespace:
+    return parser("python -m problems real-data", "held-out accuracy on the shipped real demonstration sets",
+                  "hammer only, small fits (CI)", SETS, tuple(METHODS), OUT).parse_args(list(argv or []))
 
 
 def main(argv=None):

@@ -10,7 +10,7 @@ from .errors import (DemonstrationError, InfeasibleError, InputError, ModelFileE
 from .limits import get_limits, limits, set_limits
 from .poly import PolyMatrix, Polynomial, from_sympy, jacobian, to_sympy, variables
 from .sos import BasicSet, SOSProgram, Solution, minimize_on, sum_squares
-from .lfd import (CDSP, Demonstration, Demonstrations, PoseCDSP, PoseDemonstrations, Trajectory,
+from .lfd import (CDSP, Demonstration, Demonstrations, PoseCDSP, PoseDemonstrations, SecondOrderCDSP, Trajectory,
                   check_demonstrations, dataset_names, lasa_names, load_dataset, load_demos, load_lasa, load_model,
                   load_pose_demos, load_pose_model, preprocess)
 
@@ -24,5 +24,5 @@ __all__ = [
     "SOSProgram", "Solution", "sum_squares", "BasicSet", "minimize_on",
     "CDSP", "Demonstration", "Demonstrations", "Trajectory", "check_demonstrations",
     "dataset_names", "lasa_names", "load_dataset", "load_demos", "load_lasa", "load_model", "preprocess",
-    "PoseCDSP", "PoseDemonstrations", "load_pose_demos", "load_pose_model",
+    "PoseCDSP", "PoseDemonstrations", "load_pose_demos", "load_pose_model", "SecondOrderCDSP",
 ]

@@ -83,13 +83,19 @@ def box(demos) -> tuple[np.ndarray, np.ndarray, float]:
     return lo, hi, float(np.linalg.norm(hi - lo))
 
 
-def reproduce(field: Callable, train, test) -> list[np.ndarray]:
-    """Protocol step 3 from the test demos' 20th kept samples."""
+def stop_rule(train, test) -> tuple[float, int]:
+    """Protocol step 3's (vel_tol, max_steps): ``VEL_TOL_FRACTION * diag / T_med`` and
+    ``max(30 s, HORIZON x the longest test duration) / dt``."""
     _, _, diag = box(train)
     vel_tol = VEL_TOL_FRACTION * diag / float(np.median([d.duration for d in train]))
     horizon = max(dsopt.MAX_STEPS * dsopt.DT, HORIZON * max(d.duration for d in test))
-    return dsopt.euler_reproduce(field, dsopt.start_points(test), vel_tol=vel_tol,
-                                 max_steps=int(math.ceil(horizon / dsopt.DT)))
+    return vel_tol, int(math.ceil(horizon / dsopt.DT))
+
+
+def reproduce(field: Callable, train, test) -> list[np.ndarray]:
+    """Protocol step 3 from the test demos' 20th kept samples."""
+    vel_tol, max_steps = stop_rule(train, test)
+    return dsopt.euler_reproduce(field, dsopt.start_points(test), vel_tol=vel_tol, max_steps=max_steps)
 
 
 def excursion_bounds(model, train, test) -> list:

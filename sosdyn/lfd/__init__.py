@@ -7,9 +7,9 @@ sits at the bottom beside ``data`` because fitting scores candidates by rolling 
 """
 from .data import (Demonstration, Demonstrations, PoseDemonstrations, check_demonstrations, dataset_names,
                    lasa_names, load_dataset, load_demos, load_lasa, load_pose_demos, preprocess)
-from .model import CDSP, PoseCDSP, load_model, load_pose_model, save_model
+from .model import CDSP, PoseCDSP, SecondOrderCDSP, load_model, load_pose_model, save_model
 from .rollout import Trajectory, rollout
 
 __all__ = ["CDSP", "Demonstration", "Demonstrations", "check_demonstrations", "dataset_names", "lasa_names",
            "load_dataset", "preprocess", "load_demos", "load_lasa", "load_model", "save_model", "Trajectory",
-           "rollout", "PoseCDSP", "PoseDemonstrations", "load_pose_demos", "load_pose_model"]
+           "rollout", "PoseCDSP", "SecondOrderCDSP", "PoseDemonstrations", "load_pose_demos", "load_pose_model"]

@@ -88,3 +88,19 @@ def hook_demos():
         r, th = r0 * (1 + 2.5 * np.sin(np.pi * sm)) * (1 - sm), th0 + 1.5 * np.pi * sm
         demos.append(Demonstration.from_positions(t, np.column_stack([r * np.cos(th), r * np.sin(th)]), f"hook {k}"))
     return Demonstrations(demos, "hook")
+
+
+@pytest.fixture(scope="session")
+def second_order_system():
+    """(A, B, goal, demos): four exact demos of the certified linear second-order system
+    x'' = A (x - g) + B x' (eigenvalues with real parts <= -1), 401 samples over 10 s each."""
+    A, B, goal = np.array([[-4.0, 1.0], [0.0, -3.0]]), np.array([[-3.0, 0.5], [-0.5, -2.5]]), np.array([5.0, -2.0])
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.0, 10.0, 401)
+    out = []
+    for _ in range(4):
+        y0 = np.concatenate([rng.uniform(-10, 10, 2), rng.uniform(-20, 20, 2)])
+        sol = solve_ivp(lambda _, y: np.concatenate([y[2:], A @ y[:2] + B @ y[2:]]), (0, 10), y0,
+                        t_eval=t, rtol=1e-10, atol=1e-12)
+        out.append(Demonstration.from_positions(t, sol.y[:2].T + goal))
+    return A, B, goal, Demonstrations(out, name="linear-2nd")

@@ -1,6 +1,6 @@
-"""Real demonstration sets shipped with sosdyn: :func:`load_dataset` and :func:`dataset_names`.
+"""Demonstration sets shipped with sosdyn: :func:`load_dataset` and :func:`dataset_names`.
 
-The files live in ``sosdyn/lfd/data/datasets/<set>/`` with their source repository's LICENSE
+Real sets (recorded by others; ``dataset_names(synthetic=False)``): the files live in ``sosdyn/lfd/data/datasets/<set>/`` with their source repository's LICENSE
 (copied verbatim), a README (provenance, units, caveats) and a manifest; values are as recorded
 (no smoothing, no resampling, no unit change). Every set is MIT-licensed by its authors.
 
@@ -11,7 +11,14 @@ robottasks/<task> (4 tasks)    3     9      cm (inferred)           k / 60 s (no
 pouring                        3     63     m (inferred)            k * 0.01 s
 hammer                         3     10     m (inferred)            sample index: dt declared
 cleaning/cleaning_1, _2        6     1      rad (inferred, joints)  recorded, ~0.035 s
+crossing/<shape> (8, synth.)   2     7-8    px (y up, goal at 0)    logged ms, jittered
 =============================  ====  =====  ======================  ========================
+
+``crossing/<shape>`` (``ell``, ``e``, ``phi``, ``alpha``, ``gamma``, ``at``, ``pretzel``,
+``cross``) is **synthetic**: hand-drawing-like mouse strokes that cross themselves or each
+other, written by ``python -m problems crossing-shapes`` (seeded; its README says how and why).
+:attr:`DatasetInfo.synthetic` marks it, and experiments on real data ask for
+``dataset_names(synthetic=False)``.
 
 Pose sets (robottasks, pouring) also hold an orientation quaternion ``qw, qx, qy, qz``;
 sosdyn learns positions only for now, so the loader reads x, y, z and says so (a
@@ -35,6 +42,7 @@ from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_
 
 DATASETS_DIR = Path(__file__).resolve().parent / "datasets"
 HAMMER_DT = 0.01        # s per sample, declared (the source has none; its loader uses dt = 1)
+CROSSING_SHAPES = ("ell", "e", "phi", "alpha", "gamma", "at", "pretzel", "cross")
 
 
 @dataclass(frozen=True)
@@ -48,6 +56,9 @@ class DatasetInfo:
     pose: bool = False
     index_time: bool = False
     note: str = ""
+    time: str = "t"
+    time_unit: float = 1.0
+    synthetic: bool = False
 
 
 _XYZ = ("x", "y", "z")
@@ -62,12 +73,16 @@ DATASETS = {
     **{f"cleaning/{m}": DatasetInfo(f"cleaning/{m}", tuple(f"q{i}" for i in range(1, 7)), "rad (inferred)",
                                     note="one joint-space demo (6 joints) of a cleaning motion")
        for m in ("cleaning_1", "cleaning_2")},
+    **{f"crossing/{shape}": DatasetInfo(f"crossing/{shape}", ("x", "y"), "px", time="time_ms", time_unit=1e-3,
+                                        synthetic=True, note="synthesised mouse strokes that cross (issue 28)")
+       for shape in CROSSING_SHAPES},
 }
 
 
-def dataset_names() -> list[str]:
-    """The names :func:`load_dataset` accepts, sorted."""
-    return sorted(DATASETS)
+def dataset_names(synthetic: bool | None = None) -> list[str]:
+    """The names :func:`load_dataset` accepts, sorted; only the real (recorded) sets for
+    ``synthetic=False``, only the synthesised ones for ``True``."""
+    return sorted(k for k, info in DATASETS.items() if synthetic is None or info.synthetic == synthetic)
 
 
 def dataset_info(name: str) -> DatasetInfo:
@@ -79,11 +94,12 @@ def dataset_info(name: str) -> DatasetInfo:
     return DATASETS[name]
 
 
-def _read_csv(path: Path, columns: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """(t, positions) of a shipped CSV whose header names ``t`` and ``columns``."""
+def _read_csv(path: Path, info: DatasetInfo) -> tuple[np.ndarray, np.ndarray]:
+    """(time column x its unit, positions) of a shipped CSV whose header names ``info.time``
+    and ``info.columns``."""
     header = path.read_text().split("\n", 1)[0].strip().split(",")
     table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    return table[:, header.index("t")], table[:, [header.index(c) for c in columns]]
+    return table[:, header.index(info.time)] * info.time_unit, table[:, [header.index(c) for c in info.columns]]
 
 
 def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | None = None,
@@ -119,7 +135,7 @@ def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | N
             raise InputError(f"dt must be a finite number > 0 (s per sample), got {dt!r}.")
     demos = []
     for path in sorted((DATASETS_DIR / info.folder).glob("demo_*.csv")):
-        t, pos = _read_csv(path, info.columns)
+        t, pos = _read_csv(path, info)
         demos.append(Demonstration.from_positions(t * step if info.index_time else t, pos,
                                                   f"{name}/{path.name}"))
     return check_demonstrations(Demonstrations(demos, name, info.units), goal_tol=goal_tol)

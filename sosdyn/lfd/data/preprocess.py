@@ -94,14 +94,21 @@ def rest_bounds(pos: np.ndarray, tol: float) -> tuple[int, int]:
     return first, max(last, first + 1)
 
 
+def savgol_derivatives(t: np.ndarray, pos: np.ndarray, window: int, order: int = 1) -> list[np.ndarray]:
+    """[pos, d pos/dt, ..., d^order pos/dt^order] of the uniformly sampled curve ``pos`` (T, n) at
+    times ``t``, all from one cubic Savitzky-Golay fit over ``window`` samples (odd, >= 5;
+    shortened to the curve's length); ``order`` <= 2 (the second derivative of the local cubic is
+    exact for cubic motions)."""
+    from scipy.signal import savgol_filter   # scipy.signal is slow to import; only here
+    w = min(window, len(t) if len(t) % 2 else len(t) - 1)
+    h = float(np.mean(np.diff(t)))
+    return [savgol_filter(pos, w, SG_ORDER, deriv=d, delta=h, axis=0, mode="interp") for d in range(order + 1)]
+
+
 def smooth(demo: Demonstration, window: int) -> Demonstration:
     """Positions and velocities of a uniformly sampled ``demo`` from a cubic Savitzky-Golay fit
-    over ``window`` samples (odd, >= 5; shortened to the demo's length)."""
-    from scipy.signal import savgol_filter   # scipy.signal is slow to import; only here
-    w = min(window, len(demo.t) if len(demo.t) % 2 else len(demo.t) - 1)
-    h = float(np.mean(np.diff(demo.t)))
-    return Demonstration(demo.t, savgol_filter(demo.pos, w, SG_ORDER, axis=0, mode="interp"),
-                         savgol_filter(demo.pos, w, SG_ORDER, deriv=1, delta=h, axis=0, mode="interp"), demo.source)
+    over ``window`` samples (odd, >= 5; shortened to the demo's length): :func:`savgol_derivatives`."""
+    return Demonstration(demo.t, *savgol_derivatives(demo.t, demo.pos, window), demo.source)
 
 
 def blend_shift(t: np.ndarray, shift: np.ndarray, fraction: float = BLEND_FRACTION) -> tuple[np.ndarray, np.ndarray]:

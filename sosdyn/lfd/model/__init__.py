@@ -1,9 +1,11 @@
 """The fitted model: the :class:`CDSP` estimator (it holds state; the maths is in ``fit``),
 its state record (``state``), the signed JSON file format (``fileformat``) and loading /
-saving model files (``files``); the pose model :class:`PoseCDSP` (``pose``, ``pose_export``).
+saving model files (``files``); the pose model :class:`PoseCDSP` (``pose``, ``pose_export``); the certified second-order model
+:class:`SecondOrderCDSP` (``second_order``, ``second_order_file``).
 """
 from .cdsp import CDSP
 from .files import load_model, load_pose_model, save_model
 from .pose import PoseCDSP
+from .second_order import SecondOrderCDSP
 
-__all__ = ["CDSP", "PoseCDSP", "load_model", "load_pose_model", "save_model"]
+__all__ = ["CDSP", "PoseCDSP", "SecondOrderCDSP", "load_model", "load_pose_model", "save_model"]

@@ -16,6 +16,8 @@ from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.learner import Settings
 from .fileformat import REFIT_HINT, model_format, read_model_file
 from .pose import GOAL_TOL_DEG, POSE_FORMAT, POSE_VERSION, PoseCDSP
+from .second_order import SECOND_ORDER_FORMAT, SecondOrderCDSP
+from .second_order_file import second_order_from_file
 from .state import check_param_names, need, validate_state
 from ..fit.params import LEGACY_PARAMS, PARAMS, check_params, resolve_seed
 
@@ -27,10 +29,11 @@ def save_model(model: CDSP, path, key=None) -> Path:
     return model.save(path, key)
 
 
-def load_model(path, key=None) -> CDSP | PoseCDSP:
+def load_model(path, key=None) -> CDSP | PoseCDSP | SecondOrderCDSP:
     """Read a model written by :meth:`~sosdyn.lfd.model.cdsp.CDSP.save`: every field validated,
     certificate re-checked; a pose model file (format ``sosdyn-pose``, written by
-    :meth:`~.pose.PoseCDSP.save`) is read by :func:`load_pose_model`.
+    :meth:`~.pose.PoseCDSP.save`) is read by :func:`load_pose_model`, a second-order one (format
+    ``sosdyn-second-order``) by :func:`~.second_order_file.second_order_from_file` and then checked here.
 
     With ``key`` (bytes or str; default $SOSDYN_MODEL_KEY) the file must carry a matching HMAC.
     The certificate is re-checked from the model's own coefficients (Gram matrices, and
@@ -39,8 +42,11 @@ def load_model(path, key=None) -> CDSP | PoseCDSP:
     make this check weaker. Every failure is a ModelFileError.
     """
     path = Path(path)
-    if model_format(path) == POSE_FORMAT:
+    kind = model_format(path)
+    if kind == POSE_FORMAT:
         return load_pose_model(path, key)
+    if kind == SECOND_ORDER_FORMAT:
+        return checked_model(path, second_order_from_file(path, key))
     return checked_model(path, model_from_content_at(path, read_model_file(path, key)))
 
 
@@ -53,7 +59,7 @@ def model_from_content_at(path: Path, content: dict) -> CDSP:
         raise ModelFileError(f"{path}: {text}." + ("" if "Try:" in text else f" {REFIT_HINT}")) from None
 
 
-def checked_model(path: Path, model: CDSP) -> CDSP:
+def checked_model(path: Path, model: CDSP | SecondOrderCDSP) -> CDSP | SecondOrderCDSP:
     """``model`` with its certificate re-checked from its coefficients (DEFAULT_SAMPLES states, seed
     LOAD_SEED): ``verification_`` set and ``certified_`` True, or ModelFileError."""
     try:

@@ -4,6 +4,7 @@
   (adaptive, LSODA by default; used by ``CDSP.rollout`` and the baselines);
 * :func:`final_states`: ``x(horizon)`` from many starts as one batched ODE (grid convergence);
 * :func:`run_with_budget` / :class:`BudgetRollout`: the call-budget policy, LSODA then BDF;
+* :func:`semi_implicit_euler`: second-order (x, v) trajectories from many starts (symplectic Euler);
 * :func:`euler_until_rest`: explicit Euler with the ds-opt stop rule (:func:`euler_blocks_until_rest`:
   several systems at once, each with its own stop).
 
@@ -15,14 +16,14 @@ no integrator returns NaN or inf.
 from sosdyn.lfd.rollout.adaptive import ATOL_REL, BATCH_INTEGRATORS, INTEGRATORS, final_states, motion_scale, rollout
 from sosdyn.lfd.rollout.budget import (GRID_BUDGETS, ROLLOUT_BUDGETS, BudgetExceeded, BudgetRollout,
                                        CountedField, run_with_budget)
-from sosdyn.lfd.rollout.euler import euler_blocks_until_rest, euler_until_rest
+from sosdyn.lfd.rollout.euler import euler_blocks_until_rest, euler_until_rest, semi_implicit_euler
 from sosdyn.lfd.rollout.events import (Field, Trajectory, WorkMeter, as_positive, as_vector,
                                        check_rollout_size, parse_events)
 
 __all__ = [
     "ATOL_REL", "BATCH_INTEGRATORS", "INTEGRATORS", "final_states", "motion_scale", "rollout",
     "GRID_BUDGETS", "ROLLOUT_BUDGETS", "BudgetExceeded", "BudgetRollout", "CountedField", "run_with_budget",
-    "euler_blocks_until_rest", "euler_until_rest", "Field", "Trajectory", "WorkMeter", "as_positive", "as_vector",
+    "euler_blocks_until_rest", "euler_until_rest", "semi_implicit_euler", "Field", "Trajectory", "WorkMeter", "as_positive", "as_vector",
     "check_rollout_size",
     "parse_events",
 ]

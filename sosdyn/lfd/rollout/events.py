@@ -29,13 +29,15 @@ class Trajectory:
     ``t`` (T,) s from 0 to the duration; ``pos`` (T, n); ``goal_history`` (T, n) the goal in
     effect at each sample; ``events``: one dict per applied event, in time order, with keys
     ``kind`` ("push" or "goal_change"), ``time`` and ``before`` / ``after`` (the state for
-    a push, the goal for a goal change).
+    a push, the goal for a goal change). ``vel`` (T, n): the velocities of a second-order rollout
+    (its state is (x, v): a push's ``before`` / ``after`` are then (2n,)), None for first order.
     """
 
     t: np.ndarray
     pos: np.ndarray
     goal_history: np.ndarray
     events: list[dict] = field(default_factory=list)
+    vel: np.ndarray | None = None
 
 
 def as_vector(value, n: int | None, what: str) -> np.ndarray:

@@ -60,3 +60,43 @@ def _header(model, comment: str, max_speed: float | None) -> str:
         f"1..{int(model.field_exps_.sum(axis=1).max())}; positions in UNITS.", f"{formula}.",
         "goal: the model's, or the one passed to predict; " + ("no speed limit." if max_speed is None else
         f"speed limit {max_speed!r} units/s: xdot scaled by min(1, max_speed / |xdot|).")))
+
+
+#: The generated Python's mixture: Cholesky factors and log normalisers (WEIGHTS, MEANS,
+#: COVARIANCES defined before it); shared by the first- and second-order exports.
+MIXTURE_PY = '''_CHOL = np.linalg.cholesky(COVARIANCES)
+_INV = np.linalg.inv(_CHOL)
+_LOGNORM = (np.log(WEIGHTS) - np.log(np.diagonal(_CHOL, axis1=1, axis2=2)).sum(axis=1)
+            - 0.5 * MEANS.shape[1] * np.log(2 * np.pi))
+'''
+#: The generated Python's h_k(z) (:mod:`~sosdyn.lfd.fit.gmm`; BOUND the gating bound c or None).
+RESPONSIBILITIES_PY = '''def softmax(lj):
+    top = lj.max(axis=1, keepdims=True)
+    return np.exp(lj - (top + np.log(np.exp(lj - top).sum(axis=1, keepdims=True))))
+
+
+def responsibilities(Z):
+    """h_k(z), (N, K): softmax of log pi_k + log N(z; mu_k, S_k), the quadratic forms q_k divided
+    by tau = max(1, min_k q_k / BOUND) (BOUND None: tau = 1); where a form overflows, one-hot on the
+    nearest component (Mahalanobis), or with a BOUND the softmax of the exact tempered terms."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        d = np.einsum("kij,mkj->mki", _INV, Z[:, None, :] - MEANS[None])
+        q = np.einsum("mki,mki->mk", d, d)
+        if BOUND is not None:
+            q = np.where(np.isfinite(q).all(axis=1, keepdims=True),
+                         q / np.maximum(1.0, q.min(axis=1, keepdims=True) / BOUND), np.nan)
+        lj = _LOGNORM[None, :] - 0.5 * q
+    far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
+    lj[far] = 0.0
+    h = softmax(lj)
+    if far.any():
+        Zf = Z[far]
+        c = np.maximum(np.abs(Zf).max(axis=1), 1.0)[:, None, None]
+        d = np.einsum("kij,mkj->mki", _INV, Zf[:, None, :] / c - MEANS[None] / c)
+        with np.errstate(divide="ignore"):
+            logdist = np.log(c[:, :, 0]) + 0.5 * np.log(np.einsum("mki,mki->mk", d, d))
+        h[far] = np.eye(WEIGHTS.size)[np.argmin(logdist, axis=1)] if BOUND is None else softmax(
+            _LOGNORM[None, :] - 0.5 * BOUND * np.exp(2.0 * (logdist - logdist.min(axis=1, keepdims=True))))
+    return h
+
+'''

@@ -40,7 +40,7 @@ import inspect
 import numpy as np
 
 from sosdyn.errors import InputError
-from .codegen import PREAMBLE, _check, _header, _literal, _warp, cpp_string
+from .codegen import MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _check, _header, _literal, _warp, cpp_string
 from .export_cpp import to_cpp
 from .predictor import (_monomial, field2, fieldn, gating, tables, warp_back, warp_back2, warp_forward, warp_forward2,
                         warp_tables)
@@ -103,11 +103,7 @@ EXPONENTS = np.array({_literal(model.field_exps_)}, dtype=np.int64)
 COEFFICIENTS = np.array({_literal(model.C_)})     # (K, n, m): f_k,i(z) = sum_j C[k, i, j] z^e_j
 
 DIM = GOAL.size
-_CHOL = np.linalg.cholesky(COVARIANCES)
-_INV = np.linalg.inv(_CHOL)
-_LOGNORM = (np.log(WEIGHTS) - np.log(np.diagonal(_CHOL, axis1=1, axis2=2)).sum(axis=1)
-            - 0.5 * DIM * np.log(2 * np.pi))
-{warp_defs}
+{MIXTURE_PY}{warp_defs}
 
 def monomials(Z):
     """(N, m) values z^e_j at the rows of Z."""
@@ -118,35 +114,7 @@ def monomials(Z):
     return out
 
 
-def softmax(lj):
-    top = lj.max(axis=1, keepdims=True)
-    return np.exp(lj - (top + np.log(np.exp(lj - top).sum(axis=1, keepdims=True))))
-
-
-def responsibilities(Z):
-    """h_k(z), (N, K): softmax of log pi_k + log N(z; mu_k, S_k), the quadratic forms q_k divided
-    by tau = max(1, min_k q_k / BOUND) (BOUND None: tau = 1); where a form overflows, one-hot on the
-    nearest component (Mahalanobis), or with a BOUND the softmax of the exact tempered terms."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        d = np.einsum("kij,mkj->mki", _INV, Z[:, None, :] - MEANS[None])
-        q = np.einsum("mki,mki->mk", d, d)
-        if BOUND is not None:
-            q = np.where(np.isfinite(q).all(axis=1, keepdims=True),
-                         q / np.maximum(1.0, q.min(axis=1, keepdims=True) / BOUND), np.nan)
-        lj = _LOGNORM[None, :] - 0.5 * q
-    far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
-    lj[far] = 0.0
-    h = softmax(lj)
-    if far.any():
-        Zf = Z[far]
-        c = np.maximum(np.abs(Zf).max(axis=1), 1.0)[:, None, None]
-        d = np.einsum("kij,mkj->mki", _INV, Zf[:, None, :] / c - MEANS[None] / c)
-        with np.errstate(divide="ignore"):
-            logdist = np.log(c[:, :, 0]) + 0.5 * np.log(np.einsum("mki,mki->mk", d, d))
-        h[far] = np.eye(WEIGHTS.size)[np.argmin(logdist, axis=1)] if BOUND is None else softmax(
-            _LOGNORM[None, :] - 0.5 * BOUND * np.exp(2.0 * (logdist - logdist.min(axis=1, keepdims=True))))
-    return h
-
+{RESPONSIBILITIES_PY}
 
 def predict(X, goal=None):
     """Velocities at the states X: shape (m, n) -> (m, n), or (n,) -> (n,); towards ``goal``

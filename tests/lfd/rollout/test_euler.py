@@ -48,3 +48,12 @@ def test_blocks_stop_on_their_own_and_a_diverging_block_leaves_the_others_alone(
     assert calls[0] == [0, 1, 2] and calls[-1] == [1]         # stopped blocks are no longer evaluated
     with pytest.raises(InputError, match="equal blocks"):
         euler_blocks_until_rest(field, [[1.0], [2.0], [3.0]], 2, **kw)
+
+
+def test_semi_implicit_euler_keeps_an_oscillator_bounded():
+    from sosdyn.lfd.rollout import semi_implicit_euler
+    X = semi_implicit_euler(lambda X, V: -X, [[1.0]], [[0.0]], dt=0.1, steps=1000)
+    assert X.shape == (1001, 1, 1) and X[0, 0, 0] == 1.0
+    assert 0.95 < np.abs(X[-200:, 0, 0]).max() < 1.06          # explicit Euler: amplitude x 1.005^1000 = 146
+    with pytest.raises(SolverError):
+        semi_implicit_euler(lambda X, V: X * 1e300, [[1.0]], [[0.0]], dt=1.0, steps=5)

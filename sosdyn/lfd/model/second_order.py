@@ -1,0 +1,276 @@
+"""The second-order CDSP estimator: certified motions that may cross themselves.
+
+Model (scaled units, :mod:`sosdyn.lfd.fit.second_order`): e = ((x - g)/s, v T/s),
+de/dt' = sum_k h_k(e) F_k e with F_k = [[0, I], [A_k, B_k]]; certificate: one constant M > 0 with
+F_k^T M + M F_k <= -2 gamma' M for every k (gamma' = gamma T), checked independently
+(:mod:`sosdyn.lfd.fit.second_order_check`) before a model is returned. Then from EVERY (x0, v0),
+|| (x - g, v) || in the metric decays like exp(-gamma t): x -> g and v -> 0 (docs/theory.md,
+"Second order"). The gating h(e) depends on v, so two branches may cross at one x.
+"""
+from __future__ import annotations
+
+import inspect
+import time
+from numbers import Integral
+from pathlib import Path
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from sosdyn.errors import InputError, NotCertifiedError, NotFittedError
+from ..data.demonstrations import check_demonstrations, sample_step
+from ..data.poses import PoseDemonstrations
+from ..fit.certificate import DEFAULT_SAMPLES
+from ..fit.params import MAX_SEED, check_params, check_solver, resolve_seed
+from ..fit.second_order import acceleration_at, fit_gating, scaled_samples
+from ..fit.second_order_fit import METHODS, fit_second_order
+from ..fit.second_order_check import check_second_order, energy_violations, excursion_bound
+from ..rollout import Trajectory, as_vector
+from ..rollout.events import is_positive_number
+from ..rollout import rollout as integrate
+from ..runtime.second_order import SecondOrderPredictor
+from ..runtime.second_order_export import to_python
+from ..runtime.states import as_state, as_states
+from .cdsp import DEFAULTS as FIRST_ORDER_DEFAULTS
+from .fileformat import write_model_file
+
+SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION = "sosdyn-second-order", 1
+MAX_COPIES = 20                 # perturbed copies per sample (each multiplies the data term's rows)
+PARAMS = ("n_components", "gamma", "margin", "max_iter", "tol", "metric_prox", "method", "tracking_copies",
+          "tracking_sigma", "tracking_rate", "max_samples", "random_state", "verify_samples", "solver")
+
+
+class SecondOrderCDSP:
+    """Learn a certified second-order motion ẍ = a(x, ẋ) from demonstrations (positions + times).
+
+    **Parameters**: ``n_components`` (int or "bic": Gaussians of the gating GMM on (x, v)),
+    ``gamma`` (1/s: the certified decay rate of ||(x - g, v)||_M), ``margin`` (the fields' LMI
+    margin, scaled units), ``max_iter`` / ``tol`` (alternations, relative cost decrease),
+    ``metric_prox`` (proximal weight of the metric step; the joint step uses 1 % of it), ``method``
+    ("ica": joint convex steps in (C, M), or "alternating": metric / field steps),
+    ``tracking_copies`` / ``tracking_sigma`` / ``tracking_rate`` (perturbed copies of each sample,
+    their spread in scaled units and the rate w of their pull-back labels a - w^2 dx - 2 w dv:
+    :func:`~sosdyn.lfd.fit.second_order.tracking_samples`; 0 copies: the demos alone),
+    ``max_samples``, ``random_state`` (EM and the sampled check), ``verify_samples`` (states of the
+    sampled check), ``solver``.
+
+    **Learned**: ``goal_``, ``dim_``, ``dt_``, ``length_scale_`` (s), ``time_scale_`` (T),
+    ``mixture_`` (the gating on e), ``C_`` (K, n, 2n) = [A_k, B_k] in scaled units, ``M_`` (2n, 2n),
+    ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`; also
+    ``verification_``, with ``certified_`` True, as for CDSP),
+    ``energy_violations_`` (how often the training demos themselves break the certified decrease),
+    ``history_`` (one row per certified iterate), ``chosen_iter_`` (the row returned: least training
+    rollout deviation), ``fit_seconds_``, ``seed_``. Set by ``fit`` only (not in a model file):
+    ``energy_violations_``, ``chosen_iter_``, ``fit_seconds_`` and the rows of ``history_``. In data
+    units A_k / T^2 and B_k / T: :meth:`fields`.
+    """
+
+    name = "CDSP-2"
+
+    def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=50, tol=1e-4, metric_prox=1e-2,
+                 method="ica", tracking_copies=2, tracking_sigma=0.1, tracking_rate=3.0, max_samples=3000,
+                 random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
+        self.n_components = n_components
+        self.gamma = gamma
+        self.margin = margin
+        self.max_iter = max_iter
+        self.tol = tol
+        self.metric_prox = metric_prox
+        self.method = method
+        self.tracking_copies = tracking_copies
+        self.tracking_sigma = tracking_sigma
+        self.tracking_rate = tracking_rate
+        self.max_samples = max_samples
+        self.random_state = random_state
+        self.verify_samples = verify_samples
+        self.solver = solver
+
+    def get_params(self) -> dict:
+        return {k: getattr(self, k) for k in PARAMS}
+
+    def __repr__(self) -> str:
+        changed = [f"{k}={v!r}" for k, v in self.get_params().items() if not (v is DEFAULTS[k] or v == DEFAULTS[k])]
+        if hasattr(self, "C_"):
+            changed.append(f"fitted: K={self.C_.shape[0]}, n={self.dim_}, certified={self.verification_.passed}")
+        return f"SecondOrderCDSP({', '.join(changed)})"
+
+    def check_params(self) -> None:
+        """Types and ranges (the first-order checks of the shared parameters; InputError with a hint)."""
+        check_params({**FIRST_ORDER_DEFAULTS, **self.get_params()}, {**FIRST_ORDER_DEFAULTS, **DEFAULTS})
+        check_solver(self.solver)
+        if not isinstance(self.method, str) or self.method not in METHODS:
+            raise InputError(f"method must be one of {METHODS}, got {self.method!r}. Try: the default, method='ica'.")
+        c = self.tracking_copies
+        if isinstance(c, (bool, np.bool_)) or not isinstance(c, Integral) or not 0 <= c <= MAX_COPIES:
+            raise InputError(f"tracking_copies must be an integer in [0, {MAX_COPIES}], got {c!r}. "
+                             "Try: the default, 2.")
+        for name in ("tracking_sigma", "tracking_rate"):
+            if not is_positive_number(getattr(self, name)):
+                raise InputError(f"{name} must be a finite number > 0, got {getattr(self, name)!r}. "
+                                 f"Try: the default, {DEFAULTS[name]}.")
+
+    # ------------------------------------------------------------------ fitting
+    def fit(self, demos):
+        """Learn from Demonstrations (validated first, as :meth:`CDSP.fit`); returns self. Velocities
+        and accelerations are derived from the positions and times (one Savitzky-Golay fit per demo);
+        a demo's stored velocities are not used.
+
+        Raises NotCertifiedError when the independent check fails (no model is returned then)."""
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._fit(demos)
+
+    def _fit(self, demos):
+        start = time.perf_counter()
+        self.check_params()
+        if isinstance(demos, PoseDemonstrations):
+            raise InputError("these are pose demonstrations; SecondOrderCDSP learns positions. "
+                             "Try: sosdyn.PoseCDSP for poses, or Demonstrations of positions.")
+        demos = check_demonstrations(demos)
+        seed = resolve_seed(self.random_state)
+        K = 1 if self.n_components == "bic" else int(self.n_components)
+        scaled = scaled_samples(demos, K, self.max_samples)
+        mixture = fit_gating(scaled.E, self.n_components, seed)
+        result = fit_second_order(scaled, mixture, float(self.gamma), float(self.margin), int(self.max_iter),
+                                  float(self.tol), float(self.metric_prox), self.method, self.solver,
+                                  tracking=(int(self.tracking_copies), float(self.tracking_sigma),
+                                            float(self.tracking_rate), seed))
+        report = check_second_order(result.C, result.M, self.gamma, scaled.time, mixture, self.verify_samples, seed)
+        if not report.passed:
+            raise NotCertifiedError(f"the second-order certificate failed its independent check: {report}",
+                                    status="not_certified", hint="a smaller gamma or a larger margin")
+        n = demos.dim
+        self.seed_, self.dim_, self.goal_, self.dt_ = seed, n, scaled.goal, sample_step(demos)
+        self.length_scale_, self.time_scale_, self.window_ = scaled.length, scaled.time, scaled.window
+        self.mixture_, self.C_, self.M_, self.margin_ = mixture, result.C, result.M, result.margin
+        self.verification_, self.certified_ = report, True
+        self.history_, self.chosen_iter_ = result.history, result.chosen
+        self.energy_violations_ = energy_violations(result.M, report.gamma_scaled, scaled.E,
+                                                    np.hstack([scaled.E[:, n:], scaled.Ea]))
+        self.fit_seconds_ = time.perf_counter() - start
+        return self
+
+    @property
+    def certificate_(self):
+        """The certificate as last checked (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`:
+        M, gamma, per-LMI margins, the verdict); ``verification_`` under the first-order name."""
+        self._check_fitted()
+        return self.verification_
+
+    # ------------------------------------------------------------------ prediction
+    def _check_fitted(self):
+        if not hasattr(self, "C_"):
+            raise NotFittedError("this SecondOrderCDSP model is not fitted yet; call fit(demos) first")
+
+    def acceleration(self, X, V, goal):
+        """Accelerations (m, n) at the rows of X and V for the goal ``goal`` (no input checks)."""
+        return acceleration_at(X, V, goal, self.length_scale_, self.time_scale_, self.mixture_, self.C_)
+
+    def predict(self, X, V):
+        """Accelerations (m, n) at positions X and velocities V ((m, n) each, or one state (n,))."""
+        self._check_fitted()
+        X, V = as_states(X, self.dim_, "X"), as_states(V, self.dim_, "V")
+        if X.shape != V.shape:
+            raise InputError(f"X has {X.shape[0]} states but V has {V.shape[0]}; pass one velocity per position.")
+        with np.errstate(over="ignore", invalid="ignore"):
+            A = self.acceleration(X, V, self.goal_)
+        if not np.isfinite(A).all():
+            raise InputError("the states are so far from the data that the acceleration overflows float. "
+                             "Try: states within a few orders of magnitude of the demonstrations.")
+        return A
+
+    def fields(self):
+        """(A, B) per component in data units: A_k / T^2 (K, n, n) and B_k / T (K, n, n)."""
+        self._check_fitted()
+        n, T = self.dim_, self.time_scale_
+        return self.C_[:, :, :n] / T ** 2, self.C_[:, :, n:] / T
+
+    def predictor(self) -> SecondOrderPredictor:
+        """A one-state evaluator ``step(x, v, goal=None) -> acceleration`` (:mod:`~sosdyn.lfd.runtime.second_order`)."""
+        self._check_fitted()
+        return SecondOrderPredictor(self.goal_, self.length_scale_, self.time_scale_, self.mixture_, self.C_)
+
+    def export(self) -> str:
+        """A standalone Python module (numpy only) with ``acceleration(X, V, goal=None)``
+        (:mod:`~sosdyn.lfd.runtime.second_order_export`)."""
+        return to_python(self)
+
+    def excursion_bound(self, x0, v0=None, goal=None) -> float:
+        """The certified bound on max_t |x(t) - goal| (data units) from (x0, v0): the projection on x
+        of the ellipsoid {e : e^T M e <= e0^T M e0} (:func:`~sosdyn.lfd.fit.second_order_check.excursion_bound`)."""
+        self._check_fitted()
+        x0, v0, goal = self._start(x0, v0, goal)
+        e0 = np.concatenate([(x0 - goal) / self.length_scale_, v0 * self.time_scale_ / self.length_scale_])
+        return excursion_bound(self.M_, e0) * self.length_scale_
+
+    def _start(self, x0, v0, goal):
+        n = self.dim_
+        x0 = as_state(x0, n, "x0")
+        v0 = np.zeros(n) if v0 is None else as_state(v0, n, "v0")
+        return x0, v0, self.goal_ if goal is None else as_state(goal, n, "goal")
+
+    def rollout(self, x0, duration, v0=None, dt=None, goal=None, perturbations=(), goal_changes=()) -> Trajectory:
+        """Integrate (x, v) from (x0, v0) (v0 None: at rest) for ``duration`` s on a grid of step ``dt``
+        (None: ``dt_``). Pushes ``[(t, dx)]`` with dx of shape (n,) (position) or (2n,) (position and
+        velocity); goal changes ``[(t, g)]`` (the motion translates). The Trajectory has ``vel``; a
+        push's ``before`` / ``after`` are (x, v) states (:func:`sosdyn.lfd.rollout.rollout`)."""
+        self._check_fitted()
+        n = self.dim_
+        x0, v0, goal = self._start(x0, v0, goal)
+        pushes = _lifted(perturbations, n, "perturbation", (n, 2 * n))
+        goals = _lifted(goal_changes, n, "goal change", (n,))
+
+        def field(Y, G):
+            return np.hstack([Y[:, n:], self.acceleration(Y[:, :n], Y[:, n:], G[:n])])
+
+        traj = integrate(field, np.concatenate([x0, v0]), duration=duration, dt=self.dt_ if dt is None else dt,
+                         goal=np.concatenate([goal, np.zeros(n)]), perturbations=pushes, goal_changes=goals,
+                         scale=self.length_scale_)
+        events = [dict(e, before=e["before"][:n], after=e["after"][:n]) if e["kind"] == "goal_change" else e
+                  for e in traj.events]
+        return Trajectory(traj.t, traj.pos[:, :n], traj.goal_history[:, :n], events, vel=traj.pos[:, n:])
+
+    # ------------------------------------------------------------------ evidence and files
+    def verify(self, n_samples=None, seed=None):
+        """The independent check again (exact LMIs, sampled decrease at ``n_samples`` states drawn
+        with ``seed``; defaults ``verify_samples`` and ``seed_``)."""
+        self._check_fitted()
+        if seed is not None and (isinstance(seed, (bool, np.bool_)) or not isinstance(seed, Integral)
+                                 or not 0 <= seed <= MAX_SEED):
+            raise InputError(f"seed must be None or an integer in [0, {MAX_SEED}], got {seed!r}")
+        return check_second_order(self.C_, self.M_, self.gamma, self.time_scale_, self.mixture_,
+                                  self.verify_samples if n_samples is None else n_samples,
+                                  self.seed_ if seed is None else seed)
+
+    def state(self) -> dict:
+        """The learned values a model file holds (plain lists)."""
+        self._check_fitted()
+        mix = self.mixture_
+        return {"goal": self.goal_, "dt": self.dt_, "length_scale": self.length_scale_,
+                "time_scale": self.time_scale_, "window": self.window_, "weights": mix.weights,
+                "means": mix.means, "covariances": mix.covariances, "C": self.C_, "M": self.M_,
+                "margin": self.margin_}
+
+    def save(self, path, key=None) -> Path:
+        """Write the model file (JSON, checksummed, atomic; signed with ``key``); ``sd.load_model`` reads it."""
+        params = dict(self.get_params(), random_state=self.seed_)
+        return write_model_file({"format": SECOND_ORDER_FORMAT, "version": SECOND_ORDER_VERSION,
+                                 "params": params, "state": self.state()}, path, key)
+
+
+def _lifted(items, n: int, kind: str, sizes: tuple) -> list:
+    """``[(time, vector)]`` with vectors of a length in ``sizes``, an n-vector lifted to (vector, 0) in
+    the state (x, v) (times are checked by the integrator's :func:`~sosdyn.lfd.rollout.parse_events`)."""
+    try:
+        pairs = [(t, as_vector(v, None, f"{kind} {i} vector")) for i, (t, v) in enumerate(items)]
+    except InputError:
+        raise
+    except (TypeError, ValueError):
+        raise InputError(f"{kind}s must be a list of pairs (time, vector), got {items!r}.") from None
+    bad = [i for i, (_, v) in enumerate(pairs) if v.size not in sizes]
+    if bad:
+        raise InputError(f"{kind} {bad[0]} vector has {pairs[bad[0]][1].size} entries; expected "
+                         + (f"{n} (position) or {2 * n} (position and velocity)." if len(sizes) > 1 else f"{n}."))
+    return [(t, np.concatenate([v, np.zeros(n)]) if v.size == n else v) for t, v in pairs]
+
+
+DEFAULTS = {name: p.default for name, p in inspect.signature(SecondOrderCDSP).parameters.items()}
