@@ -38,7 +38,7 @@ def _entries(block) -> np.ndarray:
 
 
 def block_matrix(rows) -> PolyMatrix:
-    """The PolyMatrix [[rows[0][0], rows[0][1], ...], ...] of PolyMatrix / number blocks."""
+    """The PolyMatrix ``[[rows[0][0], rows[0][1], ...], ...]`` of PolyMatrix / number blocks."""
     return PolyMatrix(np.block([[_entries(b) for b in row] for row in rows]))
 
 
