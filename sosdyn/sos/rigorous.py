@@ -238,7 +238,7 @@ def _objective_expr(program):
     return sense, expr
 
 
-def _bound_from(program, data, x_solver, sense, expr, x, method, kept, t0):
+def _bound_from(program, data, solver_value, sense, expr, x, method, kept, t0):
     """(the Bound proven near x, None), or (None, reason)."""
     xq, margins, reason = prove_point(program, data.ids, x, kept)
     if margins is None:
@@ -248,8 +248,7 @@ def _bound_from(program, data, x_solver, sense, expr, x, method, kept, t0):
         return Bound(None, None, None, method, point, margins, time.perf_counter() - t0), None
     value = _exact_objective(expr, xq)
     proven = float_down(value) if sense == "max" else -float_down(-value)
-    return Bound(sense, float(objective_value(data, x_solver)), proven, method, point, margins,
-                 time.perf_counter() - t0), None
+    return Bound(sense, solver_value, proven, method, point, margins, time.perf_counter() - t0), None
 
 
 def _diagonals(program, ids, x) -> dict:
@@ -266,18 +265,20 @@ def _faces(program, ids, x) -> dict:
             else np.zeros(0, dtype=np.int64) for k, d in diags.items()}
 
 
-def prove_bound(program, data, x, tightenings=TIGHTENINGS) -> Bound:
-    """The objective of ``program`` proven exactly near the verified solver point x (module doc).
+def prove_bound(program, data, x, tightenings=TIGHTENINGS, solver_x=None) -> Bound:
+    """The objective of ``program`` proven exactly near the point x (module doc); ``solver_x`` (default
+    x) is the solver's point, whose objective the Bound reports beside the proven one.
 
     ``data`` is the conic data x belongs to. Raises UnverifiedSolutionError naming what could
     not be proven (the last two attempts).
     """
     t0 = time.perf_counter()
     sense, expr = _objective_expr(program)
+    solver_value = float(objective_value(data, x if solver_x is None else solver_x)) if sense else None
     kept = _faces(program, data.ids, x)
     reasons = []
     for candidate, method in _shift_candidates(program, data.ids, x, sense, expr, kept):
-        found, reason = _bound_from(program, data, x, sense, expr, candidate, method, kept, t0)
+        found, reason = _bound_from(program, data, solver_value, sense, expr, candidate, method, kept, t0)
         if found is not None:
             return found
         reasons.append(f"{method}: {reason}")
@@ -285,11 +286,11 @@ def prove_bound(program, data, x, tightenings=TIGHTENINGS) -> Bound:
     scales = {k: max(float(d.max()), 1.0) for k, d in _diagonals(program, data.ids, x).items()}
     for rel in tightenings:
         tight = program.tightened(kept, {k: rel * v for k, v in scales.items()})
-        sol = tight.solve(tol_feas=1e-10, tol_gap_abs=1e-10, tol_gap_rel=1e-10)
+        sol = tight.solve(prove=False, tol_feas=1e-10, tol_gap_abs=1e-10, tol_gap_rel=1e-10)
         if sol.status not in ANSWERED or not np.isfinite(sol.x).all():
             reasons.append(f"tightened by {rel:.0e}: {sol.status}")
             continue
-        found, reason = _bound_from(program, data, x, sense, expr, sol.values_of(data.ids),
+        found, reason = _bound_from(program, data, solver_value, sense, expr, sol.values_of(data.ids),
                                     f"tightened ({rel:.0e})", kept, t0)
         if found is not None:
             return found

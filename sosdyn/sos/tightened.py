@@ -1,50 +1,154 @@
-"""A safe bound where the solver's point has none: the posterior correction at a tightened re-solve.
+"""A proven point where the solver's has none: a re-solve held above the boundary, then back.
 
-The posterior shift (:mod:`.posterior`) needs every Gram block positive definite, by its
-rounding margin, in the directions the constant monomial cannot reach. An interior-point
-solver's point of a bound program lies on the boundary of the cone, where such a direction
-can carry a tiny negative eigenvalue (Broyden tridiagonal, the Motzkin form times x^2 + y^2).
-Solving again with every Gram block tightened to Q >= eps I (eps = MARGINS x the block's
-largest entry, ``SOSProgram.tightened``) buys that margin for a slightly lower t; the shift
-computed at the new point is a bound of the original program, because the posterior argument
-uses only the numbers (the identity and the blocks' eigenvalues), not how they were found.
-Where every exact certificate is singular along such a direction, the tightened programs are
-infeasible and no point is found.
+Where no single decision buys the margin (:mod:`.posterior`) -- the objective is a matrix, the
+program has no objective, a free polynomial's coefficients are what must move -- the program is
+solved again with every kept Gram block held above zero, Q[K, K] = P + eps D with D the
+solver's diagonal (each row its own scale, eps = MARGINS) and the rows off the face fixed to
+zero (``SOSProgram.tightened``). A point y_s of that program has a margin the residual fits
+under, so it is proven (:func:`~.proof.prove_program`); and since the feasible set is convex,
+every y(theta) = (1 - theta) y* + theta y_s with theta in [0, 1] is feasible in exact arithmetic
+wherever y* is, so the smallest theta the judge proves (a search in 2^-k, then a bisection)
+gives a proven point as close to the solver's optimum as the rounding allows -- the objective
+read there is on the safe side of the optimum because the point is feasible. Clarabel solves the
+tightened program; when it fails or panics, SCS does (through cvxpy).
 """
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 
-from ..errors import ResourceLimitError, UnverifiedSolutionError
+from ..errors import ResourceLimitError
+from ..poly import match_rows
 from .gram import svec_to_matrix
-from .posterior import safe_point
+from .posterior import posterior_point
+from .proof import prove_program
 from .rigorous import ANSWERED
 
-MARGINS = (1e-9, 1e-8, 1e-7)      # Q >= eps I relative to each block's largest entry, tried in order
+MARGINS = (1e-8, 1e-6, 1e-4)      # Q[K, K] >= eps diag(Q*) on each kept row (:func:`margins`), in order
+CLARABEL = dict(retry=False, prove=False, tol_feas=1e-10, tol_gap_abs=1e-10, tol_gap_rel=1e-10)
+SCS = dict(solver="SCS", backend="cvxpy", retry=False, prove=False, eps=1e-9, max_iters=50_000)
 
 
-def tightened_safe_point(solution, pattern):
-    """:func:`~.posterior.safe_point` of ``solution`` (a lower-bound program, ``pattern`` =
-    :func:`~.posterior.bound_pattern`) at the first tightened re-solve that admits one, read for
-    the original program's decisions; None if none does (or the memory guard refuses the
-    tightened program: its new blocks and face rows can be estimated far above the original's,
-    Broyden tridiagonal n = 1000: 94.8 GiB against 0.5 GiB)."""
-    program = solution.program
-    scales = {id(b.psd): max(1.0, float(np.abs(svec_to_matrix(solution.values_of(b.ids), b.psd.size)).max()))
-              for b in program.blocks if b.psd is not None and b.psd.cone == "psd" and b.psd.size}
-    for rel in MARGINS:
-        try:
-            sol = program.tightened({}, {k: rel * v for k, v in scales.items()}).solve(retry=False)
-        except ResourceLimitError:
-            return None
-        if sol.status not in ANSWERED or not np.isfinite(sol.x).all():
+def kept_rows(program, judged) -> tuple[dict, dict]:
+    """(id(PsdBlock) -> the kept rows of every Gram block, constraint name -> its kept masks), from
+    the faces the judge settled on."""
+    rows, masks = {}, {}
+    for con in program.sos_constraints:
+        proof = judged.constraints.get(con.name)
+        if proof is None or not proof.kept:
             continue
-        view = copy.copy(solution)
-        view.x = sol.values_of(solution.data.ids)
-        try:
-            return safe_point(view, pattern)
-        except UnverifiedSolutionError:
+        masks[con.name] = [m.copy() for m in proof.kept]
+        for (_, psd), mask in zip(con.gram_blocks, proof.kept):
+            rows[id(psd)] = np.flatnonzero(mask)
+    return rows, masks
+
+
+def square_coefficients(con, at) -> list:
+    """Per Gram block of ``con``, |coefficient| of each row's square z_j^2 in the constraint's
+    polynomial at the point (0 where it has none)."""
+    p = con.source.with_vars(con.basis.vars)
+    coef = np.abs(p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids))
+    out = []
+    for basis, _ in con.gram_blocks:
+        B = np.zeros((len(basis), p.nvars), dtype=np.int64)
+        B[:, [p.vars.index(v) for v in basis.vars]] = basis.exps
+        hit = match_rows(p.exps, 2 * B)
+        out.append(np.where(hit >= 0, coef[np.maximum(hit, 0)], 0.0))
+    return out
+
+
+def margins(solution, kept: dict, rel: float) -> dict:
+    """id(PsdBlock) -> eps on its kept rows: for a constraint's Gram block rel x max(the solver's
+    diagonal, the row's square coefficient in the polynomial) -- the residual a row must absorb
+    scales with that coefficient, and a block the solver left near zero still needs it; for a
+    multiplier rel x its diagonal; for a new_sos/new_psd block rel x max(its diagonal, 1e-3 of its
+    largest and of 1)."""
+    at = solution.values_of
+    own = {}
+    for con in solution.program.sos_constraints:
+        for (_, psd), sq in zip(con.gram_blocks, square_coefficients(con, at)):
+            own[id(psd)] = sq
+    multipliers = {id(m.psd) for con in solution.program.sos_constraints for m in con.multipliers
+                   if m.psd.role != "clique"}
+    out = {}
+    for b in solution.program.blocks:
+        if b.psd is None or b.psd.cone != "psd" or not b.psd.size:
             continue
+        d = np.abs(np.diag(svec_to_matrix(at(b.ids), b.psd.size)))
+        K = kept.get(id(b.psd), np.arange(b.psd.size))
+        if id(b.psd) in own:
+            scale = np.maximum(d, own[id(b.psd)])
+        elif id(b.psd) in multipliers:
+            scale = d
+        else:
+            scale = np.maximum(d, 1e-3 * max(1.0, float(d.max(initial=0.0))))
+        out[id(b.psd)] = rel * scale[K]
+    return out
+
+
+def tightened_solve(solution, kept, rel):
+    """(the tightened program's solution, whether SCS gave it): Clarabel, then SCS when Clarabel
+    fails; "infeasible" when Clarabel proves it so; None if neither answers (or the memory guard
+    refuses the tightened program)."""
+    try:
+        tight = solution.program.tightened(kept, margins(solution, kept, rel))
+        for by_scs, how in ((False, CLARABEL), (True, SCS)):
+            sol = tight.solve(**how)
+            if sol.status in ANSWERED and np.isfinite(sol.x).all():
+                return sol, by_scs
+            if sol.status == "infeasible":        # a proof of it, not a numerical failure: no SCS
+                return "infeasible"
+    except ResourceLimitError:
+        pass
     return None
+
+
+def interpolate(program, ids, x, y, snap, prefer=None):
+    """(theta, the point) for the smallest theta found in (0, 1] with snap((1 - theta) x + theta y)
+    proven (y itself is)."""
+    def proven(theta):
+        point = snap((1 - theta) * x + theta * y)
+        return point if prove_program(program, ids, point, prefer).ok else None
+    fail, ok, best = 0.0, 1.0, y
+    for k in (30, 24, 18, 12, 8, 4, 2, 1):
+        point = proven(2.0 ** -k)
+        if point is not None:
+            ok, best = 2.0 ** -k, point
+            break
+        fail = 2.0 ** -k
+    for _ in range(10):
+        mid = 0.5 * (fail + ok)
+        point = proven(mid)
+        if point is not None:
+            ok, best = mid, point
+        else:
+            fail = mid
+    return ok, best
+
+
+def tightened_point(solution, judged, snap):
+    """(a proven point, how it was found) from a tightened re-solve (module docstring), else
+    (None, what was tried)."""
+    program, ids = solution.program, solution.data.ids
+    kept, prefer = kept_rows(program, judged)
+    notes = []
+    for rel in MARGINS:
+        found = tightened_solve(solution, kept, rel)
+        if found == "infeasible":                 # every larger margin is infeasible too
+            notes.append(f"held above zero ({rel:.0e}): infeasible (no interior on this face)")
+            break
+        if found is None:
+            notes.append(f"held above zero ({rel:.0e}): no answer from Clarabel or SCS")
+            continue
+        sol, by_scs = found
+        ys = snap(sol.values_of(ids))
+        at_ys = prove_program(program, ids, ys, prefer)
+        if not at_ys.ok:
+            moved = posterior_point(program, ids, ys, at_ys)
+            if moved is None:
+                notes.append(f"held above zero ({rel:.0e}{', SCS' if by_scs else ''}): {at_ys.summary()}")
+                continue
+            ys = moved
+        theta, y = interpolate(program, ids, solution.x, ys, snap, prefer)
+        return y, (f"held above zero ({rel:.0e}{', by SCS' if by_scs else ''}), then back towards the "
+                   f"solver's point (theta = {theta:.2g})"), notes
+    return None, "", notes

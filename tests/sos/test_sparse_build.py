@@ -8,7 +8,8 @@ import pytest
 import sosdyn as sd
 from sosdyn.sos.constraints import gram_polynomial
 from sosdyn.sos.gram import gram_matching
-from sosdyn.sos.sparse_constraint import SparseSOSConstraint, keys_to_exps, multiset_keys
+from sosdyn.poly import keys_to_exps, multiset_keys
+from sosdyn.sos.sparse_constraint import SparseSOSConstraint
 from sosdyn.sos.sparsity import clique_faces, sparse_bases
 
 

@@ -1,0 +1,162 @@
+"""The point every number of a Solution is read at: one where every constraint is proven.
+
+The solver's point y* is an approximation; what leaves sosdyn is read at a point y the judge
+(:func:`~.proof.prove_program`) proves, found by these remedies in order (docs/sos-semantics.md):
+
+1. **as solved**: y* itself, on the faces the judge tries (facial reduction first);
+2. **posterior correction**: one decision of the objective moved until every constraint it
+   enters has the margin its residual needs (:mod:`.posterior`);
+3. **exact on the kernel's face** (programs of at most EXACT_MAX Gram entries): a rational
+   certificate on the face the solver's kernel names (:mod:`.kernel`: facial reduction, an exact
+   correction, exact PSD tests; Peyrl & Parrilo 2008) -- where a Gram block has no interior at
+   all (Beale's function, v v^T + I), before any re-solve: cheaper, and exact (Beale's bound 0);
+4. **held above zero**: a re-solve with every kept Gram block >= eps diag(Q*) -- Clarabel, then
+   SCS when Clarabel fails or panics -- and back towards y* as far as the judge allows
+   (:mod:`.tightened`);
+5. **exact on coordinate faces** with short re-solves (:func:`~.rigorous.prove_bound`; small
+   programs).
+
+An exact certificate's numbers are the nearest floats of its rational point, its objective the
+exact one rounded to the safe side.
+
+If none succeeds, nothing is handed out: UnverifiedSolutionError says what each step found.
+Before each judgement the point is projected onto the program's ``add_eq`` rows (a
+least-squares step in floating point, :func:`snap`), which every remedy's point may miss by
+the solver's tolerance.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ResourceLimitError, UnverifiedSolutionError
+from .conic import positions
+from .kernel import kernel_bound
+from .posterior import posterior_point
+from .proof import prove_program
+from .rigorous import QUICK_TIGHTENINGS, prove_bound
+from .tightened import tightened_point
+
+_UNVERIFIED_HINTS = {
+    "SCS": "solver='CLARABEL' (the default interior-point solver, far more accurate than SCS), "
+           "or tighter SCS tolerances (eps=1e-9, max_iters=100000)",
+    None: "tighter solver tolerances (Clarabel: tol_feas=1e-10, tol_gap_abs=1e-10, "
+          "tol_gap_rel=1e-10), rescale the problem data, or give the program more margin "
+          "(a small positive margin in strict inequalities, a lower degree)",
+}
+EXACT_MAX = 10_000      # Gram entries up to which the exact certificate is tried (rational arithmetic
+#                         on Broyden n = 1000, 54,890 entries, ran over 15 minutes)
+
+
+def unverified_hint(solver: str) -> str:
+    """What to try when a solver's answer fails the independent check."""
+    return _UNVERIFIED_HINTS.get(solver, _UNVERIFIED_HINTS[None])
+
+
+@dataclass
+class Proof:
+    """Where a Solution's numbers are read: ``x`` (ordered as the solution's ``data.ids``), how it
+    was found (``method``), what the earlier remedies found (``tried``); ``exact`` is the
+    :class:`~.rigorous.Bound` when the exact certificate gave it."""
+
+    x: np.ndarray
+    method: str
+    tried: list = field(default_factory=list)
+    exact: object = None
+
+
+def snap(program, ids):
+    """x -> x projected onto the program's ``add_eq`` rows (least squares over the decisions they
+    touch; x itself when there are none or they hold already)."""
+    rows = [r for r in program.linear if r.role == "user" and r.kind == "eq"]
+    if not rows:
+        return lambda x: x
+    cols = np.unique(np.concatenate([r.ids for r in rows]))
+    pos = positions(ids, cols)
+    n_rows = sum(r.rhs.size for r in rows)
+    A = np.zeros((n_rows, cols.size))
+    b = np.concatenate([r.rhs for r in rows])
+    start = 0
+    for r in rows:
+        np.add.at(A, (start + r.rows, np.searchsorted(cols, r.ids)), r.vals)
+        start += r.rhs.size
+    pinv = np.linalg.pinv(A)
+
+    def project(x):
+        y = x.copy()
+        for _ in range(2):
+            resid = A @ y[pos] - b
+            if not np.any(resid):
+                break
+            y[pos] = y[pos] - pinv @ resid
+        return y
+    return project
+
+
+@dataclass
+class Pending:
+    """What the remedies without a re-solve found (:func:`cheap_proof`): the judged point, the
+    judge's verdict there and what was tried; the re-solving remedies continue from it."""
+
+    x: np.ndarray
+    judged: object
+    tried: list
+
+
+def cheap_proof(solution):
+    """Remedies 1 and 2 of the module docstring (no re-solve: ``SOSProgram.solve`` runs them at
+    once, while the program is the one solved): a :class:`Proof`, or the :class:`Pending` state."""
+    program, ids = solution.program, solution.data.ids
+    x = snap(program, ids)(solution.x)
+    judged = prove_program(program, ids, x)
+    if judged.ok:
+        return Proof(x, "as solved")
+    tried = [f"as solved: {judged.summary()}"]
+    moved = posterior_point(program, ids, x, judged)
+    if moved is not None:
+        return Proof(moved, "posterior correction", tried)
+    tried.append("posterior correction: no decision of the objective makes every failing constraint "
+                 "more feasible by a sum of squares" if program.objective else
+                 "posterior correction: no objective to move")
+    return Pending(x, judged, tried)
+
+
+def full_proof(solution, pending: Pending) -> Proof:
+    """Remedies 3 to 5 after :func:`cheap_proof` found none; UnverifiedSolutionError naming what
+    each remedy found when none gives a proven point."""
+    program, tried = solution.program, list(pending.tried)
+    entries = sum(b.psd.size * (b.psd.size + 1) // 2 for b in program.blocks if b.psd is not None)
+    small = entries <= EXACT_MAX
+    if small:
+        for keep in (False, True):
+            try:
+                bound = kernel_bound(program, solution.data, solution.x, keep)
+                return Proof(bound.x, "exact on the face of the solver's kernel", tried, bound)
+            except UnverifiedSolutionError as exc:
+                tried.append(f"exact on the kernel's face{' (constant kept)' if keep else ''}: {exc.detail}")
+    y, how, notes = tightened_point(solution, pending.judged, snap(program, solution.data.ids))
+    tried += notes
+    if y is not None:
+        return Proof(y, how, tried)
+    if small:
+        try:
+            bound = prove_bound(program, solution.data, solution.x, QUICK_TIGHTENINGS)
+            return Proof(bound.x, f"exact ({bound.method})", tried, bound)
+        except (UnverifiedSolutionError, ResourceLimitError) as exc:
+            tried.append(f"exact on coordinate faces: {getattr(exc, 'detail', exc)}")
+    else:
+        tried.append(f"exact certificates: not tried ({entries} Gram entries, above {EXACT_MAX})")
+    raise UnverifiedSolutionError(
+        f"no point near the {solution.solver} answer to {program.name!r} could be proven, so no number "
+        f"from it is returned. Tried: {' | '.join(tried)}", "unverified",
+        "rescale the variables so the solution lies near the unit box, a lower degree, give the program "
+        "some margin (a strict inequality held by a small positive amount), or prog.solve(rigorous=True)")
+
+
+def refusal(solution, pending: Pending) -> UnverifiedSolutionError:
+    """The error of an answer that fails the check and whose point the cheap remedies cannot prove."""
+    return UnverifiedSolutionError(
+        f"the {solution.solver} answer to {solution.program.name!r} fails the independent check, and no "
+        f"point near it could be proven, so no number from it is returned: {solution.verify().summary()}. "
+        f"Tried: {' | '.join(pending.tried)}", "unverified", unverified_hint(solution.solver), solution.verify())
