@@ -7,7 +7,7 @@ matrix of the SOS matrix [[1 + x^2, x y^2], [x y^2, 1 + y^4]] = v v^T + I along
 y_0 x - y_1 y^2; the last clique of the chained Rosenbrock function along x_n - x_(n-1)^2. The
 solver's Gram matrix Q shows these directions as its (numerical) kernel. Here each block's
 kernel is read in rational numbers (the echelon form of its eigenvectors of eigenvalue below
-KERNEL_TOL x the largest, entries rounded to small denominators, at most ROUNDING from the floats: an interior-point
+``tol`` x the largest, tol in KERNEL_TOLS, entries rounded to small denominators, at most ROUNDING from the floats: an interior-point
 solver approaches its face only to about the square root of its tolerance),
 and the block restricted to the face Q = U R U^T, U a rational basis of the kernel's orthogonal
 complement (Permenter & Parrilo's facial reduction with the solver's kernel as the certificate
@@ -35,9 +35,10 @@ from ..poly import Polynomial
 from .conic import positions
 from .gram import SQRT2, exact, float_down, proven_min_eig, svec_pairs, svec_to_matrix
 from .objective import affine_rows
+from .proof import identity_of
 from .rigorous import Bound, _exps_in, constraint_map
 
-KERNEL_TOL = 1e-7        # eigenvalues below this x the block's largest are its kernel
+KERNEL_TOLS = (1e-9, 1e-7, 1e-5)   # eigenvalues below this x the block's largest are its kernel, tried in turn
 DENOMINATOR = 1000       # largest denominator of a kernel vector's entries
 ROUNDING = 1e-3          # how far the floats' echelon form may be from its rounding (an interior-point
 #                          solver's face is known to about the square root of its tolerance)
@@ -53,14 +54,14 @@ def on_grid(v: float, step: float) -> Fraction:
     return round(Fraction(v) / h) * h
 
 
-def rational_face(Q, keep_row=None):
+def rational_face(Q, keep_row=None, tol=1e-7):
     """U (n x r, Fractions; columns span the orthogonal complement of Q's rational kernel), or
     None when the kernel has no rational echelon form. ``keep_row``: the kernel is restricted to
     vectors vanishing there (the constant monomial of a bound, which lowering gamma reaches)."""
     n = Q.shape[0]
     w, V = np.linalg.eigh(Q)
     top = max(float(w.max(initial=0.0)), 0.0)
-    K = V[:, w <= KERNEL_TOL * top] if top > 0 else V
+    K = V[:, w <= tol * top] if top > 0 else V
     if keep_row is not None and K.shape[1]:
         _, s, vt = np.linalg.svd(K[keep_row:keep_row + 1, :])
         rank = int((s > 1e-9).sum())
@@ -128,7 +129,7 @@ def exact_solution(rows, start: dict):
 
 def _eliminate(system, unknowns):
     """Solve the square sparse rational system [({unknown: a}, rhs)] for ``unknowns``, or None."""
-    rows = [(dict(lin), rhs) for lin, rhs in system]
+    rows = [({u: a for u, a in lin.items() if a}, rhs) for lin, rhs in system]
     pivots = []
     for u in unknowns:
         cands = [k for k in range(len(pivots), len(rows)) if rows[k][0].get(u)]
@@ -173,13 +174,16 @@ def _face_terms(U, size):
     return out
 
 
-def kernel_bound(program, data, x, keep_constant: bool) -> Bound:
+def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7) -> Bound:
     """The exact certificate of the module docstring near x (ordered as ``data.ids``); a Bound
     (``proven`` None for a program without objective), or UnverifiedSolutionError."""
     sense, expr = program.objective or (None, None)
     if program.cvxpy_constraints or (sense is not None and not isinstance(expr, Polynomial)):
         raise UnverifiedSolutionError("only affine objectives and no cvxpy constraints have an exact form",
                                       "unverified")
+    equations = sum(identity_of(con).n_mon for con in program.sos_constraints)
+    if equations > MAX_ROWS:
+        raise UnverifiedSolutionError(f"{equations} coefficient equations, above {MAX_ROWS}", "unverified")
     at = lambda ids: x[positions(data.ids, ids)]  # noqa: E731
     half = exact(SQRT2) / 2
     start, entry = {}, {}
@@ -192,7 +196,7 @@ def kernel_bound(program, data, x, keep_constant: bool) -> Bound:
         if keep_constant and b.psd.role in ("gram", "clique"):
             keep = next((k for con in program.sos_constraints for basis, psd in con.gram_blocks if psd is b.psd
                          for k in np.flatnonzero(~basis.exps.any(axis=1))[:1]), None)
-        U = rational_face(Q, keep)
+        U = rational_face(Q, keep, tol)
         if U is None:
             raise UnverifiedSolutionError(f"block {b.name!r}: its kernel has no small rational form", "unverified")
         Uf = np.array([[float(v) for v in row] for row in U]) if U and U[0] else np.zeros((Q.shape[0], 0))

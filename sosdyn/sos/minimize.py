@@ -4,33 +4,50 @@
 
 with the certificate of :meth:`SOSProgram.add_nonneg_on` (Putinar multipliers up to
 ``degree``, optionally the preorder's products; :mod:`.sets`) or, for K = R^n, f - gamma SOS.
-Raising ``degree`` gives a nondecreasing sequence of bounds converging to f* when K is
-compact with an Archimedean description (Lasserre 2001). The bound is the verified value,
-lowered to the safe side (:mod:`.posterior`: the solver's gamma minus what its residual and
-negative eigenvalues can cost where the monomials are large), so it is <= min f in floating
-point; when no such correction exists (a singular certificate on an unbounded set) a quick
-exact proof's bound is returned, or UnverifiedSolutionError raised; ``rigorous=True`` always
-proves it exactly. :func:`minimize_on` raises (InfeasibleError, UnverifiedSolutionError, ...)
-rather than return a number the independent check does not confirm.
+The relaxation's value gamma* is nondecreasing in the degree and converges to f* when K is
+compact with an Archimedean description (Lasserre 2001). The *returned* bound is the objective
+at a proven point (:mod:`.proven`): <= gamma* <= f*, but not always nondecreasing in the degree
+-- a higher degree's certificate can be harder to prove near its optimum (measured: x y on the
+box [-50, 80]^2, exact -4000: -4112.5 at degree 2; rescaled, -4000.000 at degree 4). Before any
+solve and at every degree:
+
+* **no finite bound**: a ray x0 + s r inside K along which f -> -inf, proven in rational
+  arithmetic (:func:`~.sets.unbounded_ray`), is an InfeasibleError (no gamma is a bound);
+* **rescaled**: when K bounds every variable in a box [lo, hi] far from the unit box, the
+  program is solved for f(c + w u) on the pulled-back set (c the box's centre, w its half-widths;
+  :func:`~.sets.substituted`: exact coefficients rounded, the rounding subtracted from f and
+  added to every g_i, so the bound stays a bound of the original problem); ``LowerBound.minimizers``
+  maps the points back;
+* **lower degree**: when no point of the degree-d relaxation is proven (UnverifiedSolutionError,
+  or a solver error), degrees d - 2, d - 4, ... are tried and the first proven bound returned
+  (``LowerBound.degree`` says which): a bound valid at a lower degree is never refused at a
+  higher one.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
-from ..errors import InputError
+import numpy as np
+
+from ..errors import InfeasibleError, InputError, SolverError, UnverifiedSolutionError
+from ..poly import Polynomial
 from .constraints import SOSConstraint, as_sos_polynomial
+from .moments import Atoms
 from .program import SOSProgram
-from .sets import BasicSet, as_set
+from .sets import BasicSet, as_set, substituted, unbounded_ray, variable_box
 from .solution import Solution
+
+UNIT_BOX = (0.25, 2.0)     # a box is left as it is when every half-width >= 0.25 and |centre| + half-width <= 2
 
 
 @dataclass
 class LowerBound:
-    """A verified lower bound ``value`` <= min f on the set, with its program and certificate.
+    """A bound ``value`` <= min f on the set, with its program and certificate.
 
-    ``value`` is ``solution.objective``: the independently checked gamma lowered by the
-    posterior correction (:func:`~.posterior.safe_point`), or with ``rigorous=True`` the
-    bound proven in exact arithmetic; ``solver_value`` the solver's gamma.
+    ``value`` is ``solution.objective`` (the objective at the proven point, :mod:`.proven`), or with
+    ``rigorous=True`` the bound proven in exact arithmetic, minus the rounding of a rescaling;
+    ``solver_value`` the solver's gamma. ``degree``: the relaxation degree that gave it;
+    ``center``/``half``: the rescaling x = center + half * u the program was solved in (None: none).
     """
 
     value: float
@@ -38,6 +55,31 @@ class LowerBound:
     constraint: SOSConstraint
     program: SOSProgram
     solver_value: float = float("nan")
+    degree: int | None = None
+    center: np.ndarray | None = field(default=None, repr=False)
+    half: np.ndarray | None = field(default=None, repr=False)
+
+    def minimizers(self, **kw) -> Atoms:
+        """The points attaining the bound (``Solution.minimizers``), in the problem's own variables."""
+        atoms = self.solution.minimizers(self.constraint, **kw)
+        if self.center is not None:
+            atoms.points = self.center + self.half * atoms.points
+        return atoms
+
+
+def rescaling(f: Polynomial, K: BasicSet):
+    """(center, half) of the box K bounds every variable of f and K in, when it is far from the unit
+    box (UNIT_BOX) and K has no equalities; else None."""
+    if K.eqs or not K.ineqs:
+        return None
+    vars = f.vars + tuple(v for v in K.vars if v not in f.vars)
+    box = variable_box(K, vars)
+    if box is None:
+        return None
+    center, half = (box[0] + box[1]) / 2, (box[1] - box[0]) / 2 * (1 + 1e-12)
+    if (half <= 0).any() or ((half >= UNIT_BOX[0]).all() and (np.abs(center) + half <= UNIT_BOX[1]).all()):
+        return None
+    return vars, center, half
 
 
 def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, sparsity=None, cone="psd",
@@ -46,15 +88,52 @@ def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, spars
     keywords (``rigorous=True`` for a bound proven in exact arithmetic)."""
     f = as_sos_polynomial(f)
     K = as_set(() if K is None else K)
+    if not (K.ineqs or K.eqs) and (degree is not None or products):
+        raise InputError("degree= and products= shape the multipliers of a set; K has no constraints. "
+                         "Try: minimize_on(f) for a global bound, or pass the set K")
+    ray = unbounded_ray(f, K) if f.is_numeric else None
+    if ray is not None:
+        raise InfeasibleError(
+            f"{f!r} has no finite lower bound on the set: along x = {ray[0].tolist()} + s * {ray[1].tolist()} "
+            "(over the variables of f, then of the set) every constraint holds for all s >= 0 and f -> -inf, "
+            "so no gamma is a bound at any degree (proven in rational arithmetic)", "infeasible",
+            "bound the variables in the set (a box or a ball), or check the sign of the objective")
+    scaled = rescaling(f, K) if f.is_numeric else None
+    if scaled is not None:
+        vars, center, half = scaled
+        f_u, f_err = substituted(f.with_vars(vars), center, half)
+        ineqs = []
+        for g in K.ineqs:
+            g_u, g_err = substituted(g.with_vars(vars), center, half)
+            ineqs.append(g_u + g_err)
+        f, K, shift = f_u - f_err, BasicSet(ineqs), (center, half)
+    else:
+        shift = (None, None)
+    degrees = [degree]
+    if K.ineqs and isinstance(degree, (int, np.integer)) and not isinstance(degree, bool):
+        lowest = max([f.degree] + [g.degree for g in K.ineqs + K.eqs])
+        degrees += [d for d in range(int(degree) - 2, lowest - 1, -2)]
+    failures = []
+    for d in degrees:
+        try:
+            return _lower_bound(f, K, d, products, sparsity, cone, shift, solve)
+        except InfeasibleError:
+            raise
+        except (UnverifiedSolutionError, SolverError) as exc:
+            failures.append(exc)
+    if len(failures) > 1:
+        first = failures[0]
+        first.args = (f"{first}\n(lower degrees {degrees[1:]} were tried too, and no bound was proven at any)",)
+    raise failures[0]
+
+
+def _lower_bound(f, K, degree, products, sparsity, cone, shift, solve) -> LowerBound:
     prog = SOSProgram("minimize_on")
     gamma = prog.new_var(name="gamma")
     if K.ineqs or K.eqs:
         con = prog.add_nonneg_on(f - gamma, K, degree=degree, products=products, sparsity=sparsity, cone=cone)
-    elif degree is not None or products:
-        raise InputError("degree= and products= shape the multipliers of a set; K has no constraints. "
-                         "Try: minimize_on(f) for a global bound, or pass the set K")
     else:
         con = prog.add_sos(f - gamma, sparsity=sparsity, cone=cone)
     prog.maximize(gamma)
     sol = prog.solve(raise_on_failure=True, **solve)
-    return LowerBound(float(sol.objective), sol, con, prog, sol.solver_objective)
+    return LowerBound(float(sol.objective), sol, con, prog, sol.solver_objective, degree, *shift)

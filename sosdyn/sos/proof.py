@@ -11,8 +11,8 @@ is a product of at most three floats, so each coefficient e_a is computed with
 |fl(e_a) - e_a| <= gamma_(2 m_a + 6) sum |terms| (m_a terms; gamma_k = k u / (1 - k u), u the unit
 roundoff; Higham, *Accuracy and stability of numerical algorithms*, ch. 3). At the point:
 
-1. a multiplier block with lambda_min(S_i) < 0 is raised to S_i + mu_i I (its cost, -mu_i |z_i|^2
-   g_i, joins e); it must then be PSD (:func:`eig_lower` >= 0);
+1. a multiplier block's rows of tiny diagonal are set to zero, and with lambda_min(S_i) < 0 it is
+   raised to S_i + mu_i I on the rest (both changes join e); it must then be PSD (:func:`eig_lower`);
 2. the Gram rows off a *face* are set to zero (:func:`faces`: rows the polynomial forces to zero --
    a square z_j^2 no other kept product gives, with no other term of (*) on it -- iterated; then
    rows whose diagonal is tiny, which is a restriction and always sound), their terms joining e;
@@ -23,7 +23,11 @@ roundoff; Higham, *Accuracy and stability of numerical algorithms*, ch. 3). At t
    ||E~_k||_2 <= ||E~_k||_F <= tau_k = (sum_{a owned by k} B_a^2 / N_a)^(1/2), and e~_rest (monomials
    no kept product gives) must vanish exactly (checked in rational arithmetic);
 5. the constraint is proven when lambda_min(Q~_k) >= tau_k for every block, lambda_min bounded by
-   :func:`eig_lower` (a Cholesky factor of Q~ - tI and its rounding bound).
+   :func:`eig_lower` (a Cholesky factor of Q~ - tI and its rounding bound);
+6. on a set that bounds a box |x_i| <= R_i (:func:`~.sets.variable_bounds` of the multipliers'
+   constraints), a residual on monomials no kept product gives is bounded there by
+   c = sum_a B_a R^a and the constant row carries it: lambda_min(Q~ - c e_0 e_0^T) >= tau gives
+   z^T (Q~ + E~) z >= c >= -e~_rest(x) on K (the old posterior's compact-set bound).
 
 Then source = SOS + sum sigma_i g_i + sum lambda_j h_j >= 0 on K, whatever the size of the
 coefficients. Blocks that belong to no constraint (new_sos, new_psd) must have
@@ -41,16 +45,18 @@ from fractions import Fraction
 
 import numpy as np
 
-from ..poly import multiset_keys, unique_rows
+from ..poly import keys_to_exps, multiset_keys, unique_rows
 from .conic import cvxpy_block_vars, positions
 from .constraints import Basis, PsdBlock
-from .gram import (EXACT_LDL_MAX, absorb_residual, exact_sub, gram_form, matrix_to_svec, proven_min_eig,
+from .sets import BasicSet, variable_bounds
+from .gram import (SQRT2, EXACT_LDL_MAX, absorb_residual, exact_sub, gram_form, matrix_to_svec, proven_min_eig,
                    svec_pairs, svec_to_matrix)
 
 EPS = np.finfo(float).eps
 UNIT = EPS / 2
 FACES = (1e-9, 1e-7, 1e-5)   # relative Gram diagonals below which a row leaves the face (heuristic faces)
 CVXPY_TOL = 1e-9
+MULTIPLIER_FACE = 1e-9   # a multiplier row whose diagonal is below this x the largest is set to zero
 
 
 def gam(k):
@@ -129,6 +135,8 @@ class Identity:
     other_terms: np.ndarray      # per monomial: terms that are not Gram-block terms
     source_mask: np.ndarray      # the source coefficients (rows, 1 + ids) these terms cover
     source_rc: tuple             # their (row, column), in term order
+    keys: np.ndarray             # the union of monomials (multiset keys)
+    radius: np.ndarray | None    # |x_i| <= radius_i on the constraint's set (None: not bounded)
 
 
 def _keys(exps, cols, width):
@@ -204,9 +212,11 @@ def build_identity(con) -> Identity:
     other[n_source:n_gram_terms] = False
     mask = np.zeros(src.coef.shape, dtype=bool)
     mask[rs, cs] = True
+    K = BasicSet(ineqs=[m.constraint for m in mults], eqs=[m.constraint for m in eqm])
+    radius = variable_bounds(K, vars) if K.ineqs or K.eqs else None
     return Identity(inv, np.concatenate(c1), np.concatenate(c2), np.concatenate(kind), np.concatenate(where),
                     np.bincount(inv, minlength=n_mon), blocks, pair_mon, n_mon, np.arange(n_source),
-                    np.bincount(inv[other], minlength=n_mon), mask, (rs, cs))
+                    np.bincount(inv[other], minlength=n_mon), mask, (rs, cs), U, radius)
 
 
 _IDENTITIES: OrderedDict = OrderedDict()
@@ -364,6 +374,7 @@ class ConstraintProof:
     N: np.ndarray | None = None
     ident: Identity | None = None
     reason: str = ""
+    entries: np.ndarray | None = None    # the proven certificate: Q~ on the face, raised multipliers
 
     @property
     def margin(self) -> float:
@@ -371,13 +382,19 @@ class ConstraintProof:
 
 
 def _raise_multipliers(ident: Identity, entries: np.ndarray) -> str:
-    """Raise every multiplier block to S + mu I with eig_lower >= 0 (in ``entries``); a reason if
-    one cannot be raised (non-finite)."""
+    """Put every multiplier block on its face and raise it there (in ``entries``, step 1): rows
+    whose diagonal is below MULTIPLIER_FACE x the largest are set to zero (their terms join the
+    residual), the rest raised to S + mu I with eig_lower >= 0 -- mu on a near-zero row would be
+    multiplied by every coefficient of its constraint. A reason if a block cannot be raised."""
     for psd, size, off, gram in ident.blocks:
         if gram or not size:
             continue
         i, j = svec_pairs(size)
         S = _matrix(entries, off, size)
+        d = np.diag(S)
+        keep = d > MULTIPLIER_FACE * float(np.abs(d).max(initial=0.0))
+        entries[off:off + i.size][~(keep[i] & keep[j])] = 0.0
+        S = _matrix(entries, off, size)[np.ix_(keep, keep)]
         lam = eig_lower(S)
         mu = 0.0
         for _ in range(8):
@@ -386,10 +403,10 @@ def _raise_multipliers(ident: Identity, entries: np.ndarray) -> str:
             if not np.isfinite(lam):
                 return f"multiplier {psd.name!r} is not finite"
             mu = mu + (-lam) * (1 + 1e-6) + 4 * EPS * float(np.abs(S).max())
-            lam = eig_lower(S + mu * np.eye(size))
+            lam = eig_lower(S + mu * np.eye(S.shape[0]))
         if lam < 0:
             return f"multiplier {psd.name!r} cannot be made PSD"
-        entries[off:off + i.size] += np.where(i == j, mu, 0.0)
+        entries[off:off + i.size] += np.where((i == j) & keep[i], mu, 0.0)
     return ""
 
 
@@ -468,18 +485,27 @@ def _prove_on_face(name, ident, base, grams, kept, zeros, at, src_err) -> Constr
             entries[off + z * (z + 1) // 2 + z] += need[k] + spare
         e, bound, tau = _bound_of(ident, entries, at, src_err, owner, N, len(grams))
         need = _needs(entries, grams, kept, zero, tau)
+    gap = 0.0                                           # step 6 of the module docstring
     for a in np.flatnonzero((owner < 0) & (bound > 0)):
         if exact_residual(ident, int(a), at, entries) != 0:
-            return ConstraintProof(False, reason=(
-                f"constraint {name!r}: a residual {e[a]:.2e} on a monomial that no kept Gram "
-                "product gives (it cannot be absorbed)"))
+            if ident.radius is None or not shared:
+                return ConstraintProof(False, reason=(
+                    f"constraint {name!r}: a residual {e[a]:.2e} on a monomial that no kept Gram "
+                    "product gives (it cannot be absorbed, and the set bounds no box)"))
+            exps = keys_to_exps(ident.keys[a:a + 1], ident.radius.size)[0]
+            gap += float(bound[a]) * float(np.prod(ident.radius ** exps))
     A = [_matrix(entries, off, size)[np.ix_(kept[k], kept[k])] for k, (size, off) in enumerate(grams)]
+    if gap:
+        k0 = shared[0]
+        cut = gap * (1 + 1e-12) + 4 * EPS * abs(A[k0][zero[k0], zero[k0]])
+        A[k0][zero[k0], zero[k0]] -= cut
+        need[k0] += cut
     lam = [eig_lower(Q) for Q in A]
     ok = all(lk >= tk for lk, tk in zip(lam, tau))
     worst = int(np.argmin([lk - tk for lk, tk in zip(lam, tau)])) if grams else 0
     reason = "" if ok else (f"constraint {name!r}: Gram block {worst} has proven smallest eigenvalue "
                             f"{lam[worst]:.3e}, below the residual it must absorb ({tau[worst]:.2e})")
-    return ConstraintProof(ok, A, lam, [float(t) for t in tau], kept, zero, need, owner, N, ident, reason)
+    return ConstraintProof(ok, A, lam, [float(t) for t in tau], kept, zero, need, owner, N, ident, reason, entries)
 
 
 def _needs(entries, grams, kept, zero, tau) -> list:
@@ -569,6 +595,20 @@ def prove_program(program, ids, x, prefer=None) -> PointProof:
     if not ok:
         reasons.append(why)
     return PointProof(not reasons, proofs, reasons)
+
+
+def certificate_point(program, ids, x, judged: PointProof) -> np.ndarray:
+    """x with every constraint's Gram and multiplier blocks replaced by the certificate the judge
+    proved (Q~ on its face, the raised multipliers): the numbers a proven Solution hands out."""
+    y = x.copy()
+    for con in program.sos_constraints:
+        proof = judged.constraints.get(con.name)
+        if proof is None or proof.entries is None:
+            continue
+        for psd, size, off, _ in proof.ident.blocks:
+            i, j = svec_pairs(size)
+            y[positions(ids, psd.ids)] = np.where(i == j, 1.0, SQRT2) * proof.entries[off:off + i.size]
+    return y
 
 
 # ---------------------------------------------------------------------- a given certificate

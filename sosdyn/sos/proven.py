@@ -26,16 +26,16 @@ the solver's tolerance.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import ResourceLimitError, UnverifiedSolutionError
-from .conic import positions
-from .kernel import kernel_bound
+from .conic import objective_value, positions
+from .kernel import KERNEL_TOLS, kernel_bound
 from .posterior import posterior_point
-from .proof import prove_program
-from .rigorous import QUICK_TIGHTENINGS, prove_bound
+from .proof import certificate_point, prove_program
+from .rigorous import QUICK_TIGHTENINGS, Bound, confirm, prove_bound
 from .tightened import tightened_point
 
 _UNVERIFIED_HINTS = {
@@ -104,6 +104,14 @@ class Pending:
     tried: list
 
 
+def certified(program, ids, y, judged) -> np.ndarray:
+    """The proven point y with its blocks replaced by the certificates proven there
+    (:func:`~.proof.certificate_point`: PSD multipliers, the absorbed Gram matrices), when that
+    point is proven too (it is, up to rounding), else y."""
+    z = certificate_point(program, ids, y, judged)
+    return z if prove_program(program, ids, z).ok else y
+
+
 def cheap_proof(solution):
     """Remedies 1 and 2 of the module docstring (no re-solve: ``SOSProgram.solve`` runs them at
     once, while the program is the one solved): a :class:`Proof`, or the :class:`Pending` state."""
@@ -111,11 +119,11 @@ def cheap_proof(solution):
     x = snap(program, ids)(solution.x)
     judged = prove_program(program, ids, x)
     if judged.ok:
-        return Proof(x, "as solved")
+        return Proof(certified(program, ids, x, judged), "as solved")
     tried = [f"as solved: {judged.summary()}"]
     moved = posterior_point(program, ids, x, judged)
     if moved is not None:
-        return Proof(moved, "posterior correction", tried)
+        return Proof(certified(program, ids, moved, prove_program(program, ids, moved)), "posterior correction", tried)
     tried.append("posterior correction: no decision of the objective makes every failing constraint "
                  "more feasible by a sum of squares" if program.objective else
                  "posterior correction: no objective to move")
@@ -130,15 +138,21 @@ def full_proof(solution, pending: Pending) -> Proof:
     small = entries <= EXACT_MAX
     if small:
         for keep in (False, True):
-            try:
-                bound = kernel_bound(program, solution.data, solution.x, keep)
-                return Proof(bound.x, "exact on the face of the solver's kernel", tried, bound)
-            except UnverifiedSolutionError as exc:
-                tried.append(f"exact on the kernel's face{' (constant kept)' if keep else ''}: {exc.detail}")
+            why = []
+            for tol in KERNEL_TOLS:
+                try:
+                    bound = kernel_bound(program, solution.data, solution.x, keep, tol)
+                    return Proof(bound.x, "exact on the face of the solver's kernel", tried, bound)
+                except UnverifiedSolutionError as exc:
+                    why.append(f"{tol:.0e}: {exc.detail}")
+                    if "coefficient equations" in exc.detail:       # too large at any tolerance
+                        break
+            tried.append(f"exact on the kernel's face{' (constant kept)' if keep else ''}: {'; '.join(why)}")
     y, how, notes = tightened_point(solution, pending.judged, snap(program, solution.data.ids))
     tried += notes
     if y is not None:
-        return Proof(y, how, tried)
+        return Proof(certified(program, solution.data.ids, y, prove_program(program, solution.data.ids, y)), how,
+                     tried)
     if small:
         try:
             bound = prove_bound(program, solution.data, solution.x, QUICK_TIGHTENINGS)
@@ -152,6 +166,37 @@ def full_proof(solution, pending: Pending) -> Proof:
         f"from it is returned. Tried: {' | '.join(tried)}", "unverified",
         "rescale the variables so the solution lies near the unit box, a lower degree, give the program "
         "some margin (a strict inequality held by a small positive amount), or prog.solve(rigorous=True)")
+
+
+def exact_bound(solution) -> Bound:
+    """The bound of rigorous mode: the best of the exact certificates at hand -- the proof's own
+    when it is exact, :func:`~.rigorous.confirm` at the float-proven point (on the judge's faces),
+    and :func:`~.rigorous.prove_bound`'s search from the solver's point; UnverifiedSolutionError
+    when none proves it."""
+    program, data = solution.program, solution.data
+    found, errors = [], []
+    try:
+        proof = solution.proof
+    except UnverifiedSolutionError:
+        proof = None
+    if proof is not None and proof.exact is not None:
+        found.append(replace(proof.exact, solver_value=objective_value(data, solution.x) if proof.exact.sense else None))
+    elif proof is not None:
+        judged = prove_program(program, data.ids, proof.x)
+        kept = {id(psd): np.flatnonzero(mask) for con in program.sos_constraints if judged.constraints[con.name].kept
+                for (_, psd), mask in zip(con.gram_blocks, judged.constraints[con.name].kept)}
+        confirmed = confirm(program, data, proof.x, kept, solution.x)
+        if confirmed is not None:
+            found.append(confirmed)
+    if not found or found[0].sense is not None:
+        try:
+            found.append(prove_bound(program, data, solution.x, solver_x=solution.x))
+        except UnverifiedSolutionError as exc:
+            errors.append(exc)
+    if not found:
+        raise errors[0]
+    best = max if found[0].sense == "max" else min
+    return best(found, key=lambda b: b.proven) if found[0].sense else found[0]
 
 
 def refusal(solution, pending: Pending) -> UnverifiedSolutionError:

@@ -39,11 +39,12 @@ from .gram import (SQRT2, absorb_residual, evaluate_affine, exact, exact_affine,
                    exact_gram, exact_sub, float_down, gram_form, merge_affine, proven_min_eig,
                    svec_pairs, svec_to_matrix)
 from .objective import QuadraticForm, affine_rows, is_cvxpy
+from .proof import eig_lower
 
 ANSWERED = ("optimal", "optimal_inaccurate")    # solver statuses that carry an answer
 FACE_TOL = 1e-7          # a Gram diagonal below this (relative) is taken as 0
 TIGHTENINGS = (1e-12, 3e-12, 1e-11, 3e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6)  # Q >= eps I (relative)
-QUICK_TIGHTENINGS = (1e-11, 1e-9)   # the automatic attempt of a plain solve (Solution.verify / objective)
+QUICK_TIGHTENINGS = (1e-11, 3e-11, 1e-10, 1e-9)   # the automatic attempt of a plain solve (proven.full_proof)
 SHIFT_MAX = 1e-7         # largest relative shift tried before tightening
 
 
@@ -249,6 +250,27 @@ def _bound_from(program, data, solver_value, sense, expr, x, method, kept, t0):
     value = _exact_objective(expr, xq)
     proven = float_down(value) if sense == "max" else -float_down(-value)
     return Bound(sense, solver_value, proven, method, point, margins, time.perf_counter() - t0), None
+
+
+def confirm(program, data, x, kept: dict, solver_x) -> Bound | None:
+    """The exact certificate at a point x the floating-point judge proved (:mod:`.proof`, on the
+    faces ``kept``), or None: each multiplier block raised to S + mu I with a proven lambda_min >= 0
+    (as the judge does), then :func:`prove_point` on those faces. Rigorous mode starts here."""
+    t0 = time.perf_counter()
+    sense, expr = _objective_expr(program)
+    y = x.copy()
+    owned = {id(psd) for con in program.sos_constraints for _, psd in con.gram_blocks}
+    for b in program.blocks:
+        if b.psd is None or id(b.psd) in owned or not b.psd.size or b.psd.role != "multiplier":
+            continue
+        pos = positions(data.ids, b.ids)
+        lam = eig_lower(svec_to_matrix(y[pos], b.psd.size))
+        if lam < 0:
+            i, j = svec_pairs(b.psd.size)
+            y[pos[i == j]] += -lam * (1 + 1e-6) + 1e-300
+    solver_value = float(objective_value(data, solver_x)) if sense else None
+    found, _ = _bound_from(program, data, solver_value, sense, expr, y, "exact at the proven point", kept, t0)
+    return found
 
 
 def _diagonals(program, ids, x) -> dict:

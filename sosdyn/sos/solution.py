@@ -28,8 +28,8 @@ from .gram import svec_to_matrix
 from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
 from .proof import down, gam
-from .proven import Pending, Proof, cheap_proof, full_proof, refusal, unverified_hint
-from .rigorous import ANSWERED, Bound, prove_bound
+from .proven import Pending, Proof, cheap_proof, exact_bound, full_proof, refusal, unverified_hint
+from .rigorous import ANSWERED, Bound
 from .verification import VerificationReport, verify_certificate
 
 _HINTS = {
@@ -136,7 +136,8 @@ class Solution:
     def _raise_unless_usable(self):
         if self.usable:
             return
-        if self.status in ANSWERED and not isinstance(self._proven(), UnverifiedSolutionError):
+        found = self._proven() if self.status in ANSWERED else None
+        if self.status in ANSWERED and not isinstance(found, UnverifiedSolutionError):
             return
         detail = f" ({self.reason})" if self.reason else f" (solver said {self.raw_status!r})"
         if self.status == "infeasible":
@@ -145,6 +146,8 @@ class Solution:
         if self.status == "unbounded":
             raise UnboundedError(f"program {self.program.name!r} is unbounded: the objective has no finite "
                                  f"optimum{detail}.", "unbounded", _HINTS["unbounded"])
+        if isinstance(found, UnverifiedSolutionError):
+            raise found
         if self.status in ANSWERED:
             report = self.verify()
             raise UnverifiedSolutionError(
@@ -384,20 +387,13 @@ class Solution:
         t0 = time.perf_counter()
         try:
             self._require_unchanged("rigorous_bound")
-            self._bound = prove_bound(self.program, self.data, self._start_of_proof(), solver_x=self.x)
+            self._bound = exact_bound(self)
         except UnverifiedSolutionError as exc:
             self._bound_error = exc
             raise
         finally:
             self.timings["rigorous"] = time.perf_counter() - t0
         return self._bound
-
-    def _start_of_proof(self) -> np.ndarray:
-        """Where the exact proof starts: the proven point when there is one, else the solver's."""
-        try:
-            return self.proof.x
-        except UnverifiedSolutionError:
-            return self.x
 
     def __repr__(self) -> str:
         t = ", ".join(f"{k} {v * 1e3:.1f} ms" for k, v in self.timings.items())

@@ -7,8 +7,10 @@ solver's diagonal (each row its own scale, eps = MARGINS) and the rows off the f
 zero (``SOSProgram.tightened``). A point y_s of that program has a margin the residual fits
 under, so it is proven (:func:`~.proof.prove_program`); and since the feasible set is convex,
 every y(theta) = (1 - theta) y* + theta y_s with theta in [0, 1] is feasible in exact arithmetic
-wherever y* is, so the smallest theta the judge proves (a search in 2^-k, then a bisection)
-gives a proven point as close to the solver's optimum as the rounding allows -- the objective
+wherever y* is, so the smallest theta the judge proves -- directly, or after the posterior
+correction (:mod:`.posterior`) has bought the constant row's margin: the re-solve then only has
+to lift the directions the correction cannot reach -- found by a search in 2^-k and a bisection,
+gives a proven point as close to the solver's optimum as the rounding allows; the objective
 read there is on the safe side of the optimum because the point is feasible. Clarabel solves the
 tightened program; when it fails or panics, SCS does (through cvxpy).
 """
@@ -17,15 +19,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ResourceLimitError
-from ..poly import match_rows
-from .gram import svec_to_matrix
+from .gram import svec_pairs, svec_to_matrix
 from .posterior import posterior_point
-from .proof import prove_program
+from .proof import entry_vector, identity_of, prove_program, term_values
 from .rigorous import ANSWERED
 
-MARGINS = (1e-8, 1e-6, 1e-4)      # Q[K, K] >= eps diag(Q*) on each kept row (:func:`margins`), in order
+MARGINS = (1e-12, 1e-10, 1e-8, 1e-6)      # Q[K, K] >= eps diag(Q*) on each kept row (:func:`margins`), in order
+RESIDUAL = 0.0                    # ... and at least this x the identity's largest residual at the solver's point
+FLOOR = 1e-3                      # a Gram row's margin is at least this x the block's largest (constant row aside)
 CLARABEL = dict(retry=False, prove=False, tol_feas=1e-10, tol_gap_abs=1e-10, tol_gap_rel=1e-10)
-SCS = dict(solver="SCS", backend="cvxpy", retry=False, prove=False, eps=1e-9, max_iters=50_000)
+SCS = dict(solver="SCS", backend="cvxpy", retry=False, prove=False, eps=1e-8, max_iters=10_000)
 
 
 def kept_rows(program, judged) -> tuple[dict, dict]:
@@ -42,31 +45,36 @@ def kept_rows(program, judged) -> tuple[dict, dict]:
     return rows, masks
 
 
-def square_coefficients(con, at) -> list:
-    """Per Gram block of ``con``, |coefficient| of each row's square z_j^2 in the constraint's
-    polynomial at the point (0 where it has none)."""
-    p = con.source.with_vars(con.basis.vars)
-    coef = np.abs(p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids))
+def identity_sizes(con, at) -> tuple[list, float]:
+    """(per Gram block of ``con``, the size of its identity at each row's square z_j^2 -- the sum of
+    |terms| of (*) (:mod:`.proof`) on that monomial at the point, what a residual there scales
+    with --, the largest |residual| of the identity there)."""
+    ident = identity_of(con)
+    values = term_values(ident, at, entry_vector(ident, at))
+    mag = np.bincount(ident.mon, weights=np.abs(values), minlength=ident.n_mon)
+    e = np.bincount(ident.mon, weights=values, minlength=ident.n_mon)
     out = []
-    for basis, _ in con.gram_blocks:
-        B = np.zeros((len(basis), p.nvars), dtype=np.int64)
-        B[:, [p.vars.index(v) for v in basis.vars]] = basis.exps
-        hit = match_rows(p.exps, 2 * B)
-        out.append(np.where(hit >= 0, coef[np.maximum(hit, 0)], 0.0))
-    return out
+    for k, (_, psd) in enumerate(con.gram_blocks):
+        i, j = svec_pairs(psd.size)
+        out.append(mag[ident.pair_mon[k][i == j]])
+    return out, float(np.abs(e).max(initial=0.0))
 
 
 def margins(solution, kept: dict, rel: float) -> dict:
     """id(PsdBlock) -> eps on its kept rows: for a constraint's Gram block rel x max(the solver's
-    diagonal, the row's square coefficient in the polynomial) -- the residual a row must absorb
-    scales with that coefficient, and a block the solver left near zero still needs it; for a
-    multiplier rel x its diagonal; for a new_sos/new_psd block rel x max(its diagonal, 1e-3 of its
-    largest and of 1)."""
+    diagonal, the size of the identity at the row's square, :func:`square_magnitudes`) -- the
+    residual a row must absorb scales with it, and a block the solver left near zero still needs
+    it -- and at least FLOOR x the largest of these off the constant row, as the residual spreads
+    over the rows, and at least RESIDUAL x the largest residual of the identity at the solver's
+    point, which the re-solve's will be like; for a multiplier rel x its diagonal; for a new_sos/new_psd block rel x max(its diagonal,
+    1e-3 of its largest and of 1)."""
     at = solution.values_of
-    own = {}
+    own, constants, residuals = {}, {}, {}
     for con in solution.program.sos_constraints:
-        for (_, psd), sq in zip(con.gram_blocks, square_coefficients(con, at)):
-            own[id(psd)] = sq
+        sizes, worst = identity_sizes(con, at)
+        for (basis, psd), sq in zip(con.gram_blocks, sizes):
+            own[id(psd)], residuals[id(psd)] = sq, worst
+            constants[id(psd)] = np.flatnonzero(~basis.exps.any(axis=1))
     multipliers = {id(m.psd) for con in solution.program.sos_constraints for m in con.multipliers
                    if m.psd.role != "clique"}
     out = {}
@@ -77,6 +85,10 @@ def margins(solution, kept: dict, rel: float) -> dict:
         K = kept.get(id(b.psd), np.arange(b.psd.size))
         if id(b.psd) in own:
             scale = np.maximum(d, own[id(b.psd)])
+            rest = np.delete(scale, constants.get(id(b.psd), []))
+            scale = np.maximum(scale, FLOOR * float(rest.max(initial=0.0)))
+            out[id(b.psd)] = np.maximum(rel * scale[K], RESIDUAL * residuals[id(b.psd)])
+            continue
         elif id(b.psd) in multipliers:
             scale = d
         else:
@@ -85,13 +97,13 @@ def margins(solution, kept: dict, rel: float) -> dict:
     return out
 
 
-def tightened_solve(solution, kept, rel):
+def tightened_solve(solution, kept, rel, scs=True):
     """(the tightened program's solution, whether SCS gave it): Clarabel, then SCS when Clarabel
     fails; "infeasible" when Clarabel proves it so; None if neither answers (or the memory guard
     refuses the tightened program)."""
     try:
         tight = solution.program.tightened(kept, margins(solution, kept, rel))
-        for by_scs, how in ((False, CLARABEL), (True, SCS)):
+        for by_scs, how in ((False, CLARABEL), (True, SCS))[:2 if scs else 1]:
             sol = tight.solve(**how)
             if sol.status in ANSWERED and np.isfinite(sol.x).all():
                 return sol, by_scs
@@ -104,10 +116,11 @@ def tightened_solve(solution, kept, rel):
 
 def interpolate(program, ids, x, y, snap, prefer=None):
     """(theta, the point) for the smallest theta found in (0, 1] with snap((1 - theta) x + theta y)
-    proven (y itself is)."""
+    proven, directly or after the posterior correction (y itself is)."""
     def proven(theta):
         point = snap((1 - theta) * x + theta * y)
-        return point if prove_program(program, ids, point, prefer).ok else None
+        judged = prove_program(program, ids, point, prefer)
+        return point if judged.ok else posterior_point(program, ids, point, judged)
     fail, ok, best = 0.0, 1.0, y
     for k in (30, 24, 18, 12, 8, 4, 2, 1):
         point = proven(2.0 ** -k)
@@ -130,9 +143,9 @@ def tightened_point(solution, judged, snap):
     (None, what was tried)."""
     program, ids = solution.program, solution.data.ids
     kept, prefer = kept_rows(program, judged)
-    notes = []
+    notes, scs = [], True
     for rel in MARGINS:
-        found = tightened_solve(solution, kept, rel)
+        found = tightened_solve(solution, kept, rel, scs)
         if found == "infeasible":                 # every larger margin is infeasible too
             notes.append(f"held above zero ({rel:.0e}): infeasible (no interior on this face)")
             break
@@ -140,6 +153,7 @@ def tightened_point(solution, judged, snap):
             notes.append(f"held above zero ({rel:.0e}): no answer from Clarabel or SCS")
             continue
         sol, by_scs = found
+        scs = scs and not by_scs                  # SCS, slow, is tried once
         ys = snap(sol.values_of(ids))
         at_ys = prove_program(program, ids, ys, prefer)
         if not at_ys.ok:

@@ -40,26 +40,28 @@ def test_scs_provably_false_lower_bound_is_never_returned():
     claimed = float(sol.values_of(g.ids)[0])
     true_min = examples.floudas_minimum()
     assert claimed > true_min + 0.1          # SCS's "lower bound" -5.27 is above the minimum -5.508
-    with pytest.raises(sd.UnverifiedSolutionError) as exc:
-        sol.value(g)
-    failing = {c.name for c in exc.value.report.failures}
-    assert any(".sigma" in name for name in failing)     # multiplier Gram blocks are checked
+    try:                                     # what is returned is proven, so below the minimum
+        assert sol.value(g) <= true_min
+    except sd.UnverifiedSolutionError as exc:
+        failing = {c.name for c in exc.report.failures}
+        assert any(".sigma" in name for name in failing)     # multiplier Gram blocks are checked
 
 
-@pytest.mark.parametrize("make", [lambda: examples.probability_bound()[0],
-                                  lambda: examples.matrix_program()[0],
-                                  lambda: examples.floudas(6)[0]])
-def test_scs_answers_either_pass_the_check_or_raise(make):
+@pytest.mark.parametrize("make, optimum", [(lambda: examples.probability_bound()[0], 1 / 37),
+                                           (lambda: examples.matrix_program()[0], 2.0),
+                                           (lambda: examples.floudas(6)[0], -20 / 3)])
+def test_scs_answers_are_proven_on_the_safe_side_or_raise(make, optimum):
+    # known optima of the programs themselves (the degree-6 Floudas relaxation: -20/3)
     prog = make()
     sol = prog.solve(solver="SCS", max_iters=5000)
     try:
         value = sol.objective
     except sd.UnverifiedSolutionError as exc:
-        assert not exc.report.passed and not sol.verified
+        assert not sol.verified and "Tried" in str(exc)
         return
-    assert sol.verify().passed
-    clarabel = prog.solve().objective
-    assert value == pytest.approx(clarabel, rel=1e-4, abs=1e-6)
+    assert sol.verified
+    assert (value <= optimum) if prog.objective[0] == "max" else (value >= optimum)
+    assert value == pytest.approx(optimum, rel=1e-3, abs=1e-6)
 
 
 def test_a_certificate_of_t_above_the_supremum_is_refused(forged):
