@@ -94,14 +94,15 @@ def rational_face(Q, keep_row=None, tol=1e-7):
     return U
 
 
-def exact_solution(rows, start: dict):
+def exact_solution(rows, start: dict, avoid=()):
     """The exact change of the unknowns that makes every row c + sum a u = 0 hold, or None.
 
     Independent rows and as many well-conditioned unknowns are chosen in floating point (QR with
     column pivoting), the square system on them solved in rational arithmetic by sparse
     elimination (the rows of a coefficient matching touch few unknowns), and every row then
     checked exactly: a row the floats called dependent but that does not hold means the system is
-    inconsistent."""
+    inconsistent. Unknowns in ``avoid`` (the objective's) are chosen last: the correction moves the
+    certificate, not the bound, where it can."""
     keys = sorted({u for _, lin in rows for u in lin}, key=repr)
     col = {u: k for k, u in enumerate(keys)}
     r = [-(c + sum((a * start[u] for u, a in lin.items()), Fraction(0))) for c, lin in rows]
@@ -115,7 +116,8 @@ def exact_solution(rows, start: dict):
     d = np.abs(np.diag(Rr))
     rank = int((d > 1e-10 * max(d.max(initial=0.0), 1e-300)).sum())
     use = prow[:rank]
-    _, _, pcol = sla.qr(A[use], mode="economic", pivoting=True)
+    weight = np.array([1e-8 if u in set(avoid) else 1.0 for u in keys])
+    _, _, pcol = sla.qr(A[use] * weight, mode="economic", pivoting=True)
     chosen = [keys[k] for k in pcol[:rank]]
     system = [({u: a for u, a in rows[i][1].items() if u in set(chosen)}, r[i]) for i in use]
     solved = _eliminate(system, chosen)
@@ -239,7 +241,8 @@ def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7) -> Bo
     rows = [(c, lin) for c, lin in rows if c or lin]
     if len(rows) > MAX_ROWS:
         raise UnverifiedSolutionError(f"{len(rows)} coefficient equations, above {MAX_ROWS}", "unverified")
-    delta = exact_solution(rows, start)
+    avoid = [] if sense is None else [int(d) for d in affine_rows([expr])[2]]
+    delta = exact_solution(rows, start, avoid)
     if delta is None:
         raise UnverifiedSolutionError("the coefficient equations are inconsistent on the kernel's face", "unverified")
     values = {k: v + delta.get(k, 0) for k, v in start.items()}
@@ -254,19 +257,19 @@ def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7) -> Bo
         if lb is None:
             raise UnverifiedSolutionError(f"block {b.name!r} is not provably PSD on the kernel's face", "unverified")
         margins[b.name] = lb
+    def exact_value(d):
+        return sum((values[u] * w for u, w in entry[d].items()), Fraction(0)) if d in entry else values[d]
     for lin_rows in (r for r in program.linear if r.role == "user" and r.kind == "ge"):
         lhs = [-exact(v) for v in lin_rows.rhs]
         for r, d, v in zip(lin_rows.rows, lin_rows.ids, lin_rows.vals):
-            lhs[r] += exact(v) * sum(values[u] * w for u, w in (entry[int(d)].items() if int(d) in entry
-                                                                    else ((int(d), 1),)))
+            lhs[r] += exact(v) * exact_value(int(d))
         if any(v < 0 for v in lhs):
             raise UnverifiedSolutionError(f"inequality {lin_rows.name!r} fails at the exact point", "unverified")
-    point = np.array([float(sum(values[u] * w for u, w in entry[int(d)].items())) if int(d) in entry
-                      else float(values[int(d)]) for d in data.ids])
+    point = np.array([float(exact_value(int(d))) for d in data.ids])
     if sense is None:
         return Bound(None, None, None, "kernel face", point, margins)
     c0, C, ids = affine_rows([expr])
-    value = exact(c0[0]) + sum((exact(c) * values[int(d)] for c, d in zip(C[0], ids)), Fraction(0))
+    value = exact(c0[0]) + sum((exact(c) * exact_value(int(d)) for c, d in zip(C[0], ids)), Fraction(0))
     proven = float_down(value) if sense == "max" else -float_down(-value)
     solver = float(c0[0] + C[0] @ x[positions(data.ids, ids)])
     return Bound(sense, solver, proven, "kernel face", point, margins)
