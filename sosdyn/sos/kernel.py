@@ -54,14 +54,17 @@ def on_grid(v: float, step: float) -> Fraction:
     return round(Fraction(v) / h) * h
 
 
-def rational_face(Q, keep_row=None, tol=1e-7):
+def rational_face(Q, keep_row=None, tol=1e-7, zero_rows=()):
     """U (n x r, Fractions; columns span the orthogonal complement of Q's rational kernel), or
     None when the kernel has no rational echelon form. ``keep_row``: the kernel is restricted to
-    vectors vanishing there (the constant monomial of a bound, which lowering gamma reaches)."""
+    vectors vanishing there (the constant monomial of a bound, which lowering gamma reaches);
+    ``zero_rows``: coordinate vectors added to it (rows the polynomial does not need, :mod:`.proof`)."""
     n = Q.shape[0]
     w, V = np.linalg.eigh(Q)
     top = max(float(w.max(initial=0.0)), 0.0)
     K = V[:, w <= tol * top] if top > 0 else V
+    if len(zero_rows):
+        K = np.hstack([K, np.eye(n)[:, list(zero_rows)]])
     if keep_row is not None and K.shape[1]:
         _, s, vt = np.linalg.svd(K[keep_row:keep_row + 1, :])
         rank = int((s > 1e-9).sum())
@@ -176,9 +179,11 @@ def _face_terms(U, size):
     return out
 
 
-def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7) -> Bound:
+def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7, zero_squares: bool = False) -> Bound:
     """The exact certificate of the module docstring near x (ordered as ``data.ids``); a Bound
-    (``proven`` None for a program without objective), or UnverifiedSolutionError."""
+    (``proven`` None for a program without objective), or UnverifiedSolutionError. ``zero_squares``:
+    the rows of a constraint's Gram block whose square no other term of its identity reaches (its
+    coefficient in the polynomial is 0: the diagonal rule of facial reduction) join the kernel."""
     sense, expr = program.objective or (None, None)
     if program.cvxpy_constraints or (sense is not None and not isinstance(expr, Polynomial)):
         raise UnverifiedSolutionError("only affine objectives and no cvxpy constraints have an exact form",
@@ -188,6 +193,12 @@ def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7) -> Bo
         raise UnverifiedSolutionError(f"{equations} coefficient equations, above {MAX_ROWS}", "unverified")
     at = lambda ids: x[positions(data.ids, ids)]  # noqa: E731
     half = exact(SQRT2) / 2
+    zeros = {}
+    for con in program.sos_constraints:
+        ident = identity_of(con)
+        for k, (basis, psd) in enumerate(con.gram_blocks):
+            i, j = svec_pairs(psd.size)
+            zeros[id(psd)] = np.flatnonzero(ident.other_terms[ident.pair_mon[k][i == j]] == 0)
     start, entry = {}, {}
     faces = []
     for b in program.blocks:
@@ -198,7 +209,7 @@ def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7) -> Bo
         if keep_constant and b.psd.role in ("gram", "clique"):
             keep = next((k for con in program.sos_constraints for basis, psd in con.gram_blocks if psd is b.psd
                          for k in np.flatnonzero(~basis.exps.any(axis=1))[:1]), None)
-        U = rational_face(Q, keep, tol)
+        U = rational_face(Q, keep, tol, zeros.get(id(b.psd), ()) if zero_squares else ())
         if U is None:
             raise UnverifiedSolutionError(f"block {b.name!r}: its kernel has no small rational form", "unverified")
         Uf = np.array([[float(v) for v in row] for row in U]) if U and U[0] else np.zeros((Q.shape[0], 0))

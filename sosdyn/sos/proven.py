@@ -138,15 +138,19 @@ def full_proof(solution, pending: Pending) -> Proof:
     small = entries <= EXACT_MAX
     if small:
         for keep in (False, True):
-            why = []
-            for tol in KERNEL_TOLS:
+            why, found = [], []
+            for tol, squares in ((t, z) for t in KERNEL_TOLS for z in (False, True)):
                 try:
-                    bound = kernel_bound(program, solution.data, solution.x, keep, tol)
-                    return Proof(bound.x, "exact on the face of the solver's kernel", tried, bound)
+                    found.append(kernel_bound(program, solution.data, solution.x, keep, tol, squares))
                 except UnverifiedSolutionError as exc:
-                    why.append(f"{tol:.0e}: {exc.detail}")
+                    why.append(f"{tol:.0e}{', zero squares' if squares else ''}: {exc.detail}")
                     if "coefficient equations" in exc.detail:       # too large at any tolerance
                         break
+                if found and min(found[-1].margins.values(), default=1.0) > 0:
+                    break                         # a face with a margin: the one to report
+            if found:
+                bound = max(found, key=lambda b: min(b.margins.values(), default=1.0))
+                return Proof(bound.x, "exact on the face of the solver's kernel", tried, bound)
             tried.append(f"exact on the kernel's face{' (constant kept)' if keep else ''}: {'; '.join(why)}")
     y, how, notes = tightened_point(solution, pending.judged, snap(program, solution.data.ids))
     tried += notes
