@@ -18,6 +18,8 @@ solve and at every degree:
   :func:`~.sets.substituted`: exact coefficients rounded, the rounding subtracted from f and
   added to every g_i, so the bound stays a bound of the original problem); ``LowerBound.minimizers``
   maps the points back;
+* **centred**: a global bound (K = R^n) that lost more than GAP (relative) to the solver's value
+  is computed again for f(c + u), c the minimiser the moment matrix gives (:func:`recentred`);
 * **lower degree**: when no point of the degree-d relaxation is proven (UnverifiedSolutionError,
   or a solver error), degrees d - 2, d - 4, ... are tried and the first proven bound returned
   (``LowerBound.degree`` says which): a bound valid at a lower degree is never refused at a
@@ -30,13 +32,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InfeasibleError, InputError, SolverError, UnverifiedSolutionError
-from ..poly import Polynomial
+from ..poly import Polynomial, match_rows
 from .constraints import SOSConstraint, as_sos_polynomial
 from .moments import Atoms
 from .program import SOSProgram
 from .sets import BasicSet, as_set, substituted, unbounded_ray, variable_box
 from .solution import Solution
 
+GAP = 1e-6                 # a global bound this far (relative) below the solver's value is solved again, centred
 UNIT_BOX = (0.25, 2.0)     # a box is left as it is when every half-width >= 0.25 and |centre| + half-width <= 2
 
 
@@ -101,10 +104,10 @@ def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, spars
     scaled = rescaling(f, K) if f.is_numeric else None
     if scaled is not None:
         vars, center, half = scaled
-        f_u, f_err = substituted(f.with_vars(vars), center, half)
+        f_u, f_err, _ = substituted(f.with_vars(vars), center, half)
         ineqs = []
         for g in K.ineqs:
-            g_u, g_err = substituted(g.with_vars(vars), center, half)
+            g_u, g_err, _ = substituted(g.with_vars(vars), center, half)
             ineqs.append(g_u + g_err)
         f, K, shift = f_u - f_err, BasicSet(ineqs), (center, half)
     else:
@@ -116,24 +119,55 @@ def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, spars
     failures = []
     for d in degrees:
         try:
-            return _lower_bound(f, K, d, products, sparsity, cone, shift, solve)
+            lb = _lower_bound(f, K, d, products, sparsity, cone, shift, solve)
         except InfeasibleError:
             raise
         except (UnverifiedSolutionError, SolverError) as exc:
             failures.append(exc)
+            continue
+        centre = not (K.ineqs or K.eqs or solve.get("rigorous")) and f.is_numeric   # exact proofs read f(c + u)'s
+        return recentred(lb, f, sparsity, cone, solve) if centre else lb                  # floats: not with rigorous
     if len(failures) > 1:
         first = failures[0]
         first.args = (f"{first}\n(lower degrees {degrees[1:]} were tried too, and no bound was proven at any)",)
     raise failures[0]
 
 
-def _lower_bound(f, K, degree, products, sparsity, cone, shift, solve) -> LowerBound:
+def recentred(lb: LowerBound, f: Polynomial, sparsity, cone, solve) -> LowerBound:
+    """The global bound again for f(c + u), c the minimiser the moments give, when the bound lost
+    more than GAP (relative) to the solver's value; the better bound of the two. Centred there, the
+    identity's monomials are no longer large where f is small, so the solver's answer and its
+    correction are accurate. f(c + u)'s coefficients are exact rationals rounded to floats; the
+    proof absorbs each rounding like a residual (``source_error``), so the bound is one of f."""
+    if lb.solver_value - lb.value <= GAP * max(1.0, abs(lb.solver_value)):
+        return lb
+    try:
+        c = lb.minimizers().points[0]
+    except (SolverError, InputError):
+        return lb
+    g, _, rounding = substituted(f, c, np.ones(c.size))
+    try:
+        again = _lower_bound(g, BasicSet(), None, False, sparsity, cone, (c, np.ones(c.size)), solve, rounding)
+    except (SolverError, InputError):      # unproven there, or numbers no solver resolves: keep the first
+        return lb
+    return again if again.value > lb.value else lb
+
+
+def _lower_bound(f, K, degree, products, sparsity, cone, shift, solve, rounding=None) -> LowerBound:
+    """The bound of one relaxation; ``rounding`` (a polynomial of bounds on the roundings of f's
+    coefficients) is attached to the constraint for the proof (:mod:`.proof`, ``source_error``)."""
     prog = SOSProgram("minimize_on")
     gamma = prog.new_var(name="gamma")
     if K.ineqs or K.eqs:
         con = prog.add_nonneg_on(f - gamma, K, degree=degree, products=products, sparsity=sparsity, cone=cone)
     else:
         con = prog.add_sos(f - gamma, sparsity=sparsity, cone=cone)
+    if rounding is not None:
+        src = con.source.with_vars(con.basis.vars)
+        E = np.zeros(src.coef.shape)
+        rows = match_rows(src.exps, rounding.with_vars(src.vars).exps)
+        E[rows[rows >= 0], 0] = rounding.coef[rows >= 0, 0]
+        con.source_error = lambda: E
     prog.maximize(gamma)
     sol = prog.solve(raise_on_failure=True, **solve)
     return LowerBound(float(sol.objective), sol, con, prog, sol.solver_objective, degree, *shift)

@@ -29,6 +29,10 @@ roundoff; Higham, *Accuracy and stability of numerical algorithms*, ch. 3). At t
    c = sum_a B_a R^a and the constant row carries it: lambda_min(Q~ - c e_0 e_0^T) >= tau gives
    z^T (Q~ + E~) z >= c >= -e~_rest(x) on K (the old posterior's compact-set bound).
 
+A constraint whose source polynomial is itself a rounding of an exact one (a change of variables,
+:func:`~.sets.substituted`) carries ``source_error()``: the bound of each coefficient's rounding,
+added to B_a, so the proof holds for the exact polynomial.
+
 Then source = SOS + sum sigma_i g_i + sum lambda_j h_j >= 0 on K, whatever the size of the
 coefficients. Blocks that belong to no constraint (new_sos, new_psd) must have
 :func:`eig_lower` >= 0; ``add_ge`` rows must hold after their rounding bound; ``add_eq`` rows to
@@ -424,9 +428,14 @@ def prove_constraint(con, at, prefer=None) -> ConstraintProof:
     first proof wins, else the attempt with the largest margin is returned (its numbers guide the
     corrections of :mod:`.posterior`)."""
     ident = identity_of(con)
-    err = getattr(con, "source_error", None)
-    src_err = None if err is None else np.bincount(ident.mon[ident.source_rows], weights=err(at),
-                                                   minlength=ident.n_mon)
+    err = getattr(con, "source_error", None)            # |rounding| of each source coefficient (rows x 1 + ids)
+    src_err = None
+    if err is not None:
+        E = err()
+        rs, cs = ident.source_rc
+        ids = con.source.with_vars(con.basis.vars).ids
+        w = E[rs, cs] * np.where(cs == 0, 1.0, np.abs(at(ids[np.maximum(cs - 1, 0)])) if ids.size else 1.0)
+        src_err = np.bincount(ident.mon[ident.source_rows], weights=w, minlength=ident.n_mon)
     base = entry_vector(ident, at)
     why = _raise_multipliers(ident, base)
     if why:

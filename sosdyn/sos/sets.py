@@ -220,9 +220,10 @@ def unbounded_ray(f: Polynomial, K: BasicSet):
     return None
 
 
-def substituted(p: Polynomial, center, half) -> tuple[Polynomial, float]:
-    """(q, err): q(u) the float coefficients of p(center + half * u), computed exactly then rounded,
-    and err the sum of their roundings, so |q(u) - p(center + half u)| <= err on the unit box."""
+def substituted(p: Polynomial, center, half) -> tuple[Polynomial, float, Polynomial]:
+    """(q, err, d): q(u) the float coefficients of p(center + half * u), computed exactly then
+    rounded; d the bounds of those roundings, monomial by monomial (|q_a - exact_a| <= d_a), and err
+    their sum, so |q(u) - p(center + half u)| <= d(|u|) everywhere and <= err on the unit box."""
     vars = p.vars
     total: dict = {}
     for e, c in zip(p.exps, p.coef[:, 0]):
@@ -235,9 +236,12 @@ def substituted(p: Polynomial, center, half) -> tuple[Polynomial, float]:
             total[key] = total.get(key, 0) + a
     keys = [k for k, a in total.items() if a]
     coef = [float(total[k]) for k in keys]
+    rounding = [math.nextafter(float(abs(total[k] - Fraction(c))), math.inf) for k, c in zip(keys, coef)]
     err = float(sum(abs(total[k] - Fraction(c)) for k, c in zip(keys, coef)))
     exps = np.array(keys, dtype=np.int64).reshape(-1, len(vars)) if keys else np.zeros((1, len(vars)), dtype=np.int64)
-    return Polynomial(vars, exps, coef if keys else [0.0]), math.nextafter(err, math.inf) * (1 + 1e-12) if err else 0.0
+    q = Polynomial(vars, exps, coef if keys else [0.0])
+    d = Polynomial(vars, exps, [r if r > 5e-324 else 0.0 for r in rounding] if keys else [0.0])
+    return q, math.nextafter(err, math.inf) * (1 + 1e-12) if err else 0.0, d
 
 
 def as_set(ineqs=(), eqs=()) -> BasicSet:

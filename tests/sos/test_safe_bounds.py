@@ -47,16 +47,17 @@ def test_bounds_of_wide_minimisers_are_below_the_true_minimum(name):
     lb = sd.minimize_on(poly(c))
     true_min = min(float_minimum(c), exact_minimum(c))
     assert abs(float_minimum(c) - exact_minimum(c)) <= 1e-9 * abs(true_min)
-    assert lb.solver_value > true_min              # what the solver says is too high ...
-    assert lb.value <= true_min                    # ... the returned bound is a bound
+    assert lb.value <= true_min                    # a bound, whatever the solver said
     assert lb.value >= true_min * (1 + 1e-4)       # and still close (relative 1e-4)
 
 
 def test_first_issue_case_numbers():
+    # the first solve's number is 8,370 too high (-34,951,234.76, measured); centred at the
+    # minimiser -179.97 (minimize_on's second solve) the proven bound is within 1e-6 relative
+    true_min = exact_minimum(WIDE["x^2 + 24x^3 + 0.1x^4"])
+    assert true_min == pytest.approx(-34959605.00, abs=0.01)
     lb = sd.minimize_on(poly(WIDE["x^2 + 24x^3 + 0.1x^4"]))
-    assert exact_minimum(WIDE["x^2 + 24x^3 + 0.1x^4"]) == pytest.approx(-34959605.00, abs=0.01)
-    assert lb.solver_value == pytest.approx(-34951234.76, rel=1e-6)     # 8,370 too high
-    assert -34959605.00 - 2000 <= lb.value <= -34959605.00
+    assert true_min * (1 + 1e-6) <= lb.value <= true_min
 
 
 def test_tiny_negative_square_is_not_verified_sos():
