@@ -1,0 +1,79 @@
+"""The tracking field of a second-order model: what the demonstrations do near them, and a pull
+back to them off them (the nominal acceleration that :mod:`.second_order_tank` certifies).
+
+Scaled units as :mod:`.second_order` (e = ((x - g)/s, v T/s), a' = a T^2/s). The field tracks the
+training samples (e_i, a_i), i = 1..N (positions, velocities and accelerations of the demos, plus a
+critically damped landing from each demo's last state at the goal, :func:`landing_samples`):
+
+    a*(e) = sum_i w_i(e) [a_i + w^2 (x_i - e_x) + 2 w (v_i - e_v)],
+    w_i(e) = exp(-|D (e - e_i)|^2 / 2) / sum_j exp(-|D (e - e_j)|^2 / 2),   D = diag(1/h_x, .., 1/h_v, ..),
+
+a Nadaraya-Watson average of the demos' accelerations, each corrected by a critically damped pull
+(rate w) to its own sample. The kernel weighs position AND velocity, so at a crossing (one x,
+two v) the two branches are different samples and the field follows the branch the state is on.
+Far from the data the weight goes to the nearest sample and a* pulls towards it. a* alone
+certifies nothing; :mod:`.second_order_tank` filters it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.demonstrations import Demonstrations
+from .second_order import Scaled, demo_derivatives
+
+LANDING_STEPS = 60          # steps of dt' of each landing sample path (critically damped at rate w)
+CHUNK = 256                 # states per block of the kernel sums (memory ~ CHUNK x N)
+
+
+def landing_samples(demos: Demonstrations, scaled: Scaled, omega: float,
+                    steps: int = LANDING_STEPS) -> tuple[np.ndarray, np.ndarray]:
+    """(E, Ea) in scaled units: from each demo's last (x, v) (the window's Savitzky-Golay fit), the
+    critically damped landing a = -w^2 e_x - 2 w e_v integrated by semi-implicit Euler with the
+    data's step for ``steps`` steps, and the goal at rest (0, 0). A demo whose recording was trimmed
+    while it still moved says nothing about stopping; these samples do."""
+    parts, _ = demo_derivatives(demos, scaled.window)
+    n = demos.dim
+    E, A = [np.zeros(2 * n)], [np.zeros(n)]
+    for pos, vel, _ in parts:
+        e = np.concatenate([(pos[-1] - scaled.goal) / scaled.length, vel[-1] * scaled.time / scaled.length])
+        for _ in range(steps):
+            a = -omega ** 2 * e[:n] - 2.0 * omega * e[n:]
+            E.append(e.copy())
+            A.append(a)
+            e[n:] += scaled.dt * a
+            e[:n] += scaled.dt * e[n:]
+    return np.array(E), np.array(A)
+
+
+def tracking_set(demos: Demonstrations, scaled: Scaled, omega: float) -> tuple[np.ndarray, np.ndarray]:
+    """The samples the field tracks: the scaled demo samples and their landings, (N, 2n) and (N, n)."""
+    E, A = landing_samples(demos, scaled, omega)
+    return np.vstack([scaled.E, E]), np.vstack([scaled.Ea, A])
+
+
+def kernel_widths(n: int, position: float, velocity: float) -> np.ndarray:
+    """(1/h) per coordinate of e: n position widths, then n velocity widths."""
+    return np.concatenate([np.full(n, 1.0 / position), np.full(n, 1.0 / velocity)])
+
+
+def tracking_accelerations(E: np.ndarray, S: np.ndarray, Sa: np.ndarray, inv_widths: np.ndarray,
+                           omega: float) -> np.ndarray:
+    """a*(e) (module docstring) at the rows of E (m, 2n) for the samples S (N, 2n), Sa (N, n); the
+    softmax is taken after subtracting each row's smallest exponent, so no weight underflows to a
+    0/0. Blocks of CHUNK rows keep the (rows x N) weights small."""
+    n = Sa.shape[1]
+    Sw = S * inv_widths
+    s2 = np.einsum("ij,ij->i", Sw, Sw)
+    target = Sa + omega ** 2 * S[:, :n] + 2.0 * omega * S[:, n:]          # a_i + w^2 x_i + 2 w v_i
+    out = np.empty((len(E), n))
+    for lo in range(0, len(E), CHUNK):
+        Ew = E[lo:lo + CHUNK] * inv_widths
+        d2 = 0.5 * (np.einsum("ij,ij->i", Ew, Ew)[:, None] - 2.0 * Ew @ Sw.T + s2[None, :])
+        W = np.exp(-(d2 - d2.min(axis=1, keepdims=True)))
+        W /= W.sum(axis=1, keepdims=True)
+        e = E[lo:lo + CHUNK]
+        out[lo:lo + CHUNK] = W @ target - omega ** 2 * e[:, :n] - 2.0 * omega * e[:, n:]
+    return out
+
+
+__all__ = ["CHUNK", "LANDING_STEPS", "kernel_widths", "landing_samples", "tracking_accelerations", "tracking_set"]
