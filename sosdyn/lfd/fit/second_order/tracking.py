@@ -1,7 +1,7 @@
 """The tracking field of a second-order model: what the demonstrations do near them, and a pull
-back to them off them (the nominal acceleration that :mod:`.second_order_tank` certifies).
+back to them off them (the nominal acceleration that :mod:`.tank` certifies).
 
-Scaled units as :mod:`.second_order` (e = ((x - g)/s, v T/s), a' = a T^2/s). The field tracks the
+Scaled units as :mod:`.core` (e = ((x - g)/s, v T/s), a' = a T^2/s). The field tracks the
 training samples (e_i, a_i), i = 1..N (positions, velocities and accelerations of the demos, plus a
 critically damped landing from each demo's last state at the goal, :func:`landing_samples`):
 
@@ -12,14 +12,14 @@ a Nadaraya-Watson average of the demos' accelerations, each corrected by a criti
 (rate w) to its own sample. The kernel weighs position AND velocity, so at a crossing (one x,
 two v) the two branches are different samples and the field follows the branch the state is on.
 Far from the data the weight goes to the nearest sample and a* pulls towards it. a* alone
-certifies nothing; :mod:`.second_order_tank` filters it.
+certifies nothing; :mod:`.tank` filters it.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..data.demonstrations import Demonstrations
-from .second_order import Scaled, demo_derivatives
+from ...data.demonstrations import Demonstrations
+from .core import Scaled, demo_derivatives
 
 LANDING_STEPS = 60          # steps of dt' of each landing sample path (critically damped at rate w)
 CHUNK = 256                 # states per block of the kernel sums (memory ~ CHUNK x N)

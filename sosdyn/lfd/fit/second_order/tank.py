@@ -1,6 +1,6 @@
 """A certified second-order model that may gain energy from a tank: the filter, the tank, its size.
 
-Scaled units as :mod:`.second_order`: e = ((x - g)/s, v T/s), t' = t/T, gamma' = gamma T. The
+Scaled units as :mod:`.core`: e = ((x - g)/s, v T/s), t' = t/T, gamma' = gamma T. The
 certificate is a quadratic V(e) = e^T M e with a *witness* field a_0 = C_0 e,
 F_0 = [[0, I], [C_0]], F_0^T M + M F_0 + 2 gamma' M < 0 (checked exactly, as every component of the
 mixture model). Along (e_v, a) the energy changes at the rate
@@ -8,7 +8,7 @@ mixture model). Along (e_v, a) the energy changes at the rate
     dV/dt' = 2 (M e)_x . e_v + 2 (M e)_v . a          (affine in the acceleration a).
 
 The state carries a tank b >= 0 (energy, the units of V). Given any nominal acceleration a*
-(:mod:`.second_order_tracking`), the model's acceleration is a* if dV/dt'(a*) <= r(e, b) =
+(:mod:`.tracking`), the model's acceleration is a* if dV/dt'(a*) <= r(e, b) =
 -2 gamma' V + rho b, else the point of the segment a_0 -> a* where dV/dt' = r(e, b)
 (:func:`tank_filter`); the tank pays for what V gains above the certified decay and leaks:
 
@@ -29,11 +29,11 @@ import numpy as np
 from sosdyn.poly import PolyMatrix, Polynomial
 from sosdyn.sos import SOSProgram, svec_to_matrix
 from sosdyn.sos.gram import matrix_to_svec
-from .certificate import check_sample_count
-from .second_order import METRIC_EPS, Scaled, companion, demo_derivatives, lmi, metric_step, nominal_fields
-from .second_order_check import SAMPLE_BOX, SecondOrderCertificate, certificate
-from .second_order_tracking import kernel_widths, tracking_accelerations, tracking_set
-from .steps import solve_with_fallback
+from ..certificate import check_sample_count
+from ..steps import solve_with_fallback
+from .certificate import SAMPLE_BOX, SecondOrderCertificate, certificate
+from .core import METRIC_EPS, Scaled, companion, demo_derivatives, lmi, metric_step, nominal_fields
+from .tracking import kernel_widths, tracking_accelerations, tracking_set
 
 TANK_RATE = 50.0            # rho: the tank pays at most rho b per unit of t' (any rho > 0 keeps the theorem)
 TANK_ROWS = 200             # samples per demo in the tank metric step
@@ -44,7 +44,7 @@ TANK_BOX = 2.0              # the sampled check draws tank levels b in [0, TANK_
 class TankField:
     """What a tracking model computes with, scaled units: the tracked samples S (N, 2n) and their
     accelerations Sa (N, n), the kernel's inverse widths (2n,) and pull rate w
-    (:mod:`.second_order_tracking`), the metric M (2n, 2n), the witness C_0 (n, 2n), gamma' and the
+    (:mod:`.tracking`), the metric M (2n, 2n), the witness C_0 (n, 2n), gamma' and the
     tank factor beta (b(0) = beta V(e(0)))."""
 
     samples: np.ndarray
@@ -156,7 +156,7 @@ def initial_tank(field: TankField, E: np.ndarray) -> np.ndarray:
 def fit_tank_field(demos, scaled: Scaled, gamma: float, omega: float, widths: tuple[float, float], margin: float,
                    factor: float, solver="CLARABEL") -> tuple[TankField, np.ndarray]:
     """The tracking model of ``demos`` (``gamma`` = gamma', scaled): the samples it tracks, the witness
-    C_0 of the critically damped system at rate max(1, 2 gamma') (:func:`~.second_order.nominal_fields`),
+    C_0 of the critically damped system at rate max(1, 2 gamma') (:func:`~.core.nominal_fields`),
     the metric needing the least tank under it (:func:`tank_metric`, margin min(``margin``, the
     nominal metric's)), and beta = ``factor`` x the largest need of a training demo. Returns the
     field and the demos' needs beta_d."""
@@ -173,7 +173,7 @@ def fit_tank_field(demos, scaled: Scaled, gamma: float, omega: float, widths: tu
 
 def check_tank(field: TankField, gamma: float, n_samples: int, seed: int) -> SecondOrderCertificate:
     """The independent check of a tracking model (``gamma`` in 1/s of the data): the metric and the
-    witness's LMI proven in exact arithmetic (:func:`~.second_order_check.certificate`), then at
+    witness's LMI proven in exact arithmetic (:func:`~.certificate.certificate`), then at
     ``n_samples`` states e in |e|_inf <= SAMPLE_BOX, each with an empty tank and with a random level
     in [0, TANK_BOX beta V(e)], the model's own acceleration and tank rate recomputed into
     (dW/dt' + 2 gamma' W) / W (W = V + b) and, for the tank to stay >= 0, -(db/dt' + (rho + 2 gamma') b) / W:
