@@ -62,7 +62,7 @@ class SecondOrderCertificate:
         return (f"second-order certificate: gamma {self.gamma:.3g}/s, {len(self.proven_margins)} LMIs, "
                 f"max eigenvalue of L_k {max(self.lmi_max_eigs):.3e}, proven min margin {worst:.3e}, "
                 f"proven min eig M {self.metric_min_eig if self.metric_min_eig is not None else float('nan'):.3e}; "
-                f"sampled ({self.n_samples} states x 2 gatings): max rate {self.max_sampled_rate:.3e} "
+                f"sampled ({self.n_samples} states x 2 gatings or tank levels): max rate {self.max_sampled_rate:.3e} "
                 f"-> {'PASSED' if self.passed else 'FAILED'}")
 
 

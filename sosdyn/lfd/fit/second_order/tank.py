@@ -73,9 +73,9 @@ def tank_filter(E, A, b, M, C0, gamma):
     _, d0 = energy_rates(E, M, A0)
     allowed = -2.0 * gamma * V + TANK_RATE * np.maximum(b, 0.0)
     over = d1 > allowed
-    lam = np.ones(len(E))
-    lam[over] = np.clip((allowed[over] - d0[over]) / (d1[over] - d0[over]), 0.0, 1.0)
-    out = A0 + lam[:, None] * (A - A0)
+    lam = np.clip((allowed[over] - d0[over]) / (d1[over] - d0[over]), 0.0, 1.0)
+    out = A.copy()
+    out[over] = A0[over] + lam[:, None] * (A[over] - A0[over])
     _, d = energy_rates(E, M, out)
     return out, -np.maximum(0.0, d + 2.0 * gamma * V) - 2.0 * gamma * b
 
