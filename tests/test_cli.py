@@ -158,9 +158,11 @@ def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
     demo_file.write_text("t,x1,x2\n" + "".join(f"{k},{1 - k / 11},{1 - k / 11}\n" for k in range(12)))
     monkeypatch.setattr("sosdyn.cli.fit.family_for", lambda data, order=1: FakeCDSP)
     code, out, err = run(capsys, "fit", str(demo_file), "--out", str(tmp_path / "m.json"),
-                         "--components", "3", "--solver-method", "ica", "--seed", "7")
+                         "--components", "3", "--solver-method", "ica", "--seed", "7", "--max-iter", "9",
+                         "--gating", "tempered")
     assert code == 0, err
-    assert made["kwargs"] == {"n_components": 3, "solver_method": "ica", "random_state": 7}
+    assert made["kwargs"] == {"n_components": 3, "solver_method": "ica", "random_state": 7, "max_iter": 9,
+                              "gating": "tempered"}
     assert [d.source for d in made["demos"]] == [demo_file.name]
     assert (tmp_path / "m.json").exists() and "saved" in out
 
