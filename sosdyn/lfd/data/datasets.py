@@ -147,4 +147,4 @@ def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | N
         t, pos = _read_csv(path, info)
         demos.append(Demonstration.from_positions(t * step if info.index_time else t, pos,
                                                   f"{name}/{path.name}"))
-    return check_demonstrations(Demonstrations(demos, name, info.units), goal_tol=goal_tol)
+    return check_demonstrations(Demonstrations(demos, name, info.units, columns=info.columns), goal_tol=goal_tol)

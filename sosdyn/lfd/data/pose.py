@@ -72,6 +72,11 @@ class PoseDemonstration:
     def rotations(self) -> Rotation:
         return Rotation.from_quat(self.quat, scalar_first=True)
 
+    @property
+    def duration(self) -> float:
+        """``t[-1] - t[0]`` in seconds."""
+        return float(self.t[-1] - self.t[0])
+
 
 @dataclass(frozen=True)
 class PoseDemonstrations:

@@ -145,6 +145,7 @@ def fit_plain(demos: Demonstrations, maps, params: dict, progress, t_start: floa
     timings["verify_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - t_start
     state = Fit(seed_=seed, dim_=demos.dim, goal_=goal, scale_=scale, dt_=sample_step(demos), units_=demos.units,
+                columns_=demos.columns,
                 warp_=warp, history_=history.rows, timings_=timings, n_components_=gmm.n_components,
                 mixture_=mixture_, field_exps_=fexps, metric_exps_=mexps, gmr_cost_=gmr_cost(gmm, U, Udot),
                 C_=C, W_=W, certificate_=certificate, verification_=verification,

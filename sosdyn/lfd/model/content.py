@@ -1,9 +1,27 @@
-"""The content of a model file: the parameters' names and the learned state, field by field.
+"""The content of the model files of all three families, and every check of it: the one place a
+file's fields are validated (:mod:`.fileformat` holds the container: size, JSON, digests).
 
-:func:`validate_state` turns a file's ``state`` object into checked arrays (shapes implied by
-the parameters, finite numbers, symmetric W, a valid mixture and certificate layout) or raises
-a :class:`~sosdyn.errors.ModelFileError` naming the first bad field; :func:`state_record` is
-the inverse for saving. The estimator is built from these values by :mod:`sosdyn.lfd.model.cdsp`.
+A file is one JSON object: ``format``, ``version`` and the family's fields (:data:`TOP_LEVEL`);
+anything else is refused, naming the field (:func:`check_fields`). Each field is read by the
+helpers here -- :func:`need`, :func:`integer`, :func:`positive`, :func:`array` -- which accept
+finite JSON numbers only where a number is required (a JSON ``null`` is not a number: it never
+becomes NaN) and raise a :class:`~sosdyn.errors.ModelFileError` naming the field.
+
+Work is bounded before it starts (:func:`check_load_work`): the dimension n and the components K
+are read from the file's header fields first and compared with ``max_model_dim`` and
+``max_model_components``; a second-order file's exact certificate check costs about
+(K + 1)(2n)^3 rational multiply-adds (K + 1 exact LDL^T of 2n x 2n matrices), compared with
+``max_exact_work``; a first-order (or pose) file's sampled check costs about S K n^2 (m + p)
+multiply-adds (S = DEFAULT_SAMPLES states, or 1 for linear fields under a constant metric, whose
+matrices do not depend on the state; m field and p metric monomials), compared with
+``max_sampled_work`` (:mod:`sosdyn.limits`). So a file the limits admit loads in seconds (measured:
+a 24-D 3-component and a 16-D 14-component second-order file at the limit, 3.3 and 4.0 s).
+
+Per family: the first-order state (:func:`validate_state`, also the pose model's 6-D chart model;
+:func:`state_record` is the inverse for saving), the second-order state
+(:func:`second_order_state`) and the pose model's own fields (:func:`pose_fields`). The estimators
+are built from the checked values by their ``from_content`` (:mod:`.cdsp`, :mod:`.pose`,
+:mod:`.second_order`).
 """
 from __future__ import annotations
 
@@ -12,12 +30,23 @@ import math
 import numpy as np
 
 from sosdyn.errors import InputError, ModelFileError
-from ..data.demonstrations import units_problem
+from sosdyn.limits import check_count
+from ..data.demonstrations import check_columns, units_problem
+from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.contraction import field_exponents, metric_exponents
 from ..fit.gmm import PositionMixture
 from ..fit.warp import check_maps
+from .fileformat import FORMAT
 
-STATE_FIELDS = ("dim_", "goal_", "scale_", "dt_", "units_", "n_components_", "gmr_cost_", "C_", "W_",
+POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 1
+SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION = "sosdyn-second-order", 1
+#: Each format's top-level fields besides ``format`` and ``version`` (the digests are the container's).
+TOP_LEVEL = {FORMAT: ("params", "state"), SECOND_ORDER_FORMAT: ("params", "state"),
+             POSE_FORMAT: ("params", "state", "goal_quat", "rot_factor", "goal_tol_deg")}
+SECOND_ORDER_STATE = ("goal", "dt", "length_scale", "time_scale", "window", "weights", "means", "covariances",
+                      "C", "M", "margin")
+OPTIONAL_STATE = ("units", "columns")     # absent in files older than them: "" and unnamed
+STATE_FIELDS = ("dim_", "goal_", "scale_", "dt_", "units_", "columns_", "n_components_", "gmr_cost_", "C_", "W_",
                 "field_exps_", "metric_exps_", "mixture_", "certificate_", "history_", "metric_collapse_",
                 "timings_", "warp_")
 WARP_KEYS = ("centers", "vectors", "sigmas")          # warp_: null, or these arrays (z-units)
@@ -64,7 +93,54 @@ def array(value, where: str, shape: tuple, dtype=float) -> np.ndarray:
     return a.astype(np.int64 if dtype is int else float)
 
 
-# ---------------------------------------------------------------------- the parameters and the state
+def check_fields(mapping: dict, allowed, where: str) -> None:
+    """Every key of ``mapping`` is one of ``allowed``: an unknown field is refused, named."""
+    unknown = sorted(set(mapping) - set(allowed))
+    if unknown:
+        full = f"{where}.{unknown[0]}" if where else unknown[0]
+        raise ModelFileError(f"malformed: unknown field {full} (a {where or 'file'} holds exactly "
+                             f"{', '.join(sorted(allowed))})")
+
+
+def labels(units, columns, dim: int, units_field: str, columns_field: str) -> tuple[str, tuple | None]:
+    """The units' name and the ``dim`` position columns' names (None: unnamed) of the fields named so."""
+    if units_problem(units):
+        raise ModelFileError(f"malformed: {units_field} {units_problem(units)}")
+    try:
+        return units, check_columns(columns, dim)
+    except InputError as exc:
+        raise ModelFileError(f"malformed: {columns_field}: {exc}") from None
+
+
+# ---------------------------------------------------------------------- the work a load will do
+def check_load_work(fmt: str, content: dict) -> None:
+    """ResourceLimitError (naming the limit and how to raise it) when the file's dimension, its
+    components or, for a second-order file, its exact check's work (K + 1)(2n)^3 exceed the limits
+    in force; read from the header fields before any other field is converted or checked."""
+    state = need(content, "state", "", dict)
+    if fmt == SECOND_ORDER_FORMAT:
+        n, K = len(need(state, "goal", "state", list)), len(need(state, "C", "state", list))
+    else:
+        n = integer(need(state, "dim_", "state"), "state.dim_", 1)
+        K = integer(need(state, "n_components_", "state"), "state.n_components_", 1)
+    hint = "check it is the right file"
+    check_count(n, "max_model_dim", "the model file's dimension n", hint)
+    check_count(K, "max_model_components", "the model file's number of components K", hint)
+    if fmt == SECOND_ORDER_FORMAT:
+        check_count((K + 1) * (2 * n) ** 3, "max_exact_work", f"the exact check of its certificate "
+                    f"(K + 1 = {K + 1} exact LDL^T of {2 * n} x {2 * n} rational matrices), (K + 1)(2n)^3", hint)
+        return
+    params = need(content, "params", "", dict)
+    F = integer(need(params, "field_degree", "params"), "params.field_degree", 1)
+    D = 0 if params.get("metric") == "identity" else integer(need(params, "metric_degree", "params"),
+                                                             "params.metric_degree")
+    samples = 1 if F == 1 and D == 0 else DEFAULT_SAMPLES
+    work = samples * K * n * n * (math.comb(n + F, F) - 1 + math.comb(n + D, D))
+    check_count(work, "max_sampled_work", f"the sampled check of its certificate ({samples} states, K = {K}, "
+                f"n = {n}, degrees {F} and {D}), S K n^2 (m + p)", hint)
+
+
+# ---------------------------------------------------------------------- the first-order parameters and state
 def check_param_names(params: dict, names) -> None:
     """The file's parameters are exactly ``names``."""
     expected = set(names)
@@ -100,9 +176,8 @@ def validate_state(st: dict, n_components, field_degree: int, metric_degree: int
     out["goal_"] = array(need(st, "goal_", "state"), "state.goal_", (n,))
     out["scale_"] = positive(need(st, "scale_", "state"), "state.scale_")
     out["dt_"] = positive(need(st, "dt_", "state"), "state.dt_")
-    out["units_"] = units = need(st, "units_", "state")
-    if units_problem(units):
-        raise ModelFileError(f"malformed: state.units_ {units_problem(units)}")
+    out["units_"], out["columns_"] = labels(need(st, "units_", "state"), st.get("columns_"), n,
+                                             "state.units_", "state.columns_")
     out["gmr_cost_"] = float(array(need(st, "gmr_cost_", "state"), "state.gmr_cost_", ()))
     out["C_"] = array(need(st, "C_", "state"), "state.C_", (K, n, len(fexps)))
     W = out["W_"] = array(need(st, "W_", "state"), "state.W_", (n, n, len(mexps)))
@@ -119,9 +194,7 @@ def validate_state(st: dict, n_components, field_degree: int, metric_degree: int
     if not (collapse is None or isinstance(collapse, dict)):
         raise ModelFileError("malformed: state.metric_collapse_ must be null or an object")
     out["warp_"] = _warp(st.get("warp_"), n)              # absent in files older than the warp: none
-    unknown = sorted(set(st) - set(STATE_FIELDS))
-    if unknown:
-        raise ModelFileError(f"malformed: state has unknown fields {unknown}")
+    check_fields(st, STATE_FIELDS, "state")
     return out
 
 
@@ -153,30 +226,28 @@ def _exponents(st, name, n, count, expected):
     return exps
 
 
-def _mixture(mx, K, n) -> PositionMixture:
+def _mixture(mx, K, n, where: str = "state.mixture_") -> PositionMixture:
     """Weights > 0 summing to 1, means (K, n), covariances (K, n, n) symmetric positive definite,
     the gating's bound null or a positive number (absent in files older than it: null, the plain
     posterior, so such a model evaluates as it did)."""
-    w = array(need(mx, "weights", "state.mixture_"), "state.mixture_.weights", (K,))
-    means = array(need(mx, "means", "state.mixture_"), "state.mixture_.means", (K, n))
-    cov = array(need(mx, "covariances", "state.mixture_"), "state.mixture_.covariances", (K, n, n))
+    w = array(need(mx, "weights", where), f"{where}.weights", (K,))
+    means = array(need(mx, "means", where), f"{where}.means", (K, n))
+    cov = array(need(mx, "covariances", where), f"{where}.covariances", (K, n, n))
     if not (w > 0).all() or abs(w.sum() - 1.0) > 1e-9:
-        raise ModelFileError(f"malformed: state.mixture_.weights must be positive and sum to 1, got "
+        raise ModelFileError(f"malformed: {where}.weights must be positive and sum to 1, got "
                              f"{np.array2string(w, precision=4)} (sum {w.sum():.12g})")
     for k in range(K):
         S = cov[k]
         if np.abs(S - S.T).max() > 1e-12 * max(1.0, np.abs(S).max()):
-            raise ModelFileError(f"malformed: state.mixture_.covariances[{k}] is not symmetric")
+            raise ModelFileError(f"malformed: {where}.covariances[{k}] is not symmetric")
         try:
             np.linalg.cholesky(S)
         except np.linalg.LinAlgError:
-            raise ModelFileError(f"malformed: state.mixture_.covariances[{k}] is not positive definite "
+            raise ModelFileError(f"malformed: {where}.covariances[{k}] is not positive definite "
                                  "(no Cholesky factor)") from None
     bound = mx.get("bound")
-    unknown = sorted(set(mx) - {"weights", "means", "covariances", "bound"})
-    if unknown:
-        raise ModelFileError(f"malformed: state.mixture_ has unknown fields {unknown}")
-    return PositionMixture(w, means, cov, None if bound is None else positive(bound, "state.mixture_.bound"))
+    check_fields(mx, ("weights", "means", "covariances", "bound"), where)
+    return PositionMixture(w, means, cov, None if bound is None else positive(bound, f"{where}.bound"))
 
 
 def _certificate(cert, K, eps) -> dict:
@@ -202,3 +273,39 @@ def _certificate(cert, K, eps) -> dict:
         array(basis, f"{w}.basis", (len(basis), len(vars)), dtype=int)
         array(need(c, "gram", w), f"{w}.gram", (len(basis), len(basis)))
     return cert
+
+
+# ---------------------------------------------------------------------- the second-order state
+def second_order_state(st: dict) -> dict:
+    """The checked fields of a second-order file's ``state``: goal (n,), C (K, n, 2n), M (2n, 2n), the
+    gating mixture on e (weights > 0, means (K, 2n), covariances (K, 2n, 2n) symmetric positive
+    definite), dt, length_scale, time_scale and margin > 0, window an integer >= 1, units and columns."""
+    check_fields(st, SECOND_ORDER_STATE + OPTIONAL_STATE, "state")
+    goal = need(st, "goal", "state", list)
+    n = len(goal)
+    K = len(need(st, "C", "state", list))
+    out = {"goal": array(goal, "state.goal", (n,)), "C": array(st["C"], "state.C", (K, n, 2 * n)),
+           "M": array(need(st, "M", "state"), "state.M", (2 * n, 2 * n))}
+    for name in ("dt", "length_scale", "time_scale", "margin"):
+        out[name] = positive(need(st, name, "state"), f"state.{name}")
+    out["window"] = integer(need(st, "window", "state"), "state.window", 1)
+    out["units"], out["columns"] = labels(st.get("units", ""), st.get("columns"), n, "state.units", "state.columns")
+    out["mixture"] = _mixture({"weights": need(st, "weights", "state"), "means": need(st, "means", "state"),
+                               "covariances": need(st, "covariances", "state")}, K, 2 * n, "state")
+    if n < 1 or K < 1:
+        raise ModelFileError("malformed: state.goal and state.C must not be empty")
+    return out
+
+
+# ---------------------------------------------------------------------- the pose model's own fields
+def pose_fields(content: dict) -> tuple[np.ndarray, float, float]:
+    """(goal_quat, rot_factor, goal_tol_deg) of a pose file: a unit quaternion (norm 1 to 1e-9),
+    c > 0 and a tolerance in (0, 180) degrees, all finite numbers."""
+    q = array(need(content, "goal_quat", ""), "goal_quat", (4,))
+    if abs(np.linalg.norm(q) - 1) > 1e-9:
+        raise ModelFileError(f"malformed: goal_quat must be a unit quaternion (norm 1), got norm {np.linalg.norm(q):.12g}")
+    c = positive(need(content, "rot_factor", ""), "rot_factor")
+    tol = positive(need(content, "goal_tol_deg", ""), "goal_tol_deg")
+    if not tol < 180:
+        raise ModelFileError(f"malformed: goal_tol_deg must be in (0, 180), got {tol!r}")
+    return q, c, tol

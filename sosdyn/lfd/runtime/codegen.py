@@ -6,9 +6,11 @@ name is a Python literal written by ``ascii()`` or a C++ literal written by :fun
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
-from sosdyn.errors import NotFittedError
+from sosdyn.errors import InputError, NotFittedError
 
 
 def _literal(a) -> str:
@@ -33,12 +35,42 @@ def _warp(model):
     return None if w is None else (w["centers"], w["vectors"], w["sigmas"])
 
 
+#: C++17 keywords and alternative tokens, and names the header itself uses at namespace scope: none
+#: can name the generated namespace (``namespace class {`` does not compile).
+CPP_RESERVED = frozenset("""
+alignas alignof and and_eq asm auto bitand bitor bool break case catch char char16_t char32_t class
+compl const constexpr const_cast continue decltype default delete do double dynamic_cast else enum
+explicit export extern false float for friend goto if inline int long mutable namespace new noexcept
+not not_eq nullptr operator or or_eq private protected public register reinterpret_cast return short
+signed sizeof static static_assert static_cast struct switch template this thread_local throw true try
+typedef typeid typename union unsigned using virtual void volatile wchar_t while xor xor_eq
+final override import module concept requires co_await co_return co_yield char8_t consteval constinit
+std posix main
+""".split())
+
+
+def check_namespace(namespace, default: str) -> str:
+    """``namespace`` if it can name a C++ namespace: an ASCII identifier (a letter, then letters,
+    digits or single underscores, at most 64) that is no keyword nor reserved name; InputError otherwise."""
+    if not (isinstance(namespace, str) and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,63}", namespace)
+            and "__" not in namespace and namespace not in CPP_RESERVED):
+        why = ("a C++ keyword or reserved name" if isinstance(namespace, str) and namespace in CPP_RESERVED
+               else "not an ASCII C++ identifier (a letter, then letters, digits or _, no __, at most 64)")
+        raise InputError(f"namespace {namespace!r:.80} is {why}. Try: the default, {default!r}.")
+    return namespace
+
+
 def cpp_string(text: str) -> str:
     """``text`` as a C++ string literal: its UTF-8 bytes, each outside [A-Za-z0-9 _.,/-] as a
     three-digit octal escape (octal, not hex: a hex escape would swallow the digits after it; '?'
     escaped too, so no trigraph)."""
     safe = frozenset(b"abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 _.,/-")
     return '"' + "".join(chr(b) if b in safe else f"\\{b:03o}" for b in text.encode("utf-8")) + '"'
+
+
+def cpp_strings(texts) -> str:
+    """``texts`` as a C++ initialiser list of string literals (:func:`cpp_string`)."""
+    return ", ".join(cpp_string(str(t)) for t in texts)
 
 
 #: The first two lines of every generated file (after the comment marker): fixed text, so line 1 or

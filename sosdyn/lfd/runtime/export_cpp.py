@@ -5,12 +5,9 @@ states the formula), every number written out in full precision.
 """
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
-from sosdyn.errors import InputError
-from .codegen import _check, _flat, _header, _warp, cpp_string
+from .codegen import _check, _flat, _header, _warp, check_namespace, cpp_string, cpp_strings
 from .states import check_max_speed
 
 
@@ -24,11 +21,8 @@ def to_cpp(model, namespace: str = "cdsp_model", max_speed: float | None = None)
     The Cholesky factors of the mixture are precomputed here (L_k^-1 and the log normalisers)."""
     _check(model)
     max_speed = check_max_speed(max_speed)
-    if not (isinstance(namespace, str) and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,63}", namespace)):
-        raise InputError(f"namespace must be an ASCII C++ identifier (a letter, then letters, digits or _, "
-                         f"at most 64), got {namespace!r:.80}. Try: the default, 'cdsp_model'.")
+    namespace = check_namespace(namespace, "cdsp_model")
     K, n, m = model.C_.shape
-    inv, lognorm = model.mixture_.factors()
     warp = _warp(model)
     warp_defs = "" if warp is None else f"""
 // The warp u = phi(z), z-units: phi = psi_W o ... o psi_1, psi_j(z) = z + (rho_j(z) - rho_j(0)) v_j,
@@ -109,6 +103,8 @@ namespace {namespace} {{
 
 constexpr const char* units = {cpp_string(str(model.units_))};
 constexpr int N = {n};   // state dimension
+// the names of the state's coordinates (the data's position columns)
+constexpr std::array<const char*, N> columns = {{{cpp_strings(model.names())}}};
 constexpr int K = {K};   // mixture components
 constexpr int M = {m};   // monomials of each field
 constexpr std::array<double, N> goal = {{{_flat(model.goal_)}}};
@@ -116,14 +112,56 @@ constexpr double scale = {float(model.scale_)!r};
 {speed_def}constexpr std::array<int, M * N> exponents = {{{", ".join(str(int(e)) for e in model.field_exps_.ravel())}}};
 // coefficients[(k * N + i) * M + j] = C[k, i, j]
 constexpr std::array<double, K * N * M> coefficients = {{{_flat(model.C_)}}};
-constexpr std::array<double, K * N> means = {{{_flat(model.mixture_.means)}}};
+{cpp_mixture(model.mixture_)}{warp_defs}
+// xdot = scale * sum_k h_k(z) f_k(z), z = (x - g) / scale (with a warp: scale * J^-1 sum_k h_k(u) f_k(u),
+// u = phi(z)), g = goal (N doubles) or, for nullptr, the model's; false if xdot is not finite.
+inline bool predict(const double* x, double* xdot, const double* goal = nullptr) {{
+  const double* g = goal != nullptr ? goal : {namespace}::goal.data();
+  std::array<double, N> z{{}};
+  for (int i = 0; i < N; ++i) {{
+    if (!std::isfinite(x[i]) || !std::isfinite(g[i])) return false;
+    z[i] = (x[i] - g[i]) / scale;
+  }}
+{to_u}  std::array<double, M> mono{{}};
+  for (int j = 0; j < M; ++j) {{
+    double v = 1.0;
+    for (int i = 0; i < N; ++i)
+      if (exponents[j * N + i] != 0) v *= std::pow(z[i], static_cast<double>(exponents[j * N + i]));
+    mono[j] = v;
+  }}
+  std::array<double, K> h{{}};
+  responsibilities(z.data(), h.data());
+  bool finite = true;
+  for (int i = 0; i < N; ++i) {{
+    double v = 0.0;
+    for (int k = 0; k < K; ++k) {{
+      double f = 0.0;
+      for (int j = 0; j < M; ++j) f += coefficients[(k * N + i) * M + j] * mono[j];
+      v += h[k] * f;
+    }}
+    xdot[i] = v * scale;
+    finite = finite && std::isfinite(xdot[i]);
+  }}
+{from_u}{limit}  return finite;
+}}
+
+}}  // namespace {namespace}
+"""
+
+
+def cpp_mixture(mixture) -> str:
+    """The C++ of the gating h_k(z) (:mod:`~sosdyn.lfd.fit.gmm`) for a header that defines N (the
+    mixture's dimension) and K: its numbers (L_k^-1 and the log normalisers precomputed here) and
+    ``responsibilities(z, h)``; shared by the first- and second-order exports."""
+    inv, lognorm = mixture.factors()
+    return f"""constexpr std::array<double, K * N> means = {{{_flat(mixture.means)}}};
 // inv_chol[(k * N + a) * N + b] = (L_k^-1)[a, b], S_k = L_k L_k^T
 constexpr std::array<double, K * N * N> inv_chol = {{{_flat(inv)}}};
 // log pi_k - log det L_k - N/2 log(2 pi)
 constexpr std::array<double, K> log_norm = {{{_flat(lognorm)}}};
 // the gating's bound c (0: not tempered): where min_k q_k > c the forms are divided by min_k q_k / c
-constexpr double bound = {0.0 if model.mixture_.bound is None else float(model.mixture_.bound)!r};
-{warp_defs}
+constexpr double bound = {0.0 if mixture.bound is None else float(mixture.bound)!r};
+
 // Squared norm of L_k^-1 (z / c - mu_k / c).
 inline double whitened_sq(int k, const double* z, double c) {{
   double q = 0.0;
@@ -183,37 +221,4 @@ inline void responsibilities(const double* z, double* h) {{
   h[best] = 1.0;
 }}
 
-// xdot = scale * sum_k h_k(z) f_k(z), z = (x - g) / scale (with a warp: scale * J^-1 sum_k h_k(u) f_k(u),
-// u = phi(z)), g = goal (N doubles) or, for nullptr, the model's; false if xdot is not finite.
-inline bool predict(const double* x, double* xdot, const double* goal = nullptr) {{
-  const double* g = goal != nullptr ? goal : {namespace}::goal.data();
-  std::array<double, N> z{{}};
-  for (int i = 0; i < N; ++i) {{
-    if (!std::isfinite(x[i]) || !std::isfinite(g[i])) return false;
-    z[i] = (x[i] - g[i]) / scale;
-  }}
-{to_u}  std::array<double, M> mono{{}};
-  for (int j = 0; j < M; ++j) {{
-    double v = 1.0;
-    for (int i = 0; i < N; ++i)
-      if (exponents[j * N + i] != 0) v *= std::pow(z[i], static_cast<double>(exponents[j * N + i]));
-    mono[j] = v;
-  }}
-  std::array<double, K> h{{}};
-  responsibilities(z.data(), h.data());
-  bool finite = true;
-  for (int i = 0; i < N; ++i) {{
-    double v = 0.0;
-    for (int k = 0; k < K; ++k) {{
-      double f = 0.0;
-      for (int j = 0; j < M; ++j) f += coefficients[(k * N + i) * M + j] * mono[j];
-      v += h[k] * f;
-    }}
-    xdot[i] = v * scale;
-    finite = finite && std::isfinite(xdot[i]);
-  }}
-{from_u}{limit}  return finite;
-}}
-
-}}  // namespace {namespace}
 """

@@ -39,14 +39,10 @@ import inspect
 
 import numpy as np
 
-from sosdyn.errors import InputError
-from .codegen import MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _check, _header, _literal, _warp, cpp_string
-from .export_cpp import to_cpp
+from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _warp
 from .predictor import (_monomial, field2, fieldn, gating, tables, warp_back, warp_back2, warp_forward, warp_forward2,
                         warp_tables)
 from .states import check_max_speed
-
-TARGETS = ("python", "cpp")
 
 
 def to_python(model, max_speed: float | None = None) -> str:
@@ -91,6 +87,7 @@ from operator import mul
 import numpy as np
 
 UNITS = {ascii(str(model.units_))}
+COLUMNS = {ascii(tuple(map(str, model.names())))}     # the names of the state's coordinates
 GOAL = np.array({_literal(model.goal_)})
 SCALE = {float(model.scale_)!r}
 MAX_SPEED = {max_speed!r}     # None, or the largest |xdot| (units/s): xdot scaled by min(1, MAX_SPEED / |xdot|)
@@ -192,10 +189,3 @@ def one_state(x, goal):
             v = [a * (MAX_SPEED / speed) for a in v]
     return np.array(v)
 """
-
-
-def export(model, target: str, max_speed: float | None = None) -> str:
-    """The source of ``model`` for ``target`` ("python" or "cpp"), with the speed limit ``max_speed``."""
-    if target not in TARGETS:
-        raise InputError(f"unknown export target {target!r:.40}. Try: one of {', '.join(TARGETS)}.")
-    return to_python(model, max_speed) if target == "python" else to_cpp(model, max_speed=max_speed)

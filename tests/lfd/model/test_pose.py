@@ -78,7 +78,7 @@ def test_predictor_gives_world_angular_velocity(fitted):
               ).as_rotvec() / h
     np.testing.assert_allclose(w, w_true, atol=2e-3)
     goal = np.concatenate([fitted.goal_pos_ + 1.0, fitted.goal_quat_])  # a moved goal: translated field
-    v2, w2 = fitted.predictor(goal)(x0 + 1.0, q0)
+    v2, w2 = fitted.predictor(goal=goal)(x0 + 1.0, q0)
     np.testing.assert_allclose(np.concatenate([v2, w2]), np.concatenate([v, w]), atol=1e-12)
 
 
@@ -94,7 +94,7 @@ def test_goal_change_and_push(fitted):
     p0 = np.concatenate([X_GOAL + 0.2, Q_GOAL])
     turned = Rotation.from_rotvec([0, 0, 0.6]) * R_GOAL
     goal2 = np.concatenate([X_GOAL - 0.1, turned.as_quat(scalar_first=True)])
-    traj = fitted.rollout(p0, 20.0, dt=0.05, pushes=[(2.0, [0.1, 0, 0, 0.3, 0, 0])], goal_changes=[(6.0, goal2)])
+    traj = fitted.rollout(p0, 20.0, dt=0.05, perturbations=[(2.0, [0.1, 0, 0, 0.3, 0, 0])], goal_changes=[(6.0, goal2)])
     assert np.all(np.diff(traj.t) > 0)
     assert angles_deg(traj.quat[-1], goal2[3:])[0] < 0.1 and np.linalg.norm(traj.pos[-1] - goal2[:3]) < 1e-3
 

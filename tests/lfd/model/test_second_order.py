@@ -102,7 +102,7 @@ def test_predictor_matches_predict(linear_model, second_order_system):
 def test_python_export_matches_predict(linear_model, second_order_system, tmp_path):
     goal = second_order_system[2]
     path = tmp_path / "acc.py"
-    path.write_text(linear_model.export())
+    path.write_text(linear_model.export("python"))
     space = {}
     exec(compile(path.read_text(), str(path), "exec"), space)
     X, V = np.random.default_rng(3).normal(0, 5, (2, 7, 2))

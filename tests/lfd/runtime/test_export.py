@@ -9,7 +9,8 @@ import pytest
 from sosdyn.errors import InputError, NotFittedError
 from sosdyn.lfd.fit.gmm import with_bound
 from sosdyn.lfd.model.cdsp import CDSP
-from sosdyn.lfd.runtime.export_python import export, to_cpp, to_python
+from sosdyn.lfd.runtime.export_cpp import to_cpp
+from sosdyn.lfd.runtime.export_python import to_python
 
 from export_support import import_source, max_rel_error
 
@@ -64,7 +65,7 @@ def test_unfitted_model_and_unknown_target():
     with pytest.raises(NotFittedError, match="fitted"):
         to_python(CDSP())
     with pytest.raises(ValueError, match="python, cpp"):
-        export(CDSP(), "rust")
+        CDSP().export("rust")
 
 
 MAIN = """#include "model.hpp"

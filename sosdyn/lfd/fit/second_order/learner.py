@@ -115,6 +115,7 @@ def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, mar
     history = []
 
     def log(row):
+        row = dict(row, iteration=len(history))
         history.append(row)
         if progress is not None:
             progress(row)
