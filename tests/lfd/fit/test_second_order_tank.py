@@ -10,16 +10,21 @@ from scipy.special import softmax
 from sosdyn.lfd.fit.second_order.core import companion, lmi, nominal_fields
 from sosdyn.lfd.fit.second_order.tank import (TANK_RATE, TankField, check_tank, energy_rates, tank_filter,
                                               tank_metric, tank_needs)
-from sosdyn.lfd.fit.second_order.tracking import kernel_widths, tracking_accelerations
+from sosdyn.lfd.fit.second_order.tracking import GOAL_RADIUS, kernel_widths, tracking_accelerations
+
+
+def fade(E):
+    return 1.0 - np.exp(-(E ** 2).sum(axis=1) / (2 * GOAL_RADIUS ** 2))
 
 
 def test_tracking_field_of_one_sample_is_its_critically_damped_pull():
     rng = np.random.default_rng(0)
     S, Sa = rng.normal(size=(1, 4)), rng.normal(size=(1, 2))
-    E = rng.normal(size=(5, 4))
+    E = np.vstack([rng.normal(size=(5, 4)), np.zeros((1, 4)), np.full((1, 4), 0.01)])
     w = 2.5
-    want = Sa + w ** 2 * (S[:, :2] - E[:, :2]) + 2 * w * (S[:, 2:] - E[:, 2:])
+    want = fade(E)[:, None] * (Sa + w ** 2 * S[:, :2] + 2 * w * S[:, 2:]) - w ** 2 * E[:, :2] - 2 * w * E[:, 2:]
     assert np.allclose(tracking_accelerations(E, S, Sa, kernel_widths(2, 0.1, 0.5), w), want, atol=1e-12)
+    assert np.array_equal(tracking_accelerations(np.zeros((1, 4)), S, Sa, kernel_widths(2, 0.1, 0.5), w), [[0, 0]])
 
 
 def test_tracking_field_is_the_kernel_average_of_the_pulls():
@@ -27,8 +32,9 @@ def test_tracking_field_is_the_kernel_average_of_the_pulls():
     S, Sa, E = rng.normal(size=(30, 4)), rng.normal(size=(30, 2)), rng.normal(size=(300, 4))
     D, w = kernel_widths(2, 0.7, 1.3), 1.5
     W = softmax(-0.5 * (((E[:, None, :] - S[None]) * D) ** 2).sum(-1), axis=1)
-    pulls = Sa[None] + w ** 2 * (S[None, :, :2] - E[:, None, :2]) + 2 * w * (S[None, :, 2:] - E[:, None, 2:])
-    assert np.allclose(tracking_accelerations(E, S, Sa, D, w), np.einsum("mi,mij->mj", W, pulls), atol=1e-10)
+    targets = Sa + w ** 2 * S[:, :2] + 2 * w * S[:, 2:]
+    want = fade(E)[:, None] * (W @ targets) - w ** 2 * E[:, :2] - 2 * w * E[:, 2:]
+    assert np.allclose(tracking_accelerations(E, S, Sa, D, w), want, atol=1e-10)
     # far from every sample (weights that underflow in a plain softmax) the nearest sample's pull
     far = S[3] + np.array([0.0, 0.0, 40.0, 0.0])
     A = tracking_accelerations(far[None], S, Sa, kernel_widths(2, 0.01, 0.01), w)
@@ -91,7 +97,7 @@ def test_demos_of_a_system_with_a_known_quadratic_v_need_no_tank():
         E = sol.y.T
         states.append((E, E @ F.T))
     assert tank_needs(states, M_true, gamma, dt).max() == 0.0       # the known V: no demo ever needs the tank
-    M = tank_metric(states, C0, gamma, dt, margin=1e-6)
+    M = tank_metric(states, C0, gamma, dt, 1e-6, M_true)
     assert tank_needs(states, M, gamma, dt).max() < 1e-6
     assert np.linalg.eigvalsh(lmi(F, M, gamma)).max() < 0 and np.linalg.eigvalsh(M).min() > 0
 

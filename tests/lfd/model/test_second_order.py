@@ -29,7 +29,7 @@ def oscillator_demos(k=3):
 
 @pytest.fixture(scope="module")
 def linear_model(second_order_system):
-    return sd.SecondOrderCDSP(n_components=1, tracking_copies=0, max_iter=5).fit(second_order_system[3])
+    return sd.SecondOrderCDSP(field="mixture", n_components=1, tracking_copies=0, max_iter=5).fit(second_order_system[3])
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +39,7 @@ def crossing():
 
 @pytest.fixture(scope="module")
 def crossing_model(crossing):
-    return sd.SecondOrderCDSP(n_components=1, tracking_copies=0, max_iter=20).fit(crossing)
+    return sd.SecondOrderCDSP(field="mixture", n_components=1, tracking_copies=0, max_iter=20).fit(crossing)
 
 
 def test_exported_names():
@@ -146,8 +146,11 @@ def test_excursion_bound_and_energy_measure():
     assert out == {"samples": 2, "slower_than_certified": 0.5, "energy_gain": 0.5}
 
 
-@pytest.mark.parametrize("params", [dict(gamma=-1.0), dict(method="newton"), dict(tracking_copies=1.5),
-                                    dict(tracking_sigma=0.0), dict(n_components=0), dict(solver="")])
+@pytest.mark.parametrize("params", [dict(gamma=-1.0), dict(field="mixture", method="newton"),
+                                    dict(field="mixture", tracking_copies=1.5), dict(field="mixture", tracking_sigma=0.0),
+                                    dict(field="mixture", n_components=0), dict(solver=""), dict(field="spline"),
+                                    dict(position_width=0.0), dict(tank_factor=-1.0), dict(n_components=3),
+                                    dict(field="mixture", velocity_width=0.5)])
 def test_bad_parameters_are_refused_before_fitting(params, second_order_system):
     with pytest.raises(InputError):
         sd.SecondOrderCDSP(**params).fit(second_order_system[3])
@@ -191,7 +194,7 @@ def alpha_demos(k=5, T=300, duration=4.0):
 def test_alpha_second_order_beats_first_order():
     """docs/theory.md "Second order": DTWD per point 8.0 (second order, K = 8) against 10.2 (CDSP())."""
     demos = alpha_demos()
-    second_model, first_model = sd.SecondOrderCDSP().fit(demos), sd.CDSP().fit(demos)
+    second_model, first_model = sd.SecondOrderCDSP(field="mixture").fit(demos), sd.CDSP().fit(demos)
     second = [dtwd(second_model.rollout(d.pos[0], 1.5 * d.duration, v0=d.vel[0]).pos, d.pos).per_point for d in demos]
     first = [dtwd(first_model.rollout(d.pos[0], 1.5 * d.duration).pos, d.pos).per_point for d in demos]
     assert second_model.certificate_.passed

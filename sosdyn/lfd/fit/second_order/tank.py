@@ -38,6 +38,11 @@ from .tracking import kernel_widths, tracking_accelerations, tracking_set
 TANK_RATE = 50.0            # rho: the tank pays at most rho b per unit of t' (any rho > 0 keeps the theorem)
 TANK_ROWS = 200             # samples per demo in the tank metric step
 TANK_BOX = 2.0              # the sampled check draws tank levels b in [0, TANK_BOX beta V(e)]
+#: M >= eps I in the tank metric step, eps = TANK_EPS x the mean V(start_d) (capped at the nominal metric's
+#: smallest eigenvalue, so the nominal metric stays feasible): a floor that keeps M's condition near
+#: 10-40 (measured on the crossing set; 1e-3 gave 150-4200 and excursion bounds 7-90x the reproductions'
+#: largest distance to the goal, 0.1 gives 2.5-10x for tanks 2-3 % to 2x larger).
+TANK_EPS = 0.1
 
 
 @dataclass(frozen=True)
@@ -111,12 +116,16 @@ def tank_needs(states, M, gamma, dt) -> np.ndarray:
     return np.array(out)
 
 
-def tank_metric(states, C0, gamma, dt, margin, eps=METRIC_EPS, solver="CLARABEL") -> np.ndarray:
+def tank_metric(states, C0, gamma, dt, margin, M0, rel_eps=TANK_EPS, solver="CLARABEL") -> np.ndarray:
     """The metric that needs the least tank: minimise sum_d sum_t w_t max(0, tr(M S_t)) (the demos'
-    tank needs, :func:`need_terms`) subject to sum_d V_d(first sample) = number of demos (the scale of
-    M), M >= eps I and -L(F_0, M) >= margin I (the witness stays a certificate). Linear in M."""
+    tank needs, :func:`need_terms`) subject to sum_d V_d(first sample) = the same sum under ``M0`` (the
+    scale of M), M >= eps I with eps = min(``rel_eps`` x that sum / the number of demos, lambda_min(M0))
+    and -L(F_0, M) >= margin I (the witness stays a certificate). Linear in M; ``M0``, a metric of the
+    witness with that margin, is feasible, so the program always is."""
     m = C0.shape[1]
     F0 = companion(C0[None])[0]
+    scale = float(sum(E[0] @ M0 @ E[0] for E, _ in states))
+    eps = min(rel_eps * scale / len(states), float(np.linalg.eigvalsh(M0)[0]))
     prog = SOSProgram("second-order tank metric")
     M = prog.new_psd(m, name="M")
     I = PolyMatrix.identity(m)
@@ -130,7 +139,7 @@ def tank_metric(states, C0, gamma, dt, margin, eps=METRIC_EPS, solver="CLARABEL"
         weights.append(w[keep] * (len(E) / len(keep)))
         starts.append(matrix_to_svec(np.outer(E[0], E[0])))
     rows, weights = np.vstack(rows), np.concatenate(weights)
-    prog.add_eq(Polynomial.affine(M.ids, np.sum(starts, axis=0)), float(len(states)), name="scale")
+    prog.add_eq(Polynomial.affine(M.ids, np.sum(starts, axis=0)), scale, name="scale")
     slack = prog.new_ids(len(rows), name="needs")
     for t, (row, sid) in enumerate(zip(rows, slack)):
         prog.add_ge(Polynomial.affine([sid], [1.0]), 0.0, name=f"slack[{t}]")
@@ -153,19 +162,33 @@ def initial_tank(field: TankField, E: np.ndarray) -> np.ndarray:
     return field.beta * np.einsum("ti,ij,tj->t", E, field.M, E)
 
 
+def scaled_states(X, V, goal, length: float, time: float) -> np.ndarray:
+    """e = ((x - g)/s, v T/s) at the rows of X and V (m, n)."""
+    return np.hstack([(X - goal) / length, V * (time / length)])
+
+
+def derivatives_at(field: TankField, X, V, goal, length: float, time: float, tank) -> tuple[np.ndarray, np.ndarray]:
+    """In data units: (accelerations (m, n), db/dt per second (m,)) at positions X, velocities V and
+    tank levels ``tank`` (m,) for the goal ``goal`` (:func:`tank_dynamics`; a = (s/T^2) a', db/dt = (db/dt') / T)."""
+    A, bdot = tank_dynamics(field, scaled_states(X, V, goal, length, time), np.asarray(tank, dtype=float))
+    return A * (length / time ** 2), bdot / time
+
+
 def fit_tank_field(demos, scaled: Scaled, gamma: float, omega: float, widths: tuple[float, float], margin: float,
                    factor: float, solver="CLARABEL") -> tuple[TankField, np.ndarray]:
     """The tracking model of ``demos`` (``gamma`` = gamma', scaled): the samples it tracks, the witness
-    C_0 of the critically damped system at rate max(1, 2 gamma') (:func:`~.core.nominal_fields`),
+    C_0 of the critically damped system at rate max(w, 2 gamma') (:func:`~.core.nominal_fields`): with
+    w the tracking rate it is the landings' field, so near the goal, where the tracked samples are
+    landings, the tracking field is the witness and the filter leaves it alone;
     the metric needing the least tank under it (:func:`tank_metric`, margin min(``margin``, the
     nominal metric's)), and beta = ``factor`` x the largest need of a training demo. Returns the
     field and the demos' needs beta_d."""
     n = demos.dim
     S, Sa = tracking_set(demos, scaled, omega)
-    C0 = nominal_fields(n, 1, max(1.0, 2.0 * gamma))
-    _, t = metric_step(C0, gamma, solver=solver)
+    C0 = nominal_fields(n, 1, max(omega, 2.0 * gamma))
+    M0, t = metric_step(C0, gamma, solver=solver)
     states = demo_states(demos, scaled)
-    M = tank_metric(states, C0[0], gamma, scaled.dt, min(margin, t), solver=solver)
+    M = tank_metric(states, C0[0], gamma, scaled.dt, min(margin, t), M0, TANK_EPS, solver)
     needs = tank_needs(states, M, gamma, scaled.dt)
     return TankField(S, Sa, kernel_widths(n, *widths), float(omega), M, C0[0], float(gamma),
                      float(factor * needs.max())), needs
@@ -194,4 +217,4 @@ def check_tank(field: TankField, gamma: float, n_samples: int, seed: int) -> Sec
 
 
 __all__ = ["TANK_BOX", "TANK_RATE", "TankField", "check_tank", "demo_states", "energy_rates", "fit_tank_field",
-           "initial_tank", "need_terms", "tank_dynamics", "tank_filter", "tank_metric", "tank_needs"]
+           "derivatives_at", "initial_tank", "need_terms", "scaled_states", "tank_dynamics", "tank_filter", "tank_metric", "tank_needs"]
