@@ -15,11 +15,10 @@ Two fields (``field``), scaled units e = ((x - g)/s, v T/s) (:mod:`sosdyn.lfd.fi
 Both are checked independently (:mod:`sosdyn.lfd.fit.second_order.certificate`) before a model is
 returned (docs/theory.md, "Second order"). The field depends on v, so two branches may cross at one x.
 
-Speed limit (``rollout(max_speed=...)``): the whole field (v, a) scaled by lambda = min(1, v_max / |v|)
-> 0 is a time change of the certified system (same paths in (x, v), same goal, V still decreasing),
-so the position moves at |dx/dt| = lambda |v| <= v_max; the state's v is then not dx/dt, so a
-controller that reads the measured velocity cannot apply it: the one-state predictor and the exports
-refuse ``max_speed`` (docs/theory.md).
+Speed limit (``rollout(max_speed=...)``): the whole field (v, a, db/dt) scaled by lambda = min(1,
+v_max / |v|) > 0 is a time change of the certified system (same paths, same goal, V + b still
+decreasing), so |dx/dt| = lambda |v| <= v_max; the state's v is then not dx/dt, so a controller that
+reads the measured velocity cannot apply it: the predictor and the exports refuse ``max_speed``.
 """
 from __future__ import annotations
 
@@ -38,7 +37,7 @@ from ..fit.params import MAX_SEED, check_params, check_solver, resolve_seed
 from ..fit.second_order import (METHODS, acceleration_at, check_second_order, energy_violations, excursion_bound,
                                 fit_gating, fit_second_order, scaled_samples)
 from ..fit.second_order.tank import (TankField, check_tank, derivatives_at, fit_tank_field, initial_tank,
-                                     scaled_states)
+                                     scaled_states, tank_summary)
 from ..fit.second_order.tracking import kernel_widths
 from ..rollout import Trajectory
 from ..rollout import rollout as integrate
@@ -83,10 +82,9 @@ class SecondOrderCDSP(MotionModel):
     [A_k, B_k] in scaled units (tracking: K = 1, the witness C_0), ``M_`` (2n, 2n), ``tank_needs_``
     (each training demo's tank need beta_d),
     ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order.certificate.SecondOrderCertificate`; also
-    ``verification_``, with ``certified_`` True, as for CDSP),
-    ``energy_violations_`` (how often the training demos themselves break the certified decrease),
-    ``history_`` (one row per certified iterate), ``chosen_iter_`` (the row returned: least training
-    rollout deviation), ``fit_seconds_``, ``seed_``. Set by ``fit`` only (not in a model file):
+    ``verification_``, with ``certified_`` True), ``energy_violations_`` (how often the training demos
+    break the certified decrease), ``history_`` (one row per certified iterate), ``chosen_iter_`` (the
+    row returned: least training rollout deviation), ``fit_seconds_``, ``seed_``. Set by ``fit`` only:
     ``energy_violations_``, ``tank_needs_``, ``chosen_iter_``, ``fit_seconds_`` and the rows of
     ``history_``. In data units A_k / T^2 and B_k / T: :meth:`fields`.
     """
@@ -155,11 +153,9 @@ class SecondOrderCDSP(MotionModel):
 
     # ------------------------------------------------------------------ fitting
     def fit(self, demos):
-        """Learn from Demonstrations (validated first, as :meth:`CDSP.fit`); returns self. Velocities
-        and accelerations are derived from the positions and times (one Savitzky-Golay fit per demo);
-        a demo's stored velocities are not used.
-
-        Raises NotCertifiedError when the independent check fails (no model is returned then)."""
+        """Learn from Demonstrations (validated first, as :meth:`CDSP.fit`); returns self. Velocities and
+        accelerations come from one Savitzky-Golay fit per demo (stored velocities are not used).
+        NotCertifiedError when the independent check fails (no model is returned then)."""
         with threadpool_limits(limits=1, user_api="blas"):
             return self._fit(demos)
 
@@ -420,13 +416,7 @@ class SecondOrderCDSP(MotionModel):
         r = self.verification_
         worst = min((m if m is not None else -np.inf) for m in r.proven_margins)
         if self.tank_ is not None:
-            lines = [f"metric M and the witness field's LMI proven in exact arithmetic (margin {worst:.2e}); "
-                     f"V + tank decays at rate 2 gamma (max sampled rate {r.max_sampled_rate:.2e} over "
-                     f"{r.n_samples} states x 2 tank levels); tank b(0) = {self.tank_.beta:.3g} V(start)"]
-            needs = getattr(self, "tank_needs_", None)
-            if needs is not None:
-                lines.append(f"the training demonstrations need tanks of {needs.min():.3g}-{needs.max():.3g} V(start)")
-            return lines
+            return tank_summary(r, self.tank_.beta, getattr(self, "tank_needs_", None))
         lines = [f"metric M and {len(r.proven_margins)} LMIs proven in exact arithmetic (min margin {worst:.2e}), "
                  f"max sampled decrease rate {r.max_sampled_rate:.2e} over {r.n_samples} states x 2 gatings"]
         v = getattr(self, "energy_violations_", None)
@@ -434,5 +424,6 @@ class SecondOrderCDSP(MotionModel):
             lines.append(f"the demonstrations decay slower than certified at {v['slower_than_certified']:.0%} of "
                          f"{v['samples']} samples and gain M-energy at {v['energy_gain']:.0%}")
         return lines
+
 
 DEFAULTS = {name: p.default for name, p in inspect.signature(SecondOrderCDSP).parameters.items()}

@@ -194,6 +194,16 @@ def fit_tank_field(demos, scaled: Scaled, gamma: float, omega: float, widths: tu
                      float(factor * needs.max())), needs
 
 
+def tank_summary(report: SecondOrderCertificate, beta: float, needs) -> list[str]:
+    """Lines for people: the certificate of a tracking model, its tank and the training demos' needs."""
+    lines = [f"metric M and the witness field's LMI proven in exact arithmetic (margin {min(report.proven_margins):.2e}); "
+             f"V + tank decays at rate 2 gamma (max sampled rate {report.max_sampled_rate:.2e} over "
+             f"{report.n_samples} states x 2 tank levels); tank b(0) = {beta:.3g} V(start)"]
+    if needs is not None:
+        lines.append(f"the training demonstrations need tanks of {min(needs):.3g}-{max(needs):.3g} V(start)")
+    return lines
+
+
 def check_tank(field: TankField, gamma: float, n_samples: int, seed: int) -> SecondOrderCertificate:
     """The independent check of a tracking model (``gamma`` in 1/s of the data): the metric and the
     witness's LMI proven in exact arithmetic (:func:`~.certificate.certificate`), then at
@@ -217,4 +227,5 @@ def check_tank(field: TankField, gamma: float, n_samples: int, seed: int) -> Sec
 
 
 __all__ = ["TANK_BOX", "TANK_RATE", "TankField", "check_tank", "demo_states", "energy_rates", "fit_tank_field",
-           "derivatives_at", "initial_tank", "need_terms", "scaled_states", "tank_dynamics", "tank_filter", "tank_metric", "tank_needs"]
+           "derivatives_at", "initial_tank", "need_terms", "scaled_states", "tank_dynamics", "tank_filter", "tank_metric", "tank_needs",
+           "tank_summary"]
