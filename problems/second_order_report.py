@@ -59,7 +59,8 @@ def set_figure(name: str, demos, data_path: str, split, entries: dict, out_dir: 
             ax.set_ylim(*bounds[2:])
         frame_state_axes(ax, demos.units)
         bad = e.get("error") or e.get("failure")
-        score = "failed" if bad else f"DTWD/copy {fmt(e['ratio'])}, certified {fmt(e['certified'])}"
+        alike = f" (read alike {fmt(e['ratio_alike'])})" if e.get("ratio_alike") is not None else ""
+        score = "failed" if bad else f"DTWD/copy {fmt(e['ratio'])}{alike}, certified {fmt(e['certified'])}"
         ax.set_title(f"{method} ({ORDER_NAMES[e.get('order', 1)].split(',')[0]})\n{score}")
         ax.legend(loc="upper left", fontsize=7.5, frameon=True, framealpha=0.85)
     fig.suptitle(f"{name}: {len(train)} training, {len(test)} test demos\ngrey: streamlines of the field "

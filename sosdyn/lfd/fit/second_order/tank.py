@@ -39,9 +39,9 @@ TANK_RATE = 50.0            # rho: the tank pays at most rho b per unit of t' (a
 TANK_ROWS = 200             # samples per demo in the tank metric step
 TANK_BOX = 2.0              # the sampled check draws tank levels b in [0, TANK_BOX beta V(e)]
 #: M >= eps I in the tank metric step, eps = TANK_EPS x the mean V(start_d) (capped at the nominal metric's
-#: smallest eigenvalue, so the nominal metric stays feasible): a floor that keeps M's condition near
-#: 10-40 (measured on the crossing set; 1e-3 gave 150-4200 and excursion bounds 7-90x the reproductions'
-#: largest distance to the goal, 0.1 gives 2.5-10x for tanks 2-3 % to 2x larger).
+#: smallest eigenvalue, so the nominal metric stays feasible): a floor that keeps M's condition at 16-64
+#: on the crossing set, with excursion bounds 1.6-3.3x a test reproduction's largest distance to the goal
+#: (1e-3: condition 64-4241, bounds 1.6-21x, tanks beta 0.2-40 instead of 0.6-40).
 TANK_EPS = 0.1
 
 
