@@ -60,6 +60,7 @@ def test_the_families_register_and_are_chosen_by_the_data(case, linear_demos):
     with pytest.raises(InputError, match="order must be 1"):
         family_for(linear_demos, 3)
     assert model.certified_ and model.verify().passed and model.summary()[0]
+    assert repr(model).startswith(type(model).__name__ + "(") and "certified=True" in repr(model)
 
 
 def test_save_load_round_trip_keeps_the_motion(case, tmp_path):
