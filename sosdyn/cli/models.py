@@ -17,6 +17,7 @@ from rich.markup import escape
 from ..errors import InputError
 from ..lfd.model.base import FAMILIES
 from .base import ColumnsOption, TimeUnitsOption, app, info, out, parse_point, positive, read_options, status
+from .fitdata import DATASET_PREFIX, load_dataset_input
 from .paths import check_folder, check_output, demo_inputs, existing
 
 
@@ -188,7 +189,7 @@ def plot(
     out_path: Annotated[Path, typer.Option("--out", "-o", help="The figure (.png or .svg).", show_default=False)],
     demos: Annotated[list[str] | None, typer.Option(
         "--demos", help="Demonstrations to draw: CSV/NPY files (--demos a.csv b.csv), folders, quoted patterns "
-                        "('demos/*.csv'), or lasa:NAME, as `sosdyn fit` takes them. Reproductions start from "
+                        "('demos/*.csv'), lasa:NAME or dataset:NAME, as `sosdyn fit` takes them. Reproductions start from "
                         "their first states.", show_default=False)] = None,
     duration: Annotated[float | None, typer.Option(callback=positive, help="Seconds per reproduction; "
                                                    "default: twice its demonstration's duration (10 s without).")] = None,
@@ -215,15 +216,16 @@ def plot(
     if out_path.suffix.lower() not in PLOT_FORMATS:
         raise InputError(f"--out {out_path} must end in .png or .svg. Try: --out {out_path.with_suffix('.png')}.")
     lasa = len(demos) == 1 and demos[0].startswith("lasa:")
-    paths = [] if lasa else demo_inputs(demos)
+    shipped = len(demos) == 1 and demos[0].startswith(DATASET_PREFIX)
+    paths = [] if lasa or shipped else demo_inputs(demos)
     existing(model_path, "model file")
     check_output(out_path, [model_path, *paths], "input")
     check_folder(out_path.parent)
     model = sd.load_model(model_path)
     if columns is None and model.columns_ is not None:      # the position columns the model was fitted to
         columns = ",".join(model.columns_)
-    data = (sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa
-            else sd.load_demos(paths, **read_options(dt, time_units, columns))) if demos else None
+    data = None if not demos else sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else \
+        load_dataset_input(demos[0], dt) if shipped else sd.load_demos(paths, **read_options(dt, time_units, columns))
     dim = len(model.names())
     if data is not None and data[0].pos.shape[1] != dim:
         raise InputError(f"the demonstrations are {data[0].pos.shape[1]}-D but the model is {dim}-D. "

@@ -278,7 +278,8 @@ class PoseCDSP(MotionModel):
         fitted = "" if not hasattr(self, "cdsp_") else (
             f", fitted: goal {np.array2string(self.goal_pos_, precision=4, separator=', ')} "
             f"{np.array2string(self.goal_quat_, precision=4, separator=', ')}, certified={self.certified_}")
-        return f"PoseCDSP(goal_tol_deg={self.goal_tol_deg:g}, {self.cdsp_params or ''}{fitted})"
+        params = "".join(f", {k}={v!r}" for k, v in self.cdsp_params.items())
+        return f"PoseCDSP(goal_tol_deg={self.goal_tol_deg:g}{params}{fitted})"
 
     def get_params(self) -> dict:
         return {"goal_tol_deg": self.goal_tol_deg, **CDSP(**self.cdsp_params).get_params()}

@@ -149,7 +149,8 @@ def data_bounds(arrays: Sequence[np.ndarray], pad: float = 0.1,
 
 def axis_label(i: int, units: str, names=None) -> str:
     """The label of coordinate i: its name (the data's column; default $x_{i+1}$) and the units."""
-    name = names[i] if names is not None else f"$x_{{{i + 1}}}$"
+    k = i + 1
+    name = names[i] if names is not None else f"$x_{k}$" if k < 10 else f"$x_{{{k}}}$"
     return f"{name} ({units})" if units else name
 
 

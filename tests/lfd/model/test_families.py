@@ -1,6 +1,5 @@
 """One interface, three families: every method of MotionModel works on CDSP, PoseCDSP and
 SecondOrderCDSP alike (known systems, so the answers are checked, not just the types)."""
-import importlib.util
 import shutil
 import subprocess
 
@@ -13,6 +12,8 @@ from sosdyn.errors import InputError
 from sosdyn.lfd.data.pose import PoseDemonstration, PoseDemonstrations
 from sosdyn.lfd.model import FAMILIES, MotionModel, family_for
 from sosdyn.lfd.rollout.quality import deviation
+
+from export_support import import_source
 
 X_GOAL, R_GOAL = np.array([0.4, -0.2, 0.3]), Rotation.from_rotvec([0.3, -0.5, 0.2])
 
@@ -46,15 +47,6 @@ def case(request, linear_demos, second_order_system):
     return model, demos, demos[0].pos[0], demos.goal + [1.0, -1.0]
 
 
-def import_source(source, path):
-    """The generated Python ``source``, written to ``path`` and imported as a module."""
-    path.write_text(source)
-    spec = importlib.util.spec_from_file_location(f"exported_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def positions(model, traj):
     return np.asarray(traj.states)[:, :len(model.names())]
 
@@ -69,6 +61,7 @@ def test_the_families_register_and_are_chosen_by_the_data(case, linear_demos):
     with pytest.raises(InputError, match="order must be 1"):
         family_for(linear_demos, 3)
     assert model.certified_ and model.verify().passed and model.summary()[0]
+    assert repr(model).startswith(type(model).__name__ + "(") and "certified=True" in repr(model)
 
 
 def test_save_load_round_trip_keeps_the_motion(case, tmp_path):
