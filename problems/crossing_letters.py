@@ -26,15 +26,16 @@ pen: other letters, another stroke model, another logger. Models are tuned on th
 """
 from __future__ import annotations
 
-import argparse
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
 from scipy.special import erf
 
 from sosdyn.lfd.data.datasets import DATASETS_DIR
-from sosdyn.report.figures.style import new_figure
+
+from .crossing_shapes import generator_main, overview
 
 OUT = DATASETS_DIR / "crossing_letters"
 SEED = 36
@@ -162,30 +163,6 @@ def write(data: dict, out_dir: Path) -> None:
         w.writerows(rows)
 
 
-def overview(data: dict, png: Path) -> Path:
-    """All letters, one panel each, demos as logged (px)."""
-    fig = new_figure(14, 6)
-    for i, (name, demos) in enumerate(data.items()):
-        ax = fig.add_subplot(2, (len(data) + 1) // 2, i + 1)
-        for _, xy in demos:
-            ax.plot(xy[:, 0], xy[:, 1], lw=0.8, color="#0072B2")
-            ax.plot(*xy[0], "o", ms=3, color="0.3")
-        ax.plot(0, 0, "*", ms=10, color="black")
-        ax.set_title(name)
-        ax.set_aspect("equal")
-    fig.savefig(png, dpi=72)
-    return png
-
-
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="python -m problems crossing-letters", description=__doc__.split("\n")[0])
-    p.add_argument("--out", type=Path, default=OUT, help="output folder (default: the shipped set)")
-    p.add_argument("--seed", type=int, default=SEED)
-    p.add_argument("--figure", type=Path, default=None, help="also write an overview PNG here")
-    args = p.parse_args(list(argv or []))
-    data = generate(args.seed)
-    write(data, args.out)
-    if args.figure:
-        overview(data, args.figure)
-    print(f"crossing-letters: {len(data)} letters, {sum(map(len, data.values()))} demos -> {args.out}")
-    return 0
+    return generator_main(argv, sys.modules[__name__], OUT, SEED, generate, write,
+                          lambda data, png: overview(data, png, families=lambda _: 1, size=(14, 6)))

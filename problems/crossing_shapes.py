@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -143,13 +144,14 @@ def write(data: dict, out_dir: Path) -> None:
         w.writerows(rows)
 
 
-def overview(data: dict, png: Path) -> Path:
-    """All shapes, one panel each, demos as logged (px)."""
-    fig = new_figure(16, 8)
+def overview(data: dict, png: Path, families=lambda name: len(SHAPES[name][1]), size=(16, 8)) -> Path:
+    """All shapes, one panel each, demos as logged (px), coloured by family (``families(name)`` of them,
+    interleaved)."""
+    fig = new_figure(*size)
     for i, (name, demos) in enumerate(data.items()):
         ax = fig.add_subplot(2, (len(data) + 1) // 2, i + 1)
         for k, (_, xy) in enumerate(demos):
-            ax.plot(xy[:, 0], xy[:, 1], lw=0.8, color=("#0072B2", "#D55E00")[k % len(SHAPES[name][1])])
+            ax.plot(xy[:, 0], xy[:, 1], lw=0.8, color=("#0072B2", "#D55E00")[k % families(name)])
             ax.plot(*xy[0], "o", ms=3, color="0.3")
         ax.plot(0, 0, "*", ms=10, color="black")
         ax.set_title(name)
@@ -158,15 +160,22 @@ def overview(data: dict, png: Path) -> Path:
     return png
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(prog="python -m problems crossing-shapes", description=__doc__.split("\n")[0])
-    p.add_argument("--out", type=Path, default=OUT, help="output folder (default: the shipped set)")
-    p.add_argument("--seed", type=int, default=SEED)
+def generator_main(argv, module, out: Path, seed: int, generate, write, figure) -> int:
+    """The command line of a seeded set generator (``module``: its name, its docstring's first line
+    the description): ``--out``, ``--seed``, ``--figure``; writes the set (and the overview)."""
+    name = module.__name__.rsplit(".", 1)[-1].replace("_", "-")
+    p = argparse.ArgumentParser(prog=f"python -m problems {name}", description=module.__doc__.split("\n")[0])
+    p.add_argument("--out", type=Path, default=out, help="output folder (default: the shipped set)")
+    p.add_argument("--seed", type=int, default=seed)
     p.add_argument("--figure", type=Path, default=None, help="also write an overview PNG here")
     args = p.parse_args(list(argv or []))
     data = generate(args.seed)
     write(data, args.out)
     if args.figure:
-        overview(data, args.figure)
-    print(f"crossing-shapes: {len(data)} shapes, {sum(map(len, data.values()))} demos -> {args.out}")
+        figure(data, args.figure)
+    print(f"{name}: {len(data)} shapes, {sum(map(len, data.values()))} demos -> {args.out}")
     return 0
+
+
+def main(argv=None):
+    return generator_main(argv, sys.modules[__name__], OUT, SEED, generate, write, overview)
