@@ -26,7 +26,6 @@ pen: other letters, another stroke model, another logger. Models are tuned on th
 """
 from __future__ import annotations
 
-import csv
 import sys
 from pathlib import Path
 
@@ -35,7 +34,7 @@ from scipy.special import erf
 
 from sosdyn.lfd.data.datasets import DATASETS_DIR
 
-from .crossing_shapes import generator_main, overview
+from .crossing_shapes import generator_main, overview, write_set
 
 OUT = DATASETS_DIR / "crossing_letters"
 SEED = 36
@@ -145,22 +144,11 @@ def generate(seed: int = SEED) -> dict:
 
 
 def write(data: dict, out_dir: Path) -> None:
-    """The CSVs and one manifest (file, samples, duration, start, end)."""
-    rows = []
-    for name, demos in data.items():
-        folder = Path(out_dir) / name
-        folder.mkdir(parents=True, exist_ok=True)
-        for k, (ms, xy) in enumerate(demos):
-            file = f"demo_{k:02d}.csv"
-            with open(folder / file, "w", newline="") as handle:
-                w = csv.writer(handle)
-                w.writerow(["time_ms", "x", "y"])
-                w.writerows([[int(m), f"{x:.1f}", f"{y:.1f}"] for m, (x, y) in zip(ms, xy)])
-            rows.append([f"{name}/{file}", len(ms), int(ms[-1]), *(f"{v:.1f}" for v in xy[0]), *(f"{v:.1f}" for v in xy[-1])])
-    with open(Path(out_dir) / "manifest.csv", "w", newline="") as handle:
-        w = csv.writer(handle)
-        w.writerow(["file", "samples", "duration_ms", "start_x", "start_y", "end_x", "end_y"])
-        w.writerows(rows)
+    """The CSVs (integer ms, positions at 0.1 px) and one manifest (file, samples, duration, start, end)."""
+    write_set(data, out_dir, lambda ms, xy: [[int(m), f"{x:.1f}", f"{y:.1f}"] for m, (x, y) in zip(ms, xy)],
+              ["file", "samples", "duration_ms", "start_x", "start_y", "end_x", "end_y"],
+              lambda name, file, k, ms, xy: [f"{name}/{file}", len(ms), int(ms[-1]), *(f"{v:.1f}" for v in xy[0]),
+                                             *(f"{v:.1f}" for v in xy[-1])])
 
 
 def main(argv=None):

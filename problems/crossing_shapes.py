@@ -124,8 +124,9 @@ def generate(seed: int = SEED) -> dict:
     return out
 
 
-def write(data: dict, out_dir: Path) -> None:
-    """The CSVs and one manifest for all shapes (file, family, samples, duration, start, end)."""
+def write_set(data: dict, out_dir: Path, row, manifest_head: list, manifest_row) -> None:
+    """Per demo ``<name>/demo_NN.csv`` (header ``time_ms,x,y``, lines ``row(ms, xy)``) and one
+    ``manifest.csv`` (``manifest_head``, then ``manifest_row(name, file, k, ms, xy)`` per demo)."""
     rows = []
     for name, demos in data.items():
         folder = Path(out_dir) / name
@@ -135,13 +136,21 @@ def write(data: dict, out_dir: Path) -> None:
             with open(folder / file, "w", newline="") as handle:
                 w = csv.writer(handle)
                 w.writerow(["time_ms", "x", "y"])
-                w.writerows(np.column_stack([ms, xy]).tolist())
-            family = "AB"[k % len(SHAPES[name][1])]
-            rows.append([f"{name}/{file}", family, len(ms), int(ms[-1]), *xy[0], *xy[-1]])
+                w.writerows(row(ms, xy))
+            rows.append(manifest_row(name, file, k, ms, xy))
     with open(Path(out_dir) / "manifest.csv", "w", newline="") as handle:
         w = csv.writer(handle)
-        w.writerow(["file", "family", "samples", "duration_ms", "start_x", "start_y", "end_x", "end_y"])
+        w.writerow(manifest_head)
         w.writerows(rows)
+
+
+def write(data: dict, out_dir: Path) -> None:
+    """The CSVs (integer ms and px) and one manifest for all shapes (file, family, samples, duration,
+    start, end)."""
+    write_set(data, out_dir, lambda ms, xy: np.column_stack([ms, xy]).tolist(),
+              ["file", "family", "samples", "duration_ms", "start_x", "start_y", "end_x", "end_y"],
+              lambda name, file, k, ms, xy: [f"{name}/{file}", "AB"[k % len(SHAPES[name][1])], len(ms), int(ms[-1]),
+                                             *xy[0], *xy[-1]])
 
 
 def overview(data: dict, png: Path, families=lambda name: len(SHAPES[name][1]), size=(16, 8)) -> Path:
