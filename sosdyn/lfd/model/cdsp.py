@@ -38,7 +38,8 @@ from ..data.demonstrations import check_demonstrations
 from ..data.poses import PoseDemonstrations
 from ..fit.learner import reuse_steps
 from ..fit.params import MAX_SEED, PARAMS, check_params, check_solver, preset_params
-from ..fit.pipeline import check_fit, field_at, maps_of
+from ..fit.composite import maps_of, twist_of
+from ..fit.pipeline import check_fit, field_at
 from ..fit.pipeline import fit as fit_path
 from ..rollout import rollout as integrate
 from ..rollout.quality import reproduction_table
@@ -226,7 +227,8 @@ class CDSP:
         min(1, max_speed / |xdot|) (same paths and goal, ``docs/theory.md``)."""
         self._check_fitted()
         return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
-                              None if self.warp_ is None else maps_of(self.warp_), max_speed)
+                              None if self.warp_ is None else maps_of(self.warp_), max_speed,
+                              twist_of(self.warp_))
 
     def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.

@@ -10,7 +10,7 @@ import re
 import numpy as np
 
 from sosdyn.errors import InputError
-from .codegen import _check, _flat, _header, _warp, cpp_string
+from .codegen import _check, _flat, _header, _twist, _warp, cpp_string
 from .states import check_max_speed
 
 
@@ -29,7 +29,47 @@ def to_cpp(model, namespace: str = "cdsp_model", max_speed: float | None = None)
                          f"at most 64), got {namespace!r:.80}. Try: the default, 'cdsp_model'.")
     K, n, m = model.C_.shape
     inv, lognorm = model.mixture_.factors()
-    warp = _warp(model)
+    warp, twist = _warp(model), _twist(model)
+    twist_defs = "" if twist is None else f"""
+// The twist after the bumps, z-units: u <- R(alpha(|u|)) u, a rotation in the plane (p, q) by
+// alpha(r) = sum_j a_j (1 - exp(-r^2 / tau_j^2)); J <- J_T J, J_T = R (I + beta (S u) u^T),
+// beta = alpha'(r) / r, S u = (p.u) q - (q.u) p; twist_inv_w2[j] = 1 / tau_j^2.
+constexpr int TW = {len(twist[1])};
+constexpr std::array<double, N> twist_p = {{{_flat(twist[0][0])}}};
+constexpr std::array<double, N> twist_q = {{{_flat(twist[0][1])}}};
+constexpr std::array<double, TW> twist_amp = {{{_flat(twist[1])}}};
+constexpr std::array<double, TW> twist_inv_w2 = {{{_flat(1.0 / np.asarray(twist[2], dtype=float) ** 2)}}};
+
+// x <- x + ((c - 1) p.x - s q.x) p + ((c - 1) q.x + s p.x) q: R(alpha) x, c = cos alpha, s = sin alpha.
+inline void rotate(double* x, int stride, double c, double s) {{
+  double d0 = 0.0, d1 = 0.0;
+  for (int i = 0; i < N; ++i) {{ d0 += twist_p[i] * x[i * stride]; d1 += twist_q[i] * x[i * stride]; }}
+  const double a0 = (c - 1.0) * d0 - s * d1, a1 = (c - 1.0) * d1 + s * d0;
+  for (int i = 0; i < N; ++i) x[i * stride] += a0 * twist_p[i] + a1 * twist_q[i];
+}}
+
+inline void twist(double* u, double* J) {{
+  double r2 = 0.0;
+  for (int i = 0; i < N; ++i) r2 += u[i] * u[i];
+  double alpha = 0.0, beta = 0.0;
+  for (int j = 0; j < TW; ++j) {{
+    const double e = std::exp(-twist_inv_w2[j] * r2);
+    alpha += twist_amp[j] * (1.0 - e);
+    beta += 2.0 * twist_amp[j] * twist_inv_w2[j] * e;
+  }}
+  double c0 = 0.0, c1 = 0.0;
+  for (int i = 0; i < N; ++i) {{ c0 += twist_p[i] * u[i]; c1 += twist_q[i] * u[i]; }}
+  std::array<double, N> uJ{{}};     // u^T J
+  for (int a = 0; a < N; ++a)
+    for (int b = 0; b < N; ++b) uJ[b] += u[a] * J[a * N + b];
+  for (int a = 0; a < N; ++a)
+    for (int b = 0; b < N; ++b) J[a * N + b] += beta * (c0 * twist_q[a] - c1 * twist_p[a]) * uJ[b];
+  const double c = std::cos(alpha), s = std::sin(alpha);
+  for (int b = 0; b < N; ++b) rotate(J + b, N, c, s);
+  rotate(u, 1, c, s);
+}}
+"""
+    twist_call = "" if twist is None else "\n  twist(u, J);"
     warp_defs = "" if warp is None else f"""
 // The warp u = phi(z), z-units: phi = psi_W o ... o psi_1, psi_j(z) = z + (rho_j(z) - rho_j(0)) v_j,
 // rho_j(z) = exp(-|z - c_j|^2 / sigma_j^2); warp_centers/vectors[j * N + i], warp_rho0[j] = rho_j(0).
@@ -57,7 +97,7 @@ inline void warp(double* u, double* J) {{
     for (int a = 0; a < N; ++a)
       for (int b = 0; b < N; ++b) J[a * N + b] += warp_vectors[j * N + a] * row[b];
     for (int i = 0; i < N; ++i) u[i] += (rho - warp_rho0[j]) * warp_vectors[j * N + i];
-  }}
+  }}{twist_call}
 }}
 
 // Solves A y = b in place (y in b; A row-major N x N, overwritten) by Gaussian elimination with
@@ -123,7 +163,7 @@ constexpr std::array<double, K * N * N> inv_chol = {{{_flat(inv)}}};
 constexpr std::array<double, K> log_norm = {{{_flat(lognorm)}}};
 // the gating's bound c (0: not tempered): where min_k q_k > c the forms are divided by min_k q_k / c
 constexpr double bound = {0.0 if model.mixture_.bound is None else float(model.mixture_.bound)!r};
-{warp_defs}
+{twist_defs}{warp_defs}
 // Squared norm of L_k^-1 (z / c - mu_k / c).
 inline double whitened_sq(int k, const double* z, double c) {{
   double q = 0.0;
