@@ -4,8 +4,9 @@
 ``demo_NN.csv`` (``time_ms,x,y``), a ``manifest.csv`` and (``--figure``) an overview PNG.
 
 Strokes that wind around the goal: inward spirals of 180, 270 and 360 degrees, a hook that swings
-out and 270 degrees around the goal before it lands, a "G" whose tail loops back in to the goal, and
-a snail that swings out and winds a full turn in. They are synthesised as the crossing set is
+out and 270 degrees around the goal before it lands, a "G" whose tail loops back in to the goal, a
+snail that swings out and winds a full turn in; and three that start near the goal and swing far
+out before winding back (a hook, a loop and a curl: 5-15 times the start's distance). They are synthesised as the crossing set is
 (``problems/crossing_shapes.py``, whose steps this module reuses): a perturbed chord-length
 spline through the shape's waypoints, the two-thirds power law of drawing speed, and a mouse
 logger (jittered integer-ms events, integer pixels, rests at both ends). The waypoints of the
@@ -47,9 +48,10 @@ def _inward(r0: float, power: float = 0.8):
     return lambda s: r0 * (1.0 - s) ** power
 
 
-def _swing(r0: float, out: float):
-    """r(s) = r0 (1 + out sin(pi s)) (1 - s): out to about (1 + out) r0 / 2 and back in."""
-    return lambda s: r0 * (1.0 + out * np.sin(np.pi * s)) * (1.0 - s)
+def _swing(r0: float, out: float, power: float = 1.0):
+    """r(s) = r0 (1 + out sin(pi s^power)) (1 - s): out to about (1 + out) r0 / 2 and back in
+    (power < 1: out sooner)."""
+    return lambda s: r0 * (1.0 + out * np.sin(np.pi * s ** power)) * (1.0 - s)
 
 
 #: Shape name -> (description, waypoints (px, y up, the last the goal)).
@@ -65,6 +67,12 @@ SHAPES = {
            (100, -100), (130, -30), (110, 20), (60, 25), (20, 10), (0, 0)]),
     "snail": ("a snail: out and a full turn clockwise, the distance to the goal first growing, then shrinking",
               polar(-60.0, -420.0, _swing(120.0, 1.6), n=16)),
+    "nearhook": ("a hook that starts near the goal: out to about 6 times the start's distance while winding "
+                 "300 degrees counter-clockwise, then in", polar(30.0, 300.0, _swing(40.0, 12.0), n=14)),
+    "loop": ("a loop from beside the goal: out to about 15 times the start's distance and round 300 degrees "
+             "counter-clockwise back in", polar(30.0, 300.0, _swing(30.0, 20.0, 0.7), n=14)),
+    "curl": ("a curl that starts near the goal: out to about 5 times the start's distance and nearly a full turn "
+             "clockwise in", polar(-60.0, -340.0, _swing(40.0, 10.0, 0.7), n=16)),
 }
 
 

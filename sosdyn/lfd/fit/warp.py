@@ -52,7 +52,10 @@ WARP_DEFAULTS = {"n_maps": 100, "l_max": 0.5, "beta": 0.5, "n_points": 100, "mat
 #: The warped candidates of ``warp="auto"`` (the plain fit is the third): the pair of lowest 26-shape
 #: TRAINING mean when chosen per shape with the plain fit (problems/lasa_warp.py).
 AUTO_WARPS = {"60 maps, decay 0.75": dict(WARP_DEFAULTS, n_maps=60),
-              "60 maps, decay 1": dict(WARP_DEFAULTS, n_maps=60, decay=1.0)}
+              "60 maps, decay 1": dict(WARP_DEFAULTS, n_maps=60, decay=1.0),
+              "60 maps, isotonic": dict(WARP_DEFAULTS, n_maps=60, decay=1.0, match="each", target="isotonic"),
+              "60 maps, isotonic, twist 3": dict(WARP_DEFAULTS, n_maps=60, decay=1.0, match="each", target="isotonic",
+                                                 twist=3.0)}
 MATCHES, TARGETS = ("mean", "each"), ("radial", "isotonic", "line")
 CHECK_BOX = 2.0                 # the singular-value check samples |z|_inf <= CHECK_BOX (the certificate's box)
 BOUND_TOL = 1e-9                # relative slack of the sampled singular-value bound
