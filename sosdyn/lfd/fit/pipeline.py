@@ -14,7 +14,9 @@ learned attributes):
    (:func:`~.learner.learn`); the certificate (:func:`~.certificate.certify`) and its independent
    check (:func:`check_fit`), which must pass;
 3. **choice** (:func:`~.rounds.warp_choice`): among the certified candidates, the one whose Euler
-   rollouts from the training demonstrations' starts deviate least from them; all candidates'
+   rollouts from the training demonstrations' starts deviate least from them (when even that one
+   deviates by more than :data:`~.warp.ESCALATE` times the data's diagonal, the
+   :data:`~.warp.ESCALATE_WARPS` are fitted too and the choice is made again among all); all candidates'
    rollouts in one Euler loop (:func:`block_field`: every candidate's bumps per row, its weights
    in one log-sum-exp; each candidate stops by its own rest test), the same numbers as one loop
    per candidate. ``timings_`` of an "auto" fit add ``candidates_s`` (warps and core fits) and
@@ -44,7 +46,7 @@ from .learner import History, Settings, learn, subsample
 from .params import resolve_seed, warp_settings
 from .rounds import corrective_fits, warp_choice
 from .composite import block_pull, check as check_warp, fit_composite, jacobian, pulled_back, z_units
-from .warp import AUTO_WARPS
+from .warp import AUTO_WARPS, ESCALATE, ESCALATE_WARPS
 
 
 class Fit:
@@ -66,13 +68,27 @@ def fit(demos: Demonstrations, params: dict, progress=None, t_start: float | Non
         core = fit_core(demos, warp_maps(demos, warp_settings(params["warp"])), params, progress, t_start)
         return Fit(**vars(core), warp_scores_={})
     score_steps(demos)                  # the scoring rollouts' size, checked before any fit
-    t0 = time.perf_counter()
-    fits = candidate_fits(demos, {"none": None, **AUTO_WARPS}, params, progress)
-    t1 = time.perf_counter()
-    kept, scores = warp_choice(fits, demos, block_field)
-    t2 = time.perf_counter()
+    spent = {"candidates_s": 0.0, "choice_s": 0.0}
+
+    def timed(key, step, *args):
+        t0 = time.perf_counter()
+        out = step(*args)
+        spent[key] += time.perf_counter() - t0
+        return out
+
+    fits = timed("candidates_s", candidate_fits, demos, {"none": None, **AUTO_WARPS}, params, progress)
+    kept, scores = timed("choice_s", warp_choice, fits, demos, block_field)
+    if min(v for name, v in scores.items() if fits[name] is kept) > ESCALATE * diagonal(demos):
+        fits.update(timed("candidates_s", candidate_fits, demos, ESCALATE_WARPS, params, progress))
+        kept, scores = timed("choice_s", warp_choice, fits, demos, block_field)
     return Fit(**dict(vars(kept), warp_scores_=scores, timings_=dict(
-        kept.timings_, total_s=t2 - t_start, candidates_s=t1 - t0, choice_s=t2 - t1)))
+        kept.timings_, total_s=time.perf_counter() - t_start, **spent)))
+
+
+def diagonal(demos: Demonstrations) -> float:
+    """The diagonal of the demonstrations' bounding box (data units)."""
+    X = demos.stacked()[0]
+    return float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
 
 
 def warp_maps(demos: Demonstrations, settings: dict | None):
