@@ -2,15 +2,23 @@
 
 References from outside the code under test: central finite differences, numpy's solve / svd / det,
 and the closed-form spiral of a twisted linear system."""
+import hashlib
+import json
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
-from sosdyn.errors import InputError
+from sosdyn.errors import InputError, ModelFileError
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
-from sosdyn.lfd.fit import composite
+from sosdyn.lfd.fit import composite, pipeline
 from sosdyn.lfd.fit import twist as tw
 from sosdyn.lfd.fit.composite import TWIST_TERMS
+from sosdyn.lfd.fit.warp import AUTO_WARPS, ESCALATE_WARPS
 from sosdyn.lfd.model.cdsp import CDSP
+from sosdyn.lfd.model.fileformat import canonical
+from sosdyn.lfd.model.files import load_model
+from sosdyn.lfd.model.reach import reach_box
 from sosdyn.lfd.runtime.predictor import twist_back, twist_forward, twist_tables
 
 
@@ -174,3 +182,68 @@ def test_per_row_twists_are_each_rows_own():
     alone = np.vstack([composite.pulled_back(Z[:2], one, f), f(Z[2:4]), composite.pulled_back(Z[4:], two, f)])
     assert np.abs(both - alone).max() < 1e-14
     assert composite.block_pull([None, None], 3, 2) is None
+
+
+@pytest.fixture(scope="module")
+def twisted_model():
+    grid = 1.2 * np.geomspace(*tw.TAU_RANGE, TWIST_TERMS)
+    demos = twisted_demos(np.array([2.0, -0.5]), grid[[6, 9]])
+    return CDSP(n_components=2, warp={"n_maps": 5, "twist": 5.0}, corrective_rounds=0, random_state=0,
+                verify_samples=1000).fit(demos)
+
+
+def test_a_twisted_model_file_round_trips_and_a_forged_twist_does_not_load(twisted_model, tmp_path):
+    m = twisted_model
+    assert m.certified_ and "twist" in m.warp_ and m.verification_.warp["twist_shear"] <= 5.0 * (1 + 1e-12)
+    back = load_model(m.save(tmp_path / "twist.json"))
+    X = m.goal_ + np.random.default_rng(3).uniform(-1.5, 1.5, (40, 2))
+    assert np.array_equal(back.predict(X), m.predict(X)) and back.certified_
+    doc = json.loads((tmp_path / "twist.json").read_text())
+    for edit, match in ((lambda t: t.update(plane=[[1.0, 0.0], [0.2, 1.0]]), "orthonormal"),
+                        (lambda t: t.update(widths=t["widths"][:-1]), "twist.amplitudes|twist.widths"),
+                        (lambda t: t.update(extra=1), "exactly")):
+        bad = json.loads(json.dumps(doc))
+        edit(bad["state"]["warp_"]["twist"])
+        bad.pop("sha256")
+        bad["sha256"] = hashlib.sha256(canonical(bad)).hexdigest()      # a deliberate edit, checksum redone
+        path = tmp_path / "bad.json"
+        path.write_text(json.dumps(bad))
+        with pytest.raises(ModelFileError, match=match):
+            load_model(path)
+
+
+def test_a_twisted_models_rollouts_stay_in_their_reach_box(twisted_model):
+    m = twisted_model
+    starts = m.goal_ + np.array([[1.1, 0.2], [-0.6, 0.9], [1.6, -1.4]])
+    lo, hi = reach_box(m, starts)
+    for x0, a, b in zip(starts, lo, hi):
+        pos = m.rollout(x0, 8.0, dt=0.02).pos
+        assert (pos >= a - 1e-9).all() and (pos <= b + 1e-9).all()
+
+
+def test_the_reach_box_of_a_twist_is_the_disc_of_the_level_set():
+    """M = diag(4, 1), goal 0, scale 2, x0 = (2, 2), no bumps and a zero twist (T = id): V0 = 5 and the
+    twist may turn u by any angle, so each coordinate is bounded by the disc's radius sqrt(V0 / 1)."""
+    warp = {"centers": np.zeros((0, 2)), "vectors": np.zeros((0, 2)), "sigmas": np.zeros(0),
+            "twist": {"plane": np.eye(2), "amplitudes": np.zeros(1), "widths": np.ones(1)}}
+    model = SimpleNamespace(W_=np.diag([4.0, 1.0])[:, :, None], metric_exps_=np.zeros((1, 2), dtype=np.int64),
+                            dim_=2, goal_=np.zeros(2), scale_=2.0, warp_=warp)
+    lo, hi = reach_box(model, np.array([[2.0, 2.0]]))
+    assert np.allclose(hi, 2 * np.sqrt(5.0)) and np.allclose(lo, -hi)
+
+
+def test_the_default_escalates_only_past_its_threshold(monkeypatch):
+    """warp='auto' adds ESCALATE_WARPS only when the kept candidate's training deviation exceeds
+    ESCALATE x the data's diagonal: never with an infinite threshold, always with 0; the kept fit is
+    the certified one of lowest score among all candidates fitted."""
+    demos = twisted_demos(np.array([2.0]), np.array([0.6]))
+    small = {"n_components": 2, "max_samples": 300, "verify_samples": 500, "random_state": 0}
+    monkeypatch.setattr(pipeline, "ESCALATE", np.inf)
+    assert set(CDSP(**small).fit(demos).warp_scores_) == {"none", *AUTO_WARPS}
+    monkeypatch.setattr(pipeline, "ESCALATE", 0.0)
+    m = CDSP(**small).fit(demos)
+    scores = m.warp_scores_
+    assert set(scores) == {"none", *AUTO_WARPS, *ESCALATE_WARPS} and m.certified_
+    best = min(scores, key=scores.get)
+    fixed = CDSP(**small, warp="none" if best == "none" else {**AUTO_WARPS, **ESCALATE_WARPS}[best]).fit(demos)
+    assert np.array_equal(m.predict(demos[0].pos), fixed.predict(demos[0].pos))
