@@ -6,23 +6,21 @@
 Strokes that wind around the goal: inward spirals of 180, 270 and 360 degrees, a hook that swings
 out and 270 degrees around the goal before it lands, a "G" whose tail loops back in to the goal, a
 snail that swings out and winds a full turn in; and three that start near the goal and swing far
-out before winding back (a hook, a loop and a curl: 5-15 times the start's distance). They are synthesised as the crossing set is
-(``problems/crossing_shapes.py``, whose steps this module reuses): a perturbed chord-length
+out before winding back (a hook, a loop and a curl: 5-15 times the start's distance). They are
+synthesised as the crossing set is (``problems/crossing_shapes.py``, whose generator, figure and
+command line this module reuses): a perturbed chord-length
 spline through the shape's waypoints, the two-thirds power law of drawing speed, and a mouse
 logger (jittered integer-ms events, integer pixels, rests at both ends). The waypoints of the
 spirals come from polar curves r(theta) about the goal (:func:`polar`); the goal is the origin.
 """
 from __future__ import annotations
 
-import argparse
-import csv
 from pathlib import Path
 
 import numpy as np
 
 from sosdyn.lfd.data.datasets import DATASETS_DIR
-from sosdyn.report.figures.style import new_figure
-from .crossing_shapes import SPEED, log_samples, pen_path, timing
+from .crossing_shapes import LOG_COLUMNS, generator_main, log_row, write_set
 
 OUT = DATASETS_DIR / "winding"
 SEED = 36
@@ -55,7 +53,7 @@ def _swing(r0: float, out: float, power: float = 1.0):
 
 
 #: Shape name -> (description, waypoints (px, y up, the last the goal)).
-SHAPES = {
+PATHS = {
     "spiral180": ("an inward spiral, half a turn counter-clockwise", polar(-90.0, 180.0, _inward(230.0))),
     "spiral270": ("an inward spiral, three quarters of a turn clockwise", polar(120.0, -330.0, _inward(230.0))),
     "spiral360": ("an inward spiral, a full turn counter-clockwise", polar(200.0, 410.0, _inward(230.0), n=16)),
@@ -76,6 +74,10 @@ SHAPES = {
 }
 
 
+#: The same as :data:`~problems.crossing_shapes.SHAPES` takes them: (description, [waypoints], demos), one family.
+SHAPES = {name: (what, [waypoints], DEMOS) for name, (what, waypoints) in PATHS.items()}
+
+
 def winding_angle(xy: np.ndarray) -> float:
     """The total angle (degrees, signed: counter-clockwise positive) that the curve ``xy`` (T, 2)
     turns about the origin, samples at the origin skipped."""
@@ -83,62 +85,11 @@ def winding_angle(xy: np.ndarray) -> float:
     return float(np.degrees(np.sum(np.diff(np.unwrap(np.arctan2(p[:, 1], p[:, 0]))))))
 
 
-def generate(seed: int = SEED) -> dict:
-    """{shape: [(time_ms, xy) per demo]}."""
-    rng = np.random.default_rng(seed)
-    out = {}
-    for name, (_, waypoints) in SHAPES.items():
-        demos = []
-        for _ in range(DEMOS):
-            path = pen_path(waypoints, rng)
-            demos.append(log_samples(path, timing(path, SPEED * np.exp(rng.normal(scale=0.15))), rng))
-        out[name] = demos
-    return out
-
-
 def write(data: dict, out_dir: Path) -> None:
     """The CSVs and one manifest for all shapes (file, samples, duration, start, end, winding angle)."""
-    rows = []
-    for name, demos in data.items():
-        folder = Path(out_dir) / name
-        folder.mkdir(parents=True, exist_ok=True)
-        for k, (ms, xy) in enumerate(demos):
-            file = f"demo_{k:02d}.csv"
-            with open(folder / file, "w", newline="") as handle:
-                w = csv.writer(handle)
-                w.writerow(["time_ms", "x", "y"])
-                w.writerows(np.column_stack([ms, xy]).tolist())
-            rows.append([f"{name}/{file}", len(ms), int(ms[-1]), *xy[0], *xy[-1], round(winding_angle(xy))])
-    with open(Path(out_dir) / "manifest.csv", "w", newline="") as handle:
-        w = csv.writer(handle)
-        w.writerow(["file", "samples", "duration_ms", "start_x", "start_y", "end_x", "end_y", "winding_deg"])
-        w.writerows(rows)
-
-
-def overview(data: dict, png: Path) -> Path:
-    """All shapes, one panel each, demos as logged (px)."""
-    fig = new_figure(15, 8)
-    for i, (name, demos) in enumerate(data.items()):
-        ax = fig.add_subplot(2, (len(data) + 1) // 2, i + 1)
-        for _, xy in demos:
-            ax.plot(xy[:, 0], xy[:, 1], lw=0.8, color="#0072B2")
-            ax.plot(*xy[0], "o", ms=3, color="0.3")
-        ax.plot(0, 0, "*", ms=10, color="black")
-        ax.set_title(name)
-        ax.set_aspect("equal")
-    fig.savefig(png, dpi=72)
-    return png
+    write_set(data, out_dir, [*LOG_COLUMNS, "winding_deg"],
+              lambda name, k, ms, xy: [*log_row(ms, xy), round(winding_angle(xy))])
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="python -m problems winding-shapes", description=__doc__.split("\n")[0])
-    p.add_argument("--out", type=Path, default=OUT, help="output folder (default: the shipped set)")
-    p.add_argument("--seed", type=int, default=SEED)
-    p.add_argument("--figure", type=Path, default=None, help="also write an overview PNG here")
-    args = p.parse_args(list(argv or []))
-    data = generate(args.seed)
-    write(data, args.out)
-    if args.figure:
-        overview(data, args.figure)
-    print(f"winding-shapes: {len(data)} shapes, {sum(map(len, data.values()))} demos -> {args.out}")
-    return 0
+    return generator_main(argv, "winding-shapes", __doc__.split("\n")[0], OUT, SEED, SHAPES, write)

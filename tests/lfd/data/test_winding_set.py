@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import sosdyn as sd
-from problems.winding_shapes import SHAPES, generate, winding_angle
+from problems.crossing_shapes import generate
+from problems.winding_shapes import SEED, SHAPES, winding_angle
 from sosdyn.lfd.data.crossing import find_crossings
 from sosdyn.lfd.data.datasets import DATASETS, DATASETS_DIR, WINDING_SHAPES, load_dataset
 
@@ -20,7 +21,7 @@ def test_every_shape_is_shipped_synthetic_and_apart_from_the_real_sets():
 
 
 def test_the_shipped_files_are_what_the_seeded_generator_writes():
-    data = generate()
+    data = generate(SEED, SHAPES)
     for shape in ("spiral180", "loop"):
         for k in (0, len(data[shape]) - 1):
             ms, xy = data[shape][k]
