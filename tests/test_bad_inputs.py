@@ -9,7 +9,7 @@ import pytest
 import sosdyn as sd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.fit.warp import LIP_FACTOR, check_maps
-from sosdyn.lfd.runtime.export import export
+from sosdyn.lfd.runtime.export_python import export
 from sosdyn.poly import PolyMatrix
 from sosdyn.sos.moments import Moments
 

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from sosdyn.evaluation.poses import angles_deg
 from sosdyn.lfd.data.files import load_demos
-from sosdyn.lfd.data.poses import PoseDemonstrations
+from sosdyn.lfd.data.pose import PoseDemonstrations
 from sosdyn.lfd.model.files import load_model
 
 

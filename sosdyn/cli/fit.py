@@ -31,7 +31,7 @@ from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.learner import COST_FLOOR, stalled
-from ..lfd.data.poses import GOAL_TOL_DEG, is_pose_file
+from ..lfd.data.pose import GOAL_TOL_DEG, is_pose_file
 from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS, preset_params
 from ..lfd.model.pose import PoseCDSP
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options

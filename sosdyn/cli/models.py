@@ -131,7 +131,7 @@ def export_model(
     (Python: numpy + scipy) or `pose_model_pose::predict_pose(x, quat, v, omega, goal)` (C++)."""
     import sosdyn as sd
 
-    from ..lfd.runtime.export import export as generate
+    from ..lfd.runtime.export_python import export as generate
     from ..lfd.model.fileformat import replace_atomically
 
     existing(model_path, "model file")

@@ -1,5 +1,5 @@
 """Pose models in the ``sosdyn`` commands: what ``fit``, ``export`` and ``plot`` do differently for
-pose CSVs (a header naming qw, qx, qy, qz: :func:`~sosdyn.lfd.data.poses.is_pose_file`) and pose model
+pose CSVs (a header naming qw, qx, qy, qz: :func:`~sosdyn.lfd.data.pose.is_pose_file`) and pose model
 files (format ``sosdyn-pose``; :func:`sosdyn.load_model` reads either kind).
 
     sosdyn fit demos/ --units cm --out pose.json        # headers t,x,y,z,qw,qx,qy,qz or ...,qx,qy,qz,qw
@@ -22,9 +22,9 @@ import typer
 from rich.markup import escape
 
 from ..errors import InputError
-from ..lfd.data.poses import GOAL_TOL_DEG, PoseDemonstrations
+from ..lfd.data.pose import GOAL_TOL_DEG, PoseDemonstrations
 from ..lfd.model.pose import PoseCDSP
-from ..lfd.model.pose_export import pose_to_cpp, pose_to_python
+from ..lfd.runtime.pose import pose_to_cpp, pose_to_python
 from ..report.figures.poses import pose_paths
 from .base import info, positive
 

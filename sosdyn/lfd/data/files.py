@@ -16,7 +16,7 @@ from sosdyn.errors import DemonstrationError, InputError
 from sosdyn.lfd.data.columns import (COLUMNS_HINT, TIME_UNITS, check_duration, check_time_units, parse_columns,
                                     refuse_unclaimed, time_header_names, time_unit)
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_demonstrations, time_problem
-from sosdyn.lfd.data.poses import PoseDemonstrations, is_pose_file, load_pose_demos
+from sosdyn.lfd.data.pose import PoseDemonstrations, is_pose_file, load_pose_demos
 
 _AXES = ("x", "y", "z")
 _DEFAULT_DEMO_NAME = "demo"
@@ -309,8 +309,8 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
     """Load demonstrations from CSV or NPY files and check them (:func:`check_demonstrations`).
 
     Pose files (a header naming quaternion columns qw, qx, qy, qz, e.g. ``t,x,y,z,qw,qx,qy,qz``
-    or ``t,x,y,z,qx,qy,qz,qw``) give :class:`~sosdyn.lfd.data.poses.PoseDemonstrations` (read by
-    :func:`~sosdyn.lfd.data.poses.load_pose_demos`, for :class:`~sosdyn.PoseCDSP`) unless
+    or ``t,x,y,z,qx,qy,qz,qw``) give :class:`~sosdyn.lfd.data.pose.PoseDemonstrations` (read by
+    :func:`~sosdyn.lfd.data.pose.load_pose_demos`, for :class:`~sosdyn.PoseCDSP`) unless
     ``columns`` selects positions; then only ``dt``, ``time_units``, ``units`` and ``name`` apply.
 
     ``paths`` is one path or a sequence of paths. Each file holds one demonstration, except a

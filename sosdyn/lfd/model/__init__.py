@@ -1,7 +1,7 @@
-"""The fitted model: the :class:`CDSP` estimator (it holds state; the maths is in ``fit``),
-its state record (``state``), the signed JSON file format (``fileformat``) and loading /
-saving model files (``files``); the pose model :class:`PoseCDSP` (``pose``, ``pose_export``); the certified second-order model
-:class:`SecondOrderCDSP` (``second_order``, ``second_order_file``).
+"""The fitted models: the :class:`CDSP` estimator (it holds state; the maths is in ``fit``), the
+pose model :class:`PoseCDSP` (``pose``), the certified second-order model :class:`SecondOrderCDSP`
+(``second_order``, ``second_order_file``); the model files' content (``content``), the signed JSON
+file format (``fileformat``) and loading / saving model files (``files``).
 """
 from .cdsp import CDSP
 from .files import load_model, load_pose_model, save_model

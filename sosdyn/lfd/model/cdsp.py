@@ -14,8 +14,8 @@ The estimator holds parameters and learned state; the mathematics is in function
 :mod:`.certificate` (certify and check), :mod:`.refine` (the mixture), :mod:`.gmm` (EM),
 :mod:`.warp` (the pre-warp), :mod:`.rounds` (fits made of several fits).
 
-Model files (:meth:`CDSP.save`, :func:`~.model_files.load_model`; the file in :mod:`.model_io`, its
-state in :mod:`.model_state`): loading validates every field and re-checks the certificate from the
+Model files (:meth:`CDSP.save`, :func:`~.files.load_model`; the file in :mod:`.fileformat`, its
+content in :mod:`.content`): loading validates every field and re-checks the certificate from the
 model's own coefficients with the library's DEFAULT_SAMPLES states. The certificate lives in
 z-coordinates and does not involve the weights h_k, so an edited goal, scale or mixture leaves
 it valid while changing the motion: only the checksum (accidents) or the keyed signature
@@ -35,7 +35,7 @@ from sosdyn.errors import InputError, NotFittedError
 from ..fit.certificate import DEFAULT_SAMPLES, CertificateReport
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
 from ..data.demonstrations import check_demonstrations
-from ..data.poses import PoseDemonstrations
+from ..data.pose import PoseDemonstrations
 from ..fit.learner import reuse_steps
 from ..fit.params import MAX_SEED, PARAMS, check_params, check_solver, preset_params
 from ..fit.composite import maps_of, twist_of
@@ -46,7 +46,7 @@ from ..rollout.quality import reproduction_table
 from ..runtime.predictor import StatePredictor
 from ..runtime.states import as_state, as_states, check_max_speed, limit_speed
 from .fileformat import FORMAT, VERSION, write_model_file
-from .state import STATE_FIELDS, state_record
+from .content import STATE_FIELDS, state_record
 
 METRIC_PROX = 1e-2              # default proximal weight of the metric step (well-posed alternation)
 

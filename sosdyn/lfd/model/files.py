@@ -1,8 +1,8 @@
 """Reading model files: :func:`load_model` (every field validated, certificate re-checked), a CDSP
 or, for a file whose format field is ``sosdyn-pose``, a :class:`~.pose.PoseCDSP` (:func:`load_pose_model`).
 
-The file itself (JSON, checksum, signature, atomic writes) is :mod:`.model_io`; its state, field by
-field, :mod:`.model_state`; writing is :meth:`~sosdyn.lfd.model.cdsp.CDSP.save` (:func:`save_model`).
+The file itself (JSON, checksum, signature, atomic writes) is :mod:`.fileformat`; its content, field by
+field, :mod:`.content`; writing is :meth:`~sosdyn.lfd.model.cdsp.CDSP.save` (:func:`save_model`).
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from .fileformat import REFIT_HINT, model_format, read_model_file
 from .pose import GOAL_TOL_DEG, POSE_FORMAT, POSE_VERSION, PoseCDSP
 from .second_order import SECOND_ORDER_FORMAT, SecondOrderCDSP
 from .second_order_file import second_order_from_file
-from .state import check_param_names, need, validate_state
+from .content import check_param_names, need, validate_state
 from ..fit.params import LEGACY_PARAMS, PARAMS, check_params, resolve_seed
 
 LOAD_SEED = 0                   # the states of the sampled check when loading a file

@@ -1,7 +1,7 @@
 """PoseCDSP: a certified model of position and orientation (docs/theory.md, "Poses").
 
 State s = (x, c r) in R^6: the position x and the rotation vector r = log(R_g^T R) of the
-orientation in the chart at the goal orientation R_g (:func:`~sosdyn.lfd.data.poses.chart`),
+orientation in the chart at the goal orientation R_g (:func:`~sosdyn.lfd.data.pose.chart`),
 r scaled by ``rot_factor_`` c = max |x - x_g|_inf / max |r|_inf over the training data (each block
 by its own data scale, so the two are commensurate). A :class:`~.cdsp.CDSP` is fitted on the 6-D
 demonstrations: positions and orientations coupled, its usual certificate (contraction at rate
@@ -33,40 +33,18 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import InputError, NotFittedError
-from ..data.poses import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart,
+from ..data.pose import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart,
                           chart_demonstrations, goal_orientation)
 from ..fit.composite import apply as warp_apply, check as check_warp
 from ..rollout import rollout as integrate
-from ..runtime.states import check_max_speed, speed_factor
+from ..runtime.pose import body_velocity, pose_speed_factor
+from ..runtime.states import check_max_speed
 from .cdsp import CDSP, DEFAULTS
 from .fileformat import write_model_file
 from .reach import metric_matrix
-from .state import STATE_FIELDS, state_record
+from .content import STATE_FIELDS, state_record
 
 POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 1
-SMALL_ANGLE = 1e-4               # below this |r| the right Jacobian's series is used
-
-
-def body_velocity(r, rdot) -> np.ndarray:
-    """J_r(r) rdot row by row (m, 3): rdot - a r x rdot + b r x (r x rdot), t = |r|, a = (1 - cos t)/t^2,
-    b = (t - sin t)/t^3 (series below SMALL_ANGLE); J_r is the right Jacobian of SO(3), so
-    R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r): the body angular velocity."""
-    r, d = np.atleast_2d(np.asarray(r, dtype=float)), np.atleast_2d(np.asarray(rdot, dtype=float))
-    t = np.linalg.norm(r, axis=1, keepdims=True)
-    small = t < SMALL_ANGLE
-    ts = np.where(small, 1.0, t)
-    a = np.where(small, 0.5 - t * t / 24.0, (1.0 - np.cos(ts)) / ts**2)
-    b = np.where(small, 1.0 / 6.0 - t * t / 120.0, (ts - np.sin(ts)) / ts**3)
-    rxd = np.cross(r, d)
-    return d - a * rxd + b * np.cross(r, rxd)
-
-
-def pose_speed_factor(S, Sdot, rot_factor: float, max_speed, max_angular_speed) -> np.ndarray:
-    """lambda = min(1, v_max / |v|, w_max / |omega|) of each chart state S (m, 6) (goal at r = 0) and
-    velocity Sdot: v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| with r = s_r / c, rdot = sdot_r / c.
-    One positive factor on the whole 6-D velocity keeps the chart paths and the goal (docs/theory.md)."""
-    w = body_velocity(S[:, 3:] / rot_factor, Sdot[:, 3:] / rot_factor)
-    return np.minimum(speed_factor(Sdot[:, :3], max_speed), speed_factor(w, max_angular_speed))
 
 
 def chart_bound(model: CDSP, z0, rot_factor: float) -> float:
@@ -127,7 +105,7 @@ class PoseCDSP:
     def fit(self, demos: PoseDemonstrations) -> PoseCDSP:
         """Goal orientation, aligned ends, the chart, the scale c, then the certified 6-D CDSP."""
         if not isinstance(demos, PoseDemonstrations):
-            raise InputError(f"PoseCDSP.fit takes PoseDemonstrations (sosdyn.lfd.data.poses.load_pose_demos), "
+            raise InputError(f"PoseCDSP.fit takes PoseDemonstrations (sosdyn.lfd.data.pose.load_pose_demos), "
                              f"got {type(demos).__name__}.")
         goal_quat = goal_orientation(demos)
         aligned, self.orientation_moved_deg_ = align_orientations(demos, goal_quat, self.goal_tol_deg)

@@ -3,7 +3,7 @@
 Model (scaled units, :mod:`sosdyn.lfd.fit.second_order`): e = ((x - g)/s, v T/s),
 de/dt' = sum_k h_k(e) F_k e with F_k = [[0, I], [A_k, B_k]]; certificate: one constant M > 0 with
 F_k^T M + M F_k <= -2 gamma' M for every k (gamma' = gamma T), checked independently
-(:mod:`sosdyn.lfd.fit.second_order_check`) before a model is returned. Then from EVERY (x0, v0),
+(:mod:`sosdyn.lfd.fit.second_order.certificate`) before a model is returned. Then from EVERY (x0, v0),
 || (x - g, v) || in the metric decays like exp(-gamma t): x -> g and v -> 0 (docs/theory.md,
 "Second order"). The gating h(e) depends on v, so two branches may cross at one x.
 """
@@ -19,17 +19,16 @@ from threadpoolctl import threadpool_limits
 
 from sosdyn.errors import InputError, NotCertifiedError, NotFittedError
 from ..data.demonstrations import check_demonstrations, sample_step
-from ..data.poses import PoseDemonstrations
+from ..data.pose import PoseDemonstrations
 from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.params import MAX_SEED, check_params, check_solver, resolve_seed
-from ..fit.second_order import acceleration_at, fit_gating, scaled_samples
-from ..fit.second_order_fit import METHODS, fit_second_order
-from ..fit.second_order_check import check_second_order, energy_violations, excursion_bound
+from ..fit.second_order import (METHODS, acceleration_at, check_second_order, energy_violations, excursion_bound,
+                                fit_gating, fit_second_order, scaled_samples)
 from ..rollout import Trajectory, as_vector
 from ..rollout.events import is_positive_number
 from ..rollout import rollout as integrate
 from ..runtime.second_order import SecondOrderPredictor
-from ..runtime.second_order_export import to_python
+from ..runtime.second_order import to_python
 from ..runtime.states import as_state, as_states
 from .cdsp import DEFAULTS as FIRST_ORDER_DEFAULTS
 from .fileformat import write_model_file
@@ -56,7 +55,7 @@ class SecondOrderCDSP:
 
     **Learned**: ``goal_``, ``dim_``, ``dt_``, ``length_scale_`` (s), ``time_scale_`` (T),
     ``mixture_`` (the gating on e), ``C_`` (K, n, 2n) = [A_k, B_k] in scaled units, ``M_`` (2n, 2n),
-    ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`; also
+    ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order.certificate.SecondOrderCertificate`; also
     ``verification_``, with ``certified_`` True, as for CDSP),
     ``energy_violations_`` (how often the training demos themselves break the certified decrease),
     ``history_`` (one row per certified iterate), ``chosen_iter_`` (the row returned: least training
@@ -151,7 +150,7 @@ class SecondOrderCDSP:
 
     @property
     def certificate_(self):
-        """The certificate as last checked (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`:
+        """The certificate as last checked (:class:`~sosdyn.lfd.fit.second_order.certificate.SecondOrderCertificate`:
         M, gamma, per-LMI margins, the verdict); ``verification_`` under the first-order name."""
         self._check_fitted()
         return self.verification_
@@ -191,12 +190,12 @@ class SecondOrderCDSP:
 
     def export(self) -> str:
         """A standalone Python module (numpy only) with ``acceleration(X, V, goal=None)``
-        (:mod:`~sosdyn.lfd.runtime.second_order_export`)."""
+        (:mod:`~sosdyn.lfd.runtime.second_order`)."""
         return to_python(self)
 
     def excursion_bound(self, x0, v0=None, goal=None) -> float:
         """The certified bound on max_t |x(t) - goal| (data units) from (x0, v0): the projection on x
-        of the ellipsoid {e : e^T M e <= e0^T M e0} (:func:`~sosdyn.lfd.fit.second_order_check.excursion_bound`)."""
+        of the ellipsoid {e : e^T M e <= e0^T M e0} (:func:`~sosdyn.lfd.fit.second_order.certificate.excursion_bound`)."""
         self._check_fitted()
         x0, v0, goal = self._start(x0, v0, goal)
         e0 = np.concatenate([(x0 - goal) / self.length_scale_, v0 * self.time_scale_ / self.length_scale_])

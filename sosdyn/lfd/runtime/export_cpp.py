@@ -1,6 +1,6 @@
 """The C++17 export of a fitted CDSP: a header-only evaluator (<array>, <cmath> only).
 
-The same numbers as :meth:`sosdyn.lfd.model.cdsp.CDSP.predict` (:mod:`.export`'s module docstring
+The same numbers as :meth:`sosdyn.lfd.model.cdsp.CDSP.predict` (:mod:`.export_python`'s module docstring
 states the formula), every number written out in full precision.
 """
 from __future__ import annotations

@@ -40,7 +40,7 @@ form overflows (|z| ~ 1e154 and up) the predictor falls back on the mixture's ow
 same as ``predict``'s too.
 
 The single-state arithmetic is module functions on plain tuples (:func:`tables`, :func:`field2`,
-:func:`fieldn`, :func:`warp_forward2`, ...): the Python export (:mod:`.export`) embeds their
+:func:`fieldn`, :func:`warp_forward2`, ...): the Python export (:mod:`.export_python`) embeds their
 source, so its one-state path is this code, not a copy.
 
 Runtime goal: ``predictor(x, goal=g)`` evaluates the model with its goal moved to g, i.e. the

@@ -6,7 +6,7 @@ import sosdyn as sd
 from sosdyn.lfd.fit.contraction import field_exponents, metric_exponents
 from sosdyn.lfd.fit.gmm import PositionMixture
 from sosdyn.lfd.model.fileformat import plain
-from sosdyn.lfd.model.state import STATE_FIELDS, check_param_names, state_record, validate_state
+from sosdyn.lfd.model.content import STATE_FIELDS, check_param_names, state_record, validate_state
 
 
 def good_state(K=1, n=2):

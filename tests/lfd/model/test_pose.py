@@ -13,12 +13,12 @@ from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import InputError, ModelFileError
 from sosdyn.evaluation.poses import angles_deg
-from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations, chart
+from sosdyn.lfd.data.pose import PoseDemonstration, PoseDemonstrations, chart
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model import pose as pose_module
 from sosdyn.lfd.model.files import load_model, load_pose_model
 from sosdyn.lfd.model.pose import PoseCDSP, body_velocity, chart_bound
-from sosdyn.lfd.model.pose_export import pose_to_cpp, pose_to_python
+from sosdyn.lfd.runtime.pose import pose_to_cpp, pose_to_python
 
 K_RATE = 0.8
 X_GOAL = np.array([0.4, -0.2, 0.3])

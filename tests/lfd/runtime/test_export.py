@@ -1,4 +1,4 @@
-"""Generated evaluators (sosdyn.lfd.runtime.export) compute what CDSP.predict computes."""
+"""Generated evaluators (sosdyn.lfd.runtime.export_python, export_cpp) compute what CDSP.predict computes."""
 import re
 import shutil
 import subprocess
@@ -9,7 +9,7 @@ import pytest
 from sosdyn.errors import InputError, NotFittedError
 from sosdyn.lfd.fit.gmm import with_bound
 from sosdyn.lfd.model.cdsp import CDSP
-from sosdyn.lfd.runtime.export import export, to_cpp, to_python
+from sosdyn.lfd.runtime.export_python import export, to_cpp, to_python
 
 from export_support import import_source, max_rel_error
 

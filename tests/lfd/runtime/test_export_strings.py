@@ -14,7 +14,7 @@ from sosdyn.lfd.data.demonstrations import Demonstrations
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.fileformat import _digest
 from sosdyn.lfd.model.files import load_model
-from sosdyn.lfd.runtime.export import PREAMBLE, cpp_string, export, to_cpp, to_python
+from sosdyn.lfd.runtime.export_python import PREAMBLE, cpp_string, export, to_cpp, to_python
 
 # Each would run code or break the file if it reached the source as text: an encoding declaration
 # (line 1 or 2 of a Python file), quotes and newlines that end a literal or a comment, a C++

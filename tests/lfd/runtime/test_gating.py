@@ -11,7 +11,7 @@ from sosdyn.lfd.fit.gmm import PositionMixture, gate_bound, with_bound
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.fileformat import _digest
 from sosdyn.lfd.model.files import load_model
-from sosdyn.lfd.runtime.export import to_python
+from sosdyn.lfd.runtime.export_python import to_python
 
 from export_support import import_source
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sosdyn.errors import InputError
-from sosdyn.lfd.runtime.export import to_cpp, to_python
+from sosdyn.lfd.runtime.export_python import to_cpp, to_python
 from sosdyn.lfd.runtime.states import limit_speed
 
 from export_support import import_source

@@ -1,6 +1,6 @@
 """The independent check of a second-order certificate, and what the certificate implies.
 
-The model (scaled units, :mod:`.second_order`): de/dt' = sum_k h_k(e) F_k e with F_k = [[0, I],
+The model (scaled units, :mod:`.core`): de/dt' = sum_k h_k(e) F_k e with F_k = [[0, I],
 [C_k]]. The certificate is the constant metric M; it is checked, not trusted:
 
 1. **exact**: M and -L_k = -(F_k^T M + M F_k + 2 gamma' M) (k = 1..K) are formed in rational
@@ -24,9 +24,9 @@ from fractions import Fraction
 import numpy as np
 
 from sosdyn.sos.gram import proven_min_eig
-from .certificate import check_sample_count
-from .gmm import PositionMixture
-from .second_order import accelerations, companion
+from ..certificate import check_sample_count
+from ..gmm import PositionMixture
+from .core import accelerations, companion
 
 SAMPLED_TOL = 1e-8
 SAMPLE_BOX = 2.0

@@ -14,9 +14,9 @@ so V(e) = e^T M e obeys dV/dt' <= -2 gamma' V for ANY weights h in the simplex: 
 depend on x and v (which is what lets two branches cross at one x with different v).
 
 Fitting alternates two convex programs through :class:`~sosdyn.sos.SOSProgram` (constant PSD
-constraints, as the first-order steps in :mod:`.steps`):
+constraints, as the first-order steps in :mod:`sosdyn.lfd.fit.steps`):
 
-* field step (M fixed): least squares of the accelerations (:class:`.steps.LeastSquaresData`
+* field step (M fixed): least squares of the accelerations (:class:`sosdyn.lfd.fit.steps.LeastSquaresData`
   with features e) subject to -L_k - delta I >= 0, linear in C_k;
 * metric step (C fixed): maximise t with -L_k - t I >= 0, M - eps I >= 0, trace M = 2n (the
   scale of M is free), plus a proximal term rho |M - M0|^2.
@@ -35,13 +35,13 @@ from sosdyn.errors import InputError, SolverError
 from sosdyn.poly import PolyMatrix, Polynomial
 from sosdyn.sos import SOSProgram, svec_to_matrix
 from sosdyn.sos.gram import matrix_to_svec
-from ..data.demonstrations import Demonstrations, sample_step
-from ..data.preprocess import resample_uniform, savgol_derivatives, smoothing_window
-from ..rollout import semi_implicit_euler
-from .gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm
-from .learner import subsample
-from .steps import LeastSquaresData, solve_with_fallback
-from .steps.common import proximal
+from ...data.demonstrations import Demonstrations, sample_step
+from ...data.preprocess import resample_uniform, savgol_derivatives, smoothing_window
+from ...rollout import semi_implicit_euler
+from ..gmm import MIN_SAMPLES_PER_COMPONENT, PositionMixture, fit_joint_gmm
+from ..learner import subsample
+from ..steps import LeastSquaresData, solve_with_fallback
+from ..steps.common import proximal
 
 DERIV_WINDOW = 9                # Savitzky-Golay window for smooth data (as estimate_velocity)
 METRIC_EPS = 1e-3               # M >= eps I (trace M = 2n)
@@ -114,7 +114,7 @@ def tracking_samples(scaled: Scaled, copies: int, sigma: float, omega: float, se
 
 
 def fit_gating(E: np.ndarray, n_components: int, seed: int) -> PositionMixture:
-    """A full-covariance GMM on the scaled states e = (e_x, e_v) (EM, :func:`~.gmm.fit_joint_gmm`):
+    """A full-covariance GMM on the scaled states e = (e_x, e_v) (EM, :func:`~sosdyn.lfd.fit.gmm.fit_joint_gmm`):
     h_k(e) are its responsibilities."""
     n = E.shape[1] // 2
     gmm, _ = fit_joint_gmm(E[:, :n], E[:, n:], n_components, seed)

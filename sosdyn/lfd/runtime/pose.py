@@ -1,15 +1,16 @@
-"""A fitted :class:`~.pose.PoseCDSP` as standalone code: Python ``predict_pose(x, quat, goal=None)``
+"""A fitted :class:`~sosdyn.lfd.model.pose.PoseCDSP` at run time: its chart's angular velocity
+(:func:`body_velocity`), the speed limits (:func:`pose_speed_factor`), and standalone code: Python ``predict_pose(x, quat, goal=None)``
 (:func:`pose_to_python`) or C++17 ``predict_pose(x, quat, v, omega, goal = nullptr)`` (:func:`pose_to_cpp`).
 
-The module is the 6-D chart model's own export (:func:`~sosdyn.lfd.runtime.export.to_python`:
+The module is the 6-D chart model's own export (:func:`~sosdyn.lfd.runtime.export_python.to_python`:
 ``predict(S)`` on s = (x, c r)) followed by the chart: r = log(R_g^T R) (scipy's ``Rotation``),
 s = (x - x_g' + x_g, c r) for the goal pose (x_g', R_g'), and (v, omega) = (sdot_x,
-R J_r(r) sdot_r / c) with :func:`~.pose.body_velocity` (its source copied verbatim). It needs numpy
+R J_r(r) sdot_r / c) with :func:`body_velocity` (its source copied verbatim). It needs numpy
 and scipy, never sosdyn. States within CHART_MARGIN of the cut locus raise ValueError. Speed limits
 (``max_speed`` on |v|, ``max_angular_speed`` on |omega|, written into the code): (v, omega) scaled by
-lambda = min(1, v_max / |v|, w_max / |omega|), as :meth:`~.pose.PoseCDSP.predictor`.
+lambda = min(1, v_max / |v|, w_max / |omega|), as :meth:`~sosdyn.lfd.model.pose.PoseCDSP.predictor`.
 
-The C++ header is the chart model's :func:`~sosdyn.lfd.runtime.export.to_cpp` (namespace NS) and a
+The C++ header is the chart model's :func:`~sosdyn.lfd.runtime.export_cpp.to_cpp` (namespace NS) and a
 namespace NS_pose with the same chart in plain arithmetic (<cmath> only): quaternion product and
 conjugate, log (r = 2 atan2(|v|, w) v / |v|, w >= 0) and the right Jacobian; it returns false for a
 state that is not finite, a velocity that is not finite, or an orientation within CHART_MARGIN of the
@@ -19,13 +20,42 @@ from __future__ import annotations
 
 import inspect
 
-from ..data.poses import CHART_MARGIN
-from ..runtime.codegen import _flat, _literal
-from ..runtime.export import to_cpp, to_python
-from .pose import SMALL_ANGLE, PoseCDSP, body_velocity
+import numpy as np
+
+from ..data.pose import CHART_MARGIN
+from .codegen import _flat, _literal
+from .export_cpp import to_cpp
+from .export_python import to_python
+from .states import speed_factor
+
+SMALL_ANGLE = 1e-4               # below this |r| the right Jacobian's series is used
 
 
-def pose_to_python(model: PoseCDSP, max_speed: float | None = None, max_angular_speed: float | None = None) -> str:
+def body_velocity(r, rdot) -> np.ndarray:
+    """J_r(r) rdot row by row (m, 3): rdot - a r x rdot + b r x (r x rdot), t = |r|, a = (1 - cos t)/t^2,
+    b = (t - sin t)/t^3 (series below SMALL_ANGLE); J_r is the right Jacobian of SO(3), so
+    R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r): the body angular velocity."""
+    r, d = np.atleast_2d(np.asarray(r, dtype=float)), np.atleast_2d(np.asarray(rdot, dtype=float))
+    t = np.linalg.norm(r, axis=1, keepdims=True)
+    small = t < SMALL_ANGLE
+    ts = np.where(small, 1.0, t)
+    a = np.where(small, 0.5 - t * t / 24.0, (1.0 - np.cos(ts)) / ts**2)
+    b = np.where(small, 1.0 / 6.0 - t * t / 120.0, (ts - np.sin(ts)) / ts**3)
+    rxd = np.cross(r, d)
+    return d - a * rxd + b * np.cross(r, rxd)
+
+
+def pose_speed_factor(S, Sdot, rot_factor: float, max_speed, max_angular_speed) -> np.ndarray:
+    """lambda = min(1, v_max / |v|, w_max / |omega|) of each chart state S (m, 6) (goal at r = 0) and
+    velocity Sdot: v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| with r = s_r / c, rdot = sdot_r / c.
+    One positive factor on the whole 6-D velocity keeps the chart paths and the goal (docs/theory.md)."""
+    w = body_velocity(S[:, 3:] / rot_factor, Sdot[:, 3:] / rot_factor)
+    return np.minimum(speed_factor(Sdot[:, :3], max_speed), speed_factor(w, max_angular_speed))
+
+
+
+
+def pose_to_python(model, max_speed: float | None = None, max_angular_speed: float | None = None) -> str:
     """Source of the standalone pose module (module docstring)."""
     model._check_fitted()
     max_speed, max_angular_speed = model._limits(max_speed, max_angular_speed)
@@ -71,7 +101,7 @@ def _cpp_limit(name: str, limit: float | None, vector: str) -> str:
         f"  if ({name}2 * scale * scale > {limit!r} * {limit!r}) scale = {limit!r} / std::sqrt({name}2);\n")
 
 
-def pose_to_cpp(model: PoseCDSP, namespace: str = "pose_model", max_speed: float | None = None,
+def pose_to_cpp(model, namespace: str = "pose_model", max_speed: float | None = None,
                 max_angular_speed: float | None = None) -> str:
     """Source of the header-only C++17 pose evaluator (module docstring)."""
     model._check_fitted()

@@ -24,12 +24,12 @@ import numpy as np
 
 from sosdyn.poly import PolyMatrix
 from sosdyn.sos import SOSProgram, svec_to_matrix
-from .gmm import PositionMixture
-from .second_order import (METRIC_EPS, Scaled, companion, decision_companion, energy_metric_step, field_step, lmi,
+from ..gmm import PositionMixture
+from .core import (METRIC_EPS, Scaled, companion, decision_companion, energy_metric_step, field_step, lmi,
                            metric_step,
                            nominal_fields, tracking_samples, training_deviation)
-from .steps import LeastSquaresData, solve_with_fallback
-from .steps.common import proximal
+from ..steps import LeastSquaresData, solve_with_fallback
+from ..steps.common import proximal
 
 
 def _entries(block) -> np.ndarray:
@@ -97,14 +97,14 @@ def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, mar
                      progress=None, tracking=None) -> SecondOrderFit:
     """Fit C and M in scaled units (``gamma`` in 1/s of the data, gamma' = gamma T).
 
-    Start: M of the critically damped nominal fields (:func:`~.second_order.metric_step`), then the
+    Start: M of the critically damped nominal fields (:func:`~.core.metric_step`), then the
     field step under it. Each iteration is, for ``method`` "ica", a joint step (:func:`ica_step`,
     Young weight a = 1) followed by a field step under its M (a = |dM| / |dC| of the previous joint step, the
     weight that makes Young's bound tight for a step like it); for "alternating", a metric step
     (max margin, proximal) then a field step. Every step keeps the current fields feasible, so
     the cost never increases; stop when it falls by less than ``tol`` (relative) in an iteration.
     Every iterate is certified; the one returned is the one whose rollouts from the training
-    demos' first states deviate least from them (:func:`~.second_order.training_deviation`): the
+    demos' first states deviate least from them (:func:`~.core.training_deviation`): the
     acceleration cost is a poor proxy for a twice-integrated path near a crossing.
     """
     g = gamma * scaled.time
