@@ -150,8 +150,8 @@ def pulled_back(W, plane, amplitudes, widths, field) -> np.ndarray:
 
 
 def fit_plane(curves: list[np.ndarray]) -> np.ndarray:
-    """The dominant 2-plane (2, n) of sum_i (w_i dw_i^T - dw_i w_i^T) over the curves' points and
-    steps (the identity's rows for n = 2)."""
+    """The dominant 2-plane (2, n), orthonormal rows, of sum_i (w_i dw_i^T - dw_i w_i^T) over the curves'
+    points and steps (the identity's rows for n = 2)."""
     n = curves[0].shape[1]
     if n == 2:
         return np.eye(2)
@@ -161,9 +161,10 @@ def fit_plane(curves: list[np.ndarray]) -> np.ndarray:
         m = 0.5 * (w[1:] + w[:-1])
         L += m.T @ d - d.T @ m
     U, _, Vt = np.linalg.svd(L)
-    p = U[:, 0]
-    q = Vt[0] - (Vt[0] @ p) * p
-    return np.array([p, q / np.linalg.norm(q)])
+    # L v = s u with u orthogonal to v (L skew): the plane of (U[:, 0], Vt[0]); orthonormalised by QR, which
+    # also gives an orthonormal pair when L = 0 (curves without rotation: then any plane will do)
+    Q = np.linalg.qr(np.column_stack([U[:, 0], Vt[0], np.eye(n)]))[0]
+    return Q[:, :2].T
 
 
 def fit_twist(curves: list[np.ndarray], n_terms: int, ridge: float, max_shear: float

@@ -140,7 +140,8 @@ def _warp(w, n) -> dict | None:
     m = len(sigmas)
     out = {"sigmas": array(sigmas, "state.warp_.sigmas", (m,))}
     for key in ("centers", "vectors"):
-        out[key] = array(need(w, key, "state.warp_"), f"state.warp_.{key}", (m, n))
+        v = need(w, key, "state.warp_")
+        out[key] = np.zeros((0, n)) if m == 0 and v == [] else array(v, f"state.warp_.{key}", (m, n))  # no bump: []
     try:
         check_maps(out["centers"], out["vectors"], out["sigmas"], np.zeros(n), what="state.warp_")
     except InputError as exc:
