@@ -6,7 +6,7 @@
 Strokes that wind around the goal: inward spirals of 180, 270 and 360 degrees, a hook that swings
 out and 270 degrees around the goal before it lands, a "G" whose tail loops back in to the goal, a
 snail that swings out and winds a full turn in; and three that start near the goal and swing far
-out before winding back (a hook, a loop and a curl: 5-15 times the start's distance). They are
+out before winding back (a hook, a loop and a curl: 6-20 times the start's distance). They are
 synthesised as the crossing set is (``problems/crossing_shapes.py``, whose generator, figure and
 command line this module reuses): a perturbed chord-length
 spline through the shape's waypoints, the two-thirds power law of drawing speed, and a mouse
@@ -55,7 +55,7 @@ def _swing(r0: float, out: float, power: float = 1.0):
 #: Shape name -> (description, waypoints (px, y up, the last the goal)).
 PATHS = {
     "spiral180": ("an inward spiral, half a turn counter-clockwise", polar(-90.0, 180.0, _inward(230.0))),
-    "spiral270": ("an inward spiral, three quarters of a turn clockwise", polar(120.0, -330.0, _inward(230.0))),
+    "spiral270": ("an inward spiral of 270-300 degrees clockwise", polar(120.0, -330.0, _inward(230.0))),
     "spiral360": ("an inward spiral, a full turn counter-clockwise", polar(200.0, 410.0, _inward(230.0), n=16)),
     "hook": ("a hook: out to about twice the start's distance from the goal while winding 270 degrees "
              "counter-clockwise around it, then in", polar(30.0, 300.0, _swing(110.0, 2.5), n=14)),
@@ -65,11 +65,11 @@ PATHS = {
            (100, -100), (130, -30), (110, 20), (60, 25), (20, 10), (0, 0)]),
     "snail": ("a snail: out and a full turn clockwise, the distance to the goal first growing, then shrinking",
               polar(-60.0, -420.0, _swing(120.0, 1.6), n=16)),
-    "nearhook": ("a hook that starts near the goal: out to about 6 times the start's distance while winding "
+    "nearhook": ("a hook that starts near the goal: out to about 8 times the start's distance while winding "
                  "300 degrees counter-clockwise, then in", polar(30.0, 300.0, _swing(40.0, 12.0), n=14)),
-    "loop": ("a loop from beside the goal: out to about 15 times the start's distance and round 300 degrees "
+    "loop": ("a loop from beside the goal: out to about 18 times the start's distance and round 300 degrees "
              "counter-clockwise back in", polar(30.0, 300.0, _swing(30.0, 20.0, 0.7), n=14)),
-    "curl": ("a curl that starts near the goal: out to about 5 times the start's distance and nearly a full turn "
+    "curl": ("a curl that starts near the goal: out to about 8 times the start's distance and nearly a full turn "
              "clockwise in", polar(-60.0, -340.0, _swing(40.0, 10.0, 0.7), n=16)),
 }
 
