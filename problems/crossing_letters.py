@@ -26,7 +26,6 @@ pen: other letters, another stroke model, another logger. Models are tuned on th
 """
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +33,7 @@ from scipy.special import erf
 
 from sosdyn.lfd.data.datasets import DATASETS_DIR
 
-from .crossing_shapes import generator_main, overview, write_set
+from .crossing_shapes import LOG_COLUMNS, generator_main, log_row, write_set
 
 OUT = DATASETS_DIR / "crossing_letters"
 SEED = 36
@@ -145,12 +144,11 @@ def generate(seed: int = SEED) -> dict:
 
 def write(data: dict, out_dir: Path) -> None:
     """The CSVs (integer ms, positions at 0.1 px) and one manifest (file, samples, duration, start, end)."""
-    write_set(data, out_dir, lambda ms, xy: [[int(m), f"{x:.1f}", f"{y:.1f}"] for m, (x, y) in zip(ms, xy)],
-              ["file", "samples", "duration_ms", "start_x", "start_y", "end_x", "end_y"],
-              lambda name, file, k, ms, xy: [f"{name}/{file}", len(ms), int(ms[-1]), *(f"{v:.1f}" for v in xy[0]),
-                                             *(f"{v:.1f}" for v in xy[-1])])
+    write_set(data, out_dir, LOG_COLUMNS, lambda name, k, ms, xy: log_row(ms, xy),
+              lines=lambda ms, xy: [[int(m), f"{x:.1f}", f"{y:.1f}"] for m, (x, y) in zip(ms, xy)])
 
 
 def main(argv=None):
-    return generator_main(argv, sys.modules[__name__], OUT, SEED, generate, write,
-                          lambda data, png: overview(data, png, families=lambda _: 1, size=(14, 6)))
+    families = {name: (text, [plan]) for name, (text, plan) in LETTERS.items()}      # one family each
+    return generator_main(argv, "crossing-letters", __doc__.split("\n")[0], OUT, SEED, families, write,
+                          make=lambda seed, _: generate(seed))

@@ -38,7 +38,8 @@ from ..data.demonstrations import check_demonstrations
 from ..data.pose import PoseDemonstrations
 from ..fit.learner import Settings, reuse_steps
 from ..fit.params import LEGACY_PARAMS, MAX_SEED, PARAMS, check_params, check_solver, preset_params, resolve_seed
-from ..fit.pipeline import check_fit, field_at, maps_of
+from ..fit.composite import maps_of, twist_of
+from ..fit.pipeline import check_fit, field_at
 from ..fit.pipeline import fit as fit_path
 from ..rollout import rollout as integrate
 from ..rollout.quality import HORIZON, reproduction_table
@@ -234,7 +235,8 @@ class CDSP(MotionModel):
         self.refuse(other, "predictor")
         self._check_fitted()
         return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
-                              None if self.warp_ is None else maps_of(self.warp_), max_speed)
+                              None if self.warp_ is None else maps_of(self.warp_), max_speed,
+                              twist_of(self.warp_))
 
     def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None, **other):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.

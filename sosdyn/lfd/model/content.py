@@ -35,6 +35,8 @@ from ..data.demonstrations import check_columns, units_problem
 from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.contraction import field_exponents, metric_exponents
 from ..fit.gmm import PositionMixture
+from ..fit.composite import TWIST_KEYS
+from ..fit.twist import check_twist
 from ..fit.warp import check_maps
 from .fileformat import FORMAT
 
@@ -51,7 +53,7 @@ OPTIONAL_STATE = ("units", "columns")     # absent in files older than them: "" 
 STATE_FIELDS = ("dim_", "goal_", "scale_", "dt_", "units_", "columns_", "n_components_", "gmr_cost_", "C_", "W_",
                 "field_exps_", "metric_exps_", "mixture_", "certificate_", "history_", "metric_collapse_",
                 "timings_", "warp_")
-WARP_KEYS = ("centers", "vectors", "sigmas")          # warp_: null, or these arrays (z-units)
+WARP_KEYS = ("centers", "vectors", "sigmas")          # warp_: null, or these arrays (z-units) and an optional twist
 
 
 def need(mapping: dict, name: str, where: str, kind=None):
@@ -204,21 +206,38 @@ def validate_state(st: dict, n_components, field_degree: int, metric_degree: int
 
 
 def _warp(w, n) -> dict | None:
-    """None, or {centers (m, n), vectors (m, n), sigmas (m,)}: finite, sigma_j > 0, every l_j < 1."""
+    """None, or {centers (m, n), vectors (m, n), sigmas (m,)}: finite, sigma_j > 0, every l_j < 1;
+    and, if present, twist {plane (2, n) orthonormal, amplitudes (k,), widths (k,) > 0}
+    (:func:`~sosdyn.lfd.fit.twist.check_twist`). A file older than the twist has none."""
     if w is None:
         return None
-    if not isinstance(w, dict) or set(w) != set(WARP_KEYS):
-        raise ModelFileError(f"malformed: state.warp_ must be null or an object with exactly {list(WARP_KEYS)}")
+    if not isinstance(w, dict) or not set(WARP_KEYS) <= set(w) <= {*WARP_KEYS, "twist"}:
+        raise ModelFileError(f"malformed: state.warp_ must be null or an object with exactly {list(WARP_KEYS)} "
+                             "and optionally twist")
     sigmas = need(w, "sigmas", "state.warp_", list)
     m = len(sigmas)
     out = {"sigmas": array(sigmas, "state.warp_.sigmas", (m,))}
     for key in ("centers", "vectors"):
-        out[key] = array(need(w, key, "state.warp_"), f"state.warp_.{key}", (m, n))
+        v = need(w, key, "state.warp_")
+        out[key] = np.zeros((0, n)) if m == 0 and v == [] else array(v, f"state.warp_.{key}", (m, n))  # no bump: []
     try:
         check_maps(out["centers"], out["vectors"], out["sigmas"], np.zeros(n), what="state.warp_")
     except InputError as exc:
         raise ModelFileError(f"invalid {exc}") from None
-    return out
+    t = w.get("twist")
+    if t is None:
+        return out
+    if not isinstance(t, dict) or set(t) != set(TWIST_KEYS):
+        raise ModelFileError(f"malformed: state.warp_.twist must be an object with exactly {list(TWIST_KEYS)}")
+    k = len(need(t, "widths", "state.warp_.twist", list))
+    twist = {"plane": array(need(t, "plane", "state.warp_.twist"), "state.warp_.twist.plane", (2, n)),
+             **{key: array(need(t, key, "state.warp_.twist"), f"state.warp_.twist.{key}", (k,))
+                for key in ("amplitudes", "widths")}}
+    try:
+        check_twist(twist["plane"], twist["amplitudes"], twist["widths"], what="state.warp_.twist")
+    except InputError as exc:
+        raise ModelFileError(f"invalid {exc}") from None
+    return dict(out, twist=twist)
 
 
 def _exponents(st, name, n, count, expected):

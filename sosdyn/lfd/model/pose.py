@@ -36,8 +36,7 @@ from scipy.spatial.transform import Rotation
 from sosdyn.errors import InputError, NotFittedError
 from ..data.pose import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart,
                           chart_demonstrations, goal_orientation)
-from ..fit.pipeline import maps_of
-from ..fit.warp import apply as warp_apply, check_warp
+from ..fit.composite import apply as warp_apply, check as check_warp
 from ..fit.params import preset_params
 from ..rollout import rollout as integrate
 from ..rollout.quality import HORIZON, reproduction_rows
@@ -56,8 +55,9 @@ PUSH_NAMES = ("dx", "dy", "dz", "wx", "wy", "wz")
 def chart_bound(model: CDSP, z0, rot_factor: float) -> float:
     """An upper bound on sup_t |r(t)| from the start z0 (z-units): with u = phi(z) and constant M,
     u^T M u is non-increasing, so |r| = s |z_r| / c <= s / c * sqrt(u0^T M u0) * b with b =
-    sqrt(lambda_max(P M^-1 P^T)) (P picks the r block; no warp) or 1 / (sqrt(lambda_min M) prod(1 - l_j))
-    (warp: |z| <= |u| / prod(1 - l_j)). inf when M is not constant."""
+    sqrt(lambda_max(P M^-1 P^T)) (P picks the r block; no warp) or 1 / (sqrt(lambda_min M) b_lo) (warp:
+    |z| <= |u| / b_lo, b_lo = prod(1 - l_j) / lam(K) <= sigma_min(J_phi), :mod:`~sosdyn.lfd.fit.composite`).
+    inf when M is not constant."""
     M = metric_matrix(model)
     if M is None:
         return np.inf
@@ -66,9 +66,9 @@ def chart_bound(model: CDSP, z0, rot_factor: float) -> float:
         level, Minv = float(z0 @ M @ z0), np.linalg.inv(M)
         b = np.sqrt(np.linalg.eigvalsh(Minv[3:, 3:]).max())
     else:
-        u0 = warp_apply(z0[None], *maps_of(model.warp_), np.zeros(model.dim_))[0]
+        u0 = warp_apply(z0[None], model.warp_)[0]
         level = float(u0 @ M @ u0)
-        lower = check_warp(maps_of(model.warp_), 1, 0)["singular_bound"]
+        lower = check_warp(model.warp_, 1, 0)["singular_bound"]
         b = 1.0 / (np.sqrt(np.linalg.eigvalsh(M).min()) * lower) if lower > 0 else np.inf
     return float(model.scale_ / rot_factor * np.sqrt(max(level, 0.0)) * b)
 

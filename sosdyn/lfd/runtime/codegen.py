@@ -30,7 +30,7 @@ def _check(model) -> None:
 
 
 def _warp(model):
-    """The model's warp (centers, vectors, sigmas) in z-units, or None."""
+    """The model's warp bumps (centers, vectors, sigmas) in z-units, or None."""
     w = getattr(model, "warp_", None)
     return None if w is None else (w["centers"], w["vectors"], w["sigmas"])
 
@@ -60,6 +60,12 @@ def check_namespace(namespace, default: str) -> str:
     return namespace
 
 
+def _twist(model):
+    """The model's twist after the bumps (plane, amplitudes, widths) in z-units, or None."""
+    t = (getattr(model, "warp_", None) or {}).get("twist")
+    return None if t is None else (t["plane"], t["amplitudes"], t["widths"])
+
+
 def cpp_string(text: str) -> str:
     """``text`` as a C++ string literal: its UTF-8 bytes, each outside [A-Za-z0-9 _.,/-] as a
     three-digit octal escape (octal, not hex: a hex escape would swallow the digits after it; '?'
@@ -84,9 +90,10 @@ def _header(model, comment: str, max_speed: float | None) -> str:
     from the model (a units' name in line 1 or 2 of a Python file could be an encoding declaration;
     in a C++ comment a trailing backslash continues the comment onto the next line)."""
     K, n, m = model.C_.shape
-    warp = _warp(model)
+    warp, twist = _warp(model), _twist(model)
     formula = ("xdot = s * sum_k h_k(z) f_k(z), z = (x - goal) / s" if warp is None else
-               f"xdot = s * J_phi(z)^-1 sum_k h_k(u) f_k(u), u = phi(z), z = (x - goal) / s, {len(warp[2])} bumps")
+               f"xdot = s * J_phi(z)^-1 sum_k h_k(u) f_k(u), u = phi(z), z = (x - goal) / s, {len(warp[2])} bumps"
+               + ("" if twist is None else f" then a twist of {len(twist[1])} terms"))
     return "".join(f"{comment} {line}\n" for line in (
         *PREAMBLE, f"n = {n} state dimensions, K = {K} components, {m} monomials of degree "
         f"1..{int(model.field_exps_.sum(axis=1).max())}; positions in UNITS.", f"{formula}.",

@@ -15,7 +15,7 @@ one-hot on the component of least Mahalanobis distance, or with a bound c the so
 l_k = c_k - c/2 (d_k / d_min)^2, the distances from the rescaling of
 :meth:`~sosdyn.lfd.fit.gmm.PositionMixture.log_mahalanobis`. A warped model (``warp_``, :mod:`.warp`)
 evaluates the same sum at u = phi(z) and returns s J_phi(z)^-1 (...): the bump maps and their
-chain-rule Jacobian, then one n x n solve (numpy's, or Gaussian elimination with partial pivoting
+chain-rule Jacobian (and a twist's, :mod:`~sosdyn.lfd.fit.twist`), then one n x n solve (numpy's, or Gaussian elimination with partial pivoting
 in the C++). The generated code never imports
 sosdyn: it is meant to run on a robot that has numpy (Python) or a C++17 compiler only.
 
@@ -39,9 +39,9 @@ import inspect
 
 import numpy as np
 
-from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _warp
-from .predictor import (_monomial, field2, fieldn, gating, tables, warp_back, warp_back2, warp_forward, warp_forward2,
-                        warp_tables)
+from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _twist, _warp
+from .predictor import (_monomial, field2, fieldn, gating, tables, twist_back, twist_forward, twist_tables, warp_back,
+                        warp_back2, warp_forward, warp_forward2, warp_tables)
 from .states import check_max_speed
 
 
@@ -51,7 +51,7 @@ def to_python(model, max_speed: float | None = None) -> str:
     with ``max_speed`` every velocity is scaled to |xdot| <= max_speed."""
     _check(model)
     max_speed = check_max_speed(max_speed)
-    mix, warp = model.mixture_, _warp(model)
+    mix, warp, twist = model.mixture_, _warp(model), _twist(model)
     warp_defs = "" if warp is None else f'''
 # the warp u = phi(z), z-units: phi = psi_m o ... o psi_1, psi_j(z) = z + (rho_j(z) - rho_j(0)) v_j,
 # rho_j(z) = exp(-|z - c_j|^2 / sigma_j^2)
@@ -69,9 +69,31 @@ def warp(Z):
         grad = (-2.0 / s ** 2) * rho[:, None] * (U - c)
         J += v[None, :, None] * np.einsum("ki,kij->kj", grad, J)[:, None, :]
         U += (rho - np.exp(-np.sum((0.0 - c) ** 2) / s ** 2))[:, None] * v
-    return U, J
-'''
-    one_state = _one_state(model, mix, warp, max_speed)
+    return {"U, J" if twist is None else "twist(U, J)"}
+''' + ("" if twist is None else f'''
+
+# then the twist u = R(alpha(|w|)) w, a rotation in the plane (p, q) = TWIST_PLANE by
+# alpha(r) = sum_j a_j (1 - exp(-r^2 / tau_j^2)); J_T = R (I + beta (S w) w^T), beta = alpha'(r) / r
+TWIST_PLANE = np.array({_literal(twist[0])}).reshape(2, {model.dim_})
+TWIST_AMPLITUDES = np.array({_literal(twist[1])}, dtype=float)
+TWIST_WIDTHS = np.array({_literal(twist[2])}, dtype=float)
+
+
+def twist(W, JW):
+    """(T(W), J_T(W) JW) at the rows of W."""
+    e = np.exp(-np.sum(W * W, axis=1)[:, None] / TWIST_WIDTHS ** 2)
+    alpha = (TWIST_AMPLITUDES * (1.0 - e)).sum(axis=1)
+    beta = (TWIST_AMPLITUDES * (2.0 / TWIST_WIDTHS ** 2) * e).sum(axis=1)
+    p, q = TWIST_PLANE
+    c0, c1 = W @ p, W @ q
+    n = W.shape[1]
+    R = (np.eye(n)[None] + (np.cos(alpha) - 1.0)[:, None, None] * (np.outer(p, p) + np.outer(q, q))[None]
+         + np.sin(alpha)[:, None, None] * (np.outer(q, p) - np.outer(p, q))[None])
+    SW = c0[:, None] * q - c1[:, None] * p
+    inner = np.eye(n)[None] + beta[:, None, None] * SW[:, :, None] * W[:, None, :]
+    return np.einsum("kij,kj->ki", R, W), R @ inner @ JW
+''')
+    one_state = _one_state(model, mix, warp, twist, max_speed)
     core = ("    with np.errstate(over=\"ignore\", invalid=\"ignore\"):\n"
             "        F = np.einsum(\"kij,nj->nki\", COEFFICIENTS, monomials(Z))\n"
             "        V = np.einsum(\"tk,tki->ti\", responsibilities(Z), F) * SCALE\n") if warp is None else (
@@ -148,7 +170,7 @@ def predict(X, goal=None):
 {one_state}'''
 
 
-def _one_state(model, mix, warp, max_speed) -> str:
+def _one_state(model, mix, warp, twist, max_speed) -> str:
     """The generated module's one-state path: :mod:`.predictor`'s functions (source embedded) on
     their tables (literals: ``repr`` of floats round-trips), ``one_state(x)`` -> xdot or None
     where the batch path must decide (a form overflows, or the velocity is not finite)."""
@@ -156,13 +178,20 @@ def _one_state(model, mix, warp, max_speed) -> str:
     funcs = [gating, _monomial, field2 if n == 2 else fieldn]
     if warp is not None:
         funcs += [warp_forward2, warp_back2] if n == 2 else [warp_forward, warp_back]
+    if twist is not None:
+        funcs += [twist_forward, twist_back]
     fwd, back, field = ("warp_forward2", "warp_back2", "field2") if n == 2 else ("warp_forward", "warp_back", "fieldn")
-    body = (f"        v = {field}(_TABLES, z, _far)" if warp is None else
-            f"        z, grads = {fwd}(_MAPS, z)\n        v = {back}(_MAPS, grads, {field}(_TABLES, z, _far))")
+    core = f"{field}(_TABLES, z, _far)" if twist is None else \
+        f"twist_back(_TWIST, turn, {field}(_TABLES, z, _far))"
+    body = (f"        v = {core}" if warp is None else
+            f"        z, grads = {fwd}(_MAPS, z)\n" +
+            ("" if twist is None else "        z, turn = twist_forward(_TWIST, z)\n") +
+            f"        v = {back}(_MAPS, grads, {core})")
     return "\n\n".join(inspect.getsource(f) for f in funcs) + f"""
 
 _TABLES = {tables(mix, model.C_, model.field_exps_)!r}
 _MAPS = {None if warp is None else warp_tables(*warp)!r}
+_TWIST = {None if twist is None else twist_tables(*twist)!r}
 
 
 class _Far(Exception):
