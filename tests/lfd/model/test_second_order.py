@@ -192,10 +192,14 @@ def alpha_demos(k=5, T=300, duration=4.0):
 
 @pytest.mark.slow
 def test_alpha_second_order_beats_first_order():
-    """docs/theory.md "Second order": DTWD per point 8.0 (second order, K = 8) against 10.2 (CDSP())."""
+    """docs/theory.md "Second order": on the α, DTWD per point 1.2-1.8 for the tracking field (default),
+    8.0 for the mixture (K = 8), 7.7 for CDSP() (which cuts the loop)."""
     demos = alpha_demos()
-    second_model, first_model = sd.SecondOrderCDSP(field="mixture").fit(demos), sd.CDSP().fit(demos)
-    second = [dtwd(second_model.rollout(d.pos[0], 1.5 * d.duration, v0=d.vel[0]).pos, d.pos).per_point for d in demos]
+    tracking, mixture = sd.SecondOrderCDSP().fit(demos), sd.SecondOrderCDSP(field="mixture").fit(demos)
+    first_model = sd.CDSP().fit(demos)
+    second = [[dtwd(m.rollout(d.pos[0], 1.5 * d.duration, v0=d.vel[0]).pos, d.pos).per_point for d in demos]
+              for m in (tracking, mixture)]
     first = [dtwd(first_model.rollout(d.pos[0], 1.5 * d.duration).pos, d.pos).per_point for d in demos]
-    assert second_model.certificate_.passed
-    assert np.mean(second) < 9.0 < 9.5 < np.mean(first), (second, first)
+    assert tracking.certificate_.passed and mixture.certificate_.passed
+    assert np.mean(second[0]) < 3.0 < 2 * 3.0 < np.mean(first), (second, first)
+    assert np.mean(second[1]) < 9.0, second
