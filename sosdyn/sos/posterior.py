@@ -29,7 +29,8 @@ from ..poly import Polynomial
 from .conic import cvxpy_block_vars, positions
 from .gram import svec_pairs
 from .objective import QuadraticForm, is_cvxpy
-from .proof import EPS, prove_program
+from .identity import EPS
+from .proof import prove_program
 
 STEPS = 8          # judged attempts along one direction, each step a little longer
 
@@ -47,13 +48,14 @@ def objective_ids(program) -> np.ndarray:
 
 
 def candidates(program) -> list:
-    """Objective decisions that are no Gram entry and enter no equality row (nor does the program
-    have cvxpy constraints): the decisions the correction may move."""
+    """Scalar decisions of the objective (``new_var()`` blocks of one id) that enter no equality row
+    (nor does the program have cvxpy constraints): the decisions the correction may move. A bound
+    is such a scalar; the coefficients of a free polynomial or a field are not tried."""
     if program.cvxpy_constraints:
         return []
-    gram = {int(d) for b in program.blocks if b.psd is not None for d in b.ids}
+    scalar = {int(b.ids[0]) for b in program.blocks if b.psd is None and b.ids.size == 1}
     fixed = {int(d) for rows in program.linear if rows.kind == "eq" for d in rows.ids}
-    return [int(t) for t in objective_ids(program) if int(t) not in gram | fixed]
+    return [int(t) for t in objective_ids(program) if int(t) in scalar - fixed]
 
 
 def spread(proof, h: np.ndarray) -> list:
@@ -153,7 +155,8 @@ def moved_point(program, ids, x, judged, t: int):
 
 
 def posterior_point(program, ids, x, judged):
-    """A proven point reached by moving one decision (module docstring), or None."""
+    """The judge's proof (:class:`~.proof.PointProof`, its point ``x``) at a point reached by moving
+    one decision (module docstring), or None."""
     for t in candidates(program):
         found = moved_point(program, ids, x, judged, t)
         if found is None:
@@ -163,6 +166,7 @@ def posterior_point(program, ids, x, judged):
             y = x.copy()
             grow = step * (1 + 1e-9 * 10.0**k) + 4.0**k * EPS * (abs(x[pos]) + step)
             y[pos] = x[pos] + sign * grow
-            if prove_program(program, ids, y).ok:
-                return y
+            at_y = prove_program(program, ids, y)
+            if at_y.ok:
+                return at_y
     return None

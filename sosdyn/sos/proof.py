@@ -8,9 +8,12 @@ multipliers lambda_j of h_j = 0, every term of the identity
     e = source - sum_i sigma_i g_i - sum_j lambda_j h_j - sum_k z_k^T Q_k z_k        (*)
 
 is a product of at most three floats, so each coefficient e_a is computed with
-|fl(e_a) - e_a| <= gamma_(2 m_a + 6) sum |terms| (m_a terms; gamma_k = k u / (1 - k u), u the unit
+|fl(e_a) - e_a| <= gamma_(2 m_a + 8) sum |terms| (m_a terms; gamma_k = k u / (1 - k u), u the unit
 roundoff; Higham, *Accuracy and stability of numerical algorithms*, ch. 3). At the point:
 
+0. the coefficients of monomials no Gram product gives (a free multiplier's top terms) must vanish
+   exactly: the free decisions they involve are corrected in rational arithmetic (their floats
+   are the nearest, one more rounding in the bound), so the point proven is rational there;
 1. a multiplier block's rows of tiny diagonal are set to zero, and with lambda_min(S_i) < 0 it is
    raised to S_i + mu_i I on the rest (both changes join e); it must then be PSD (:func:`eig_lower`);
 2. the Gram rows off a *face* are set to zero (:func:`faces`: rows the polynomial forces to zero --
@@ -24,10 +27,12 @@ roundoff; Higham, *Accuracy and stability of numerical algorithms*, ch. 3). At t
    no kept product gives) must vanish exactly (checked in rational arithmetic);
 5. the constraint is proven when lambda_min(Q~_k) >= tau_k for every block, lambda_min bounded by
    :func:`eig_lower` (a Cholesky factor of Q~ - tI and its rounding bound);
-6. on a set that bounds a box |x_i| <= R_i (:func:`~.sets.variable_bounds` of the multipliers'
-   constraints), a residual on monomials no kept product gives is bounded there by
-   c = sum_a B_a R^a and the constant row carries it: lambda_min(Q~ - c e_0 e_0^T) >= tau gives
-   z^T (Q~ + E~) z >= c >= -e~_rest(x) on K (the old posterior's compact-set bound).
+6. a residual on a monomial x^a no kept product gives is dominated by the squares of the basis:
+   with a = sum_j lam_j 2 b_j (lam >= 0, sum 1, exact rationals from an LP vertex) the weighted
+   AM-GM inequality gives |x^a| <= sum_j lam_j z_j^2, so B_a lam_j comes off the diagonal entries
+   (:func:`dominated`); else, on a set that bounds a box |x_i| <= R_i (:func:`~.sets.variable_bounds`
+   of the multipliers' constraints), |e_a x^a| <= B_a R^a there and the constant row carries it:
+   lambda_min(Q~ - c e_0 e_0^T) >= tau, c = sum B_a R^a, gives z^T (Q~ + E~) z >= c on K.
 
 A constraint whose source polynomial is itself a rounding of an exact one (a change of variables,
 :func:`~.sets.substituted`) carries ``source_error()``: the bound of each coefficient's rounding,
@@ -43,30 +48,22 @@ scale), not proven. :func:`prove_program` applies all of this to a program at a 
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
 from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
+from scipy.optimize import linprog
 
-from ..poly import keys_to_exps, multiset_keys, unique_rows
+from ..poly import keys_to_exps
 from .conic import cvxpy_block_vars, positions
 from .constraints import Basis, PsdBlock
-from .sets import BasicSet, variable_bounds
-from .gram import (SQRT2, EXACT_LDL_MAX, absorb_residual, exact_sub, gram_form, matrix_to_svec, proven_min_eig,
-                   svec_pairs, svec_to_matrix)
+from .gram import (EXACT_LDL_MAX, SQRT2, absorb_residual, exact_solution, exact_sub, gram_form, matrix_to_svec,
+                   proven_min_eig, svec_pairs, svec_to_matrix)
+from .identity import (EPS, UNIT, Identity, block_matrix, entry_vector, exps_over, exact_residual, faces, gam,
+                       identity_of, residual, term_values, unreachable_rows)
 
-EPS = np.finfo(float).eps
-UNIT = EPS / 2
-FACES = (1e-9, 1e-7, 1e-5)   # relative Gram diagonals below which a row leaves the face (heuristic faces)
 CVXPY_TOL = 1e-9
 MULTIPLIER_FACE = 1e-9   # a multiplier row whose diagonal is below this x the largest is set to zero
-
-
-def gam(k):
-    """gamma_k = k u / (1 - k u): the relative error bound of k floating-point operations."""
-    ku = np.asarray(k, dtype=float) * UNIT
-    return ku / (1.0 - ku)
 
 
 def down(v: float) -> float:
@@ -107,242 +104,6 @@ def eig_lower(A: np.ndarray) -> float:
         if np.isfinite(r):
             return down(t - r)
     return -math.inf
-
-
-# ---------------------------------------------------------------------- the identity's structure
-def _cols(vars, sub) -> np.ndarray:
-    at = {v: i for i, v in enumerate(vars)}
-    return np.array([at[v] for v in sub], dtype=np.int64)
-
-
-@dataclass
-class Identity:
-    """The terms of (*) for one constraint, as arrays (values are read at each point).
-
-    Every term is ``c1 * c2 * factor`` on monomial ``mon`` (an index into the union of
-    monomials, keyed by :func:`~sosdyn.poly.multiset_keys`); ``factor`` is 1 (kind 0),
-    a decision value (kind 1, ``where`` = its id) or a Gram/multiplier matrix entry (kind 2,
-    ``where`` = its index in the entry vector: the svec-ordered entries Q_ij, i <= j, of the
-    blocks in ``blocks`` order, Gram blocks first). ``pair_mon[k]`` is the monomial of each
-    svec pair of Gram block k; ``square[k]`` that of each diagonal pair."""
-
-    mon: np.ndarray
-    c1: np.ndarray
-    c2: np.ndarray
-    kind: np.ndarray
-    where: np.ndarray
-    count: np.ndarray            # terms per monomial
-    blocks: list                 # (PsdBlock, size, offset into the entry vector, is Gram block)
-    pair_mon: list
-    n_mon: int
-    source_rows: np.ndarray      # the term range of the source polynomial's coefficients
-    other_terms: np.ndarray      # per monomial: terms that are not Gram-block terms
-    source_mask: np.ndarray      # the source coefficients (rows, 1 + ids) these terms cover
-    source_rc: tuple             # their (row, column), in term order
-    keys: np.ndarray             # the union of monomials (multiset keys)
-    radius: np.ndarray | None    # |x_i| <= radius_i on the constraint's set (None: not bounded)
-
-
-def _keys(exps, cols, width):
-    return multiset_keys(exps, cols, width)
-
-
-def build_identity(con) -> Identity:
-    """The :class:`Identity` of ``con`` (see the module docstring, (*))."""
-    vars = con.basis.vars
-    src = con.source.with_vars(vars)
-    grams = con.gram_blocks
-    mults = [m for m in con.multipliers if m.psd.role != "clique"]
-    eqm = con.eq_multipliers
-    degs = [int(src.exps.sum(axis=1).max(initial=0))]
-    degs += [2 * int(b.exps.sum(axis=1).max(initial=0)) for b, _ in grams]
-    degs += [2 * int(m.basis.exps.sum(axis=1).max(initial=0)) + m.constraint.degree for m in mults]
-    degs += [m.poly.degree + m.constraint.degree for m in eqm]
-    width = max(degs + [1])
-    keys, c1, c2, kind, where = [], [], [], [], []
-
-    def add(k, a, b, kd, w):
-        keys.append(k)
-        c1.append(np.asarray(a, dtype=float))
-        c2.append(np.asarray(b, dtype=float))
-        kind.append(np.full(len(k), kd, dtype=np.int8))
-        where.append(np.asarray(w, dtype=np.int64))
-
-    all_cols = np.arange(len(vars))
-    skeys = _keys(src.exps, all_cols, width)
-    rs, cs = np.nonzero(src.coef)
-    add(skeys[rs], src.coef[rs, cs], np.ones(rs.size), np.where(cs == 0, 0, 1),
-        np.where(cs == 0, -1, src.ids[np.maximum(cs - 1, 0)] if src.ids.size else -1))
-    n_source = len(keys[0])
-    blocks, pair_mon_keys, offset = [], [], 0
-    for basis, psd in grams:
-        i, j = svec_pairs(psd.size)
-        k = _keys(basis.exps[i] + basis.exps[j], _cols(vars, basis.vars), width)
-        add(k, np.where(i == j, -1.0, -2.0), np.ones(i.size), 2, offset + np.arange(i.size))
-        pair_mon_keys.append(k)
-        blocks.append((psd, psd.size, offset, True))
-        offset += i.size
-    n_gram_terms = sum(len(k) for k in keys)
-    for m in mults:
-        i, j = svec_pairs(m.psd.size)
-        g = m.constraint.with_vars(vars)
-        B = np.zeros((len(m.basis), len(vars)), dtype=np.int64)
-        B[:, _cols(vars, m.basis.vars)] = m.basis.exps
-        pairs = (B[i] + B[j])[:, None, :] + g.exps[None, :, :]
-        k = _keys(pairs.reshape(-1, len(vars)), all_cols, width)
-        w = np.where(i == j, -1.0, -2.0)[:, None] * np.ones(g.nterms)[None, :]
-        gc = np.ones(i.size)[:, None] * g.coef[:, 0][None, :]
-        add(k, w.ravel(), gc.ravel(), 2, (offset + np.arange(i.size))[:, None].repeat(g.nterms, 1).ravel())
-        blocks.append((m.psd, m.psd.size, offset, False))
-        offset += i.size
-    for m in eqm:
-        lam, h = m.poly.with_vars(vars), m.constraint.with_vars(vars)
-        r, c = np.nonzero(lam.coef)
-        exps = (lam.exps[r][:, None, :] + h.exps[None, :, :]).reshape(-1, len(vars))
-        cc = (-lam.coef[r, c])[:, None] * np.ones(h.nterms)[None, :]
-        hh = np.ones(r.size)[:, None] * h.coef[:, 0][None, :]
-        ids = np.where(c == 0, -1, lam.ids[np.maximum(c - 1, 0)] if lam.ids.size else -1)
-        add(_keys(exps, all_cols, width), cc.ravel(), hh.ravel(), 0, ids[:, None].repeat(h.nterms, 1).ravel())
-        kind[-1] = np.where(np.repeat(c, h.nterms) == 0, 0, 1).astype(np.int8)
-    allkeys = np.vstack(keys) if keys else np.zeros((0, width), dtype=np.int64)
-    U, inv = unique_rows(allkeys)
-    inv = np.asarray(inv).ravel()
-    n_mon = U.shape[0]
-    starts = np.cumsum([0] + [len(k) for k in keys])
-    pair_mon = []
-    for kb in range(len(grams)):
-        pair_mon.append(inv[starts[1 + kb]:starts[2 + kb]])
-    other = np.ones(inv.size, dtype=bool)
-    other[n_source:n_gram_terms] = False
-    mask = np.zeros(src.coef.shape, dtype=bool)
-    mask[rs, cs] = True
-    K = BasicSet(ineqs=[m.constraint for m in mults], eqs=[m.constraint for m in eqm])
-    radius = variable_bounds(K, vars) if K.ineqs or K.eqs else None
-    return Identity(inv, np.concatenate(c1), np.concatenate(c2), np.concatenate(kind), np.concatenate(where),
-                    np.bincount(inv, minlength=n_mon), blocks, pair_mon, n_mon, np.arange(n_source),
-                    np.bincount(inv[other], minlength=n_mon), mask, (rs, cs), U, radius)
-
-
-_IDENTITIES: OrderedDict = OrderedDict()
-_KEPT = 128
-
-
-def identity_of(con) -> Identity:
-    """:func:`build_identity`, remembered while the constraint's monomials, blocks and the pattern
-    of its non-zero source coefficients stay (a family re-solved with new weights keeps its
-    arrays); the source's coefficients themselves are read now (:func:`current`)."""
-    src = con.source.with_vars(con.basis.vars)
-    parts = (src.exps, src.ids, *[psd for _, psd in con.gram_blocks], *[m.psd for m in con.multipliers],
-             *[m.poly for m in con.eq_multipliers])
-    key = id(con)
-    hit = _IDENTITIES.get(key)
-    if hit is not None and hit[0] is con and len(hit[1]) == len(parts) and all(a is b for a, b in zip(hit[1], parts)) \
-            and hit[2].source_mask.shape == src.coef.shape and not ((src.coef != 0) & ~hit[2].source_mask).any():
-        _IDENTITIES.move_to_end(key)
-        return current(hit[2], src)
-    out = build_identity(con)
-    _IDENTITIES[key] = (con, parts, out)
-    if len(_IDENTITIES) > _KEPT:
-        _IDENTITIES.popitem(last=False)
-    return out
-
-
-def current(ident: Identity, src) -> Identity:
-    """``ident`` with the source terms' coefficients read from ``src`` (same arrays, new numbers)."""
-    c1 = ident.c1.copy()
-    c1[ident.source_rows] = src.coef[ident.source_rc]
-    return Identity(**{**ident.__dict__, "c1": c1})
-
-
-# ---------------------------------------------------------------------- evaluation at a point
-def entry_vector(ident: Identity, at) -> np.ndarray:
-    """The svec-ordered matrix entries Q_ij (i <= j) of every block of ``ident`` at the point."""
-    parts = []
-    for psd, size, _, _ in ident.blocks:
-        i, j = svec_pairs(size)
-        parts.append(svec_to_matrix(at(psd.ids), size)[i, j])
-    return np.concatenate(parts) if parts else np.zeros(0)
-
-
-def term_values(ident: Identity, y_of, entries) -> np.ndarray:
-    """The value of every term: c1 c2 factor (module docstring of :class:`Identity`)."""
-    v = ident.c1 * ident.c2
-    lin = ident.kind == 1
-    v[lin] = v[lin] * y_of(ident.where[lin])
-    gram = ident.kind == 2
-    v[gram] = v[gram] * entries[ident.where[gram]]
-    return v
-
-
-def residual(ident: Identity, values, source_error=None) -> tuple[np.ndarray, np.ndarray]:
-    """(fl(e), B) with |e_a| <= B_a for the exact e of these term values' factors."""
-    e = np.bincount(ident.mon, weights=values, minlength=ident.n_mon)
-    mag = np.bincount(ident.mon, weights=np.abs(values), minlength=ident.n_mon)
-    bound = np.abs(e) + gam(2 * ident.count + 6) * mag
-    if source_error is not None:
-        bound = bound + source_error * (1 + 4 * EPS)
-    return e, bound
-
-
-def exact_residual(ident: Identity, a: int, y_of, entries) -> Fraction:
-    """e_a in rational arithmetic (each term's factors are floats, so exact)."""
-    out = Fraction(0)
-    for t in np.flatnonzero(ident.mon == a):
-        f = Fraction(1) if ident.kind[t] == 0 else Fraction(float(
-            y_of(ident.where[t:t + 1])[0] if ident.kind[t] == 1 else entries[ident.where[t]]))
-        out += Fraction(float(ident.c1[t])) * Fraction(float(ident.c2[t])) * f
-    return out
-
-
-# ---------------------------------------------------------------------- faces
-def forced_zero_rows(ident: Identity, k: int, kept: list) -> np.ndarray:
-    """Rows of Gram block k that every exact certificate sets to zero, given the kept rows of
-    all blocks: z_j^2 is produced by no other kept product of any block and no other term of (*)
-    lands on it (its coefficient there is 0 whatever the decisions), so Q_jj = 0 and, Q being
-    PSD, the whole row; iterated by the caller."""
-    psd_size = ident.blocks[k][1]
-    i, j = svec_pairs(psd_size)
-    mon = ident.pair_mon[k]
-    producers = np.zeros(ident.n_mon, dtype=np.int64)
-    for b, mask in enumerate(kept):
-        bi, bj = svec_pairs(ident.blocks[b][1])
-        on = mask[bi] & mask[bj]
-        np.add.at(producers, ident.pair_mon[b][on], 1)
-    diag = np.flatnonzero(i == j)
-    square = mon[diag]
-    alone = (producers[square] == 1) & (ident.other_terms[square] == 0) & kept[k][i[diag]]
-    return i[diag][alone]
-
-
-def faces(ident: Identity, Qs, zeros) -> list:
-    """Kept-row masks of the Gram blocks, one list per face tried, each a sound restriction (a
-    certificate on a face is a certificate): the rows every exact certificate sets to zero
-    removed (:func:`forced_zero_rows`, iterated); then also the rows whose square z_j^2 no other
-    term of (*) lands on (its coefficient in the polynomial is 0); then the rows whose diagonal
-    is below rel x the block's largest, rel in FACES. The constant monomial is always kept."""
-    kept = [np.ones(Q.shape[0], dtype=bool) for Q in Qs]
-    changed = True
-    while changed:
-        changed = False
-        for k in range(len(Qs)):
-            rows = forced_zero_rows(ident, k, kept)
-            if rows.size:
-                kept[k][rows] = False
-                changed = True
-    zero_square = []
-    for k, Q in enumerate(Qs):
-        i, j = svec_pairs(Q.shape[0])
-        square = ident.pair_mon[k][i == j]
-        zero_square.append(kept[k] & (ident.other_terms[square] > 0))
-    out = [kept, zero_square] + [[m & (np.diag(Q) > rel * float(np.diag(Q).max(initial=0.0)))
-                                  for m, Q in zip(kept, Qs)] for rel in FACES]
-    unique = []
-    for face in out:
-        for m, z in zip(face, zeros):
-            m[z] = True
-        if not any(all(np.array_equal(a, b) for a, b in zip(face, seen)) for seen in unique):
-            unique.append(face)
-    return unique
 
 
 # ---------------------------------------------------------------------- one constraint
@@ -394,11 +155,11 @@ def _raise_multipliers(ident: Identity, entries: np.ndarray) -> str:
         if gram or not size:
             continue
         i, j = svec_pairs(size)
-        S = _matrix(entries, off, size)
+        S = block_matrix(entries, off, size)
         d = np.diag(S)
         keep = d > MULTIPLIER_FACE * float(np.abs(d).max(initial=0.0))
         entries[off:off + i.size][~(keep[i] & keep[j])] = 0.0
-        S = _matrix(entries, off, size)[np.ix_(keep, keep)]
+        S = block_matrix(entries, off, size)[np.ix_(keep, keep)]
         lam = eig_lower(S)
         mu = 0.0
         for _ in range(8):
@@ -414,15 +175,27 @@ def _raise_multipliers(ident: Identity, entries: np.ndarray) -> str:
     return ""
 
 
-def _matrix(entries, off, size) -> np.ndarray:
-    i, j = svec_pairs(size)
-    Q = np.zeros((size, size))
-    Q[i, j] = entries[off:off + i.size]
-    Q[j, i] = entries[off:off + i.size]
-    return Q
+def settle_decisions(ident, at, entries, exact: dict, place) -> str:
+    """Correct the free decisions in rational arithmetic so that the coefficients of the monomials no
+    Gram product gives vanish exactly (step 0 of the module docstring; ``exact`` collects the
+    rational values, ``place(d, value)`` writes their floats into the point); a reason if they
+    cannot."""
+    rows, start = unreachable_rows(ident, at, entries, exact)
+    rows = [(c, lin) for c, lin in rows if c or lin]
+    if not rows:
+        return ""
+    if any(not lin and c for c, lin in rows):
+        return "a monomial no Gram product gives has a fixed non-zero coefficient"
+    change = exact_solution(rows, start)
+    if change is None:
+        return "the coefficients of the monomials no Gram product gives cannot all vanish"
+    for d, v in change.items():
+        exact[d] = start[d] + v
+        place(d, exact[d])
+    return ""
 
 
-def prove_constraint(con, at, prefer=None) -> ConstraintProof:
+def prove_constraint(con, at, prefer=None, exact=None, place=None) -> ConstraintProof:
     """Prove ``con`` at the point (``at(ids)``: the values of decision ids), trying each face of
     :func:`faces` (after ``prefer``, a list of kept masks of its Gram blocks, when given); the
     first proof wins, else the attempt with the largest margin is returned (its numbers guide the
@@ -438,14 +211,17 @@ def prove_constraint(con, at, prefer=None) -> ConstraintProof:
         src_err = np.bincount(ident.mon[ident.source_rows], weights=w, minlength=ident.n_mon)
     base = entry_vector(ident, at)
     why = _raise_multipliers(ident, base)
+    if not why and exact is not None:
+        why = settle_decisions(ident, at, base, exact, place)
     if why:
         return ConstraintProof(False, reason=f"constraint {con.name!r}: {why}")
     grams = [(size, off) for _, size, off, g in ident.blocks if g]
-    Qs = [_matrix(base, off, size) for size, off in grams]
+    Qs = [block_matrix(base, off, size) for size, off in grams]
     zeros = [np.flatnonzero(~basis.exps.any(axis=1))[:1] for basis, _ in con.gram_blocks]
+    block_exps = [exps_over(basis, con.basis.vars) for basis, _ in con.gram_blocks]
     best = None
     for kept in ([prefer] if prefer is not None else []) + faces(ident, Qs, zeros):
-        proof = _prove_on_face(con.name, ident, base, grams, kept, zeros, at, src_err)
+        proof = _prove_on_face(con.name, ident, base, grams, kept, zeros, at, src_err, block_exps, exact)
         if proof.ok:
             return proof
         if best is None or (proof.lam and (not best.lam or proof.margin > best.margin)):
@@ -461,7 +237,29 @@ def _bound_of(ident, entries, at, src_err, owner, N, n_blocks):
     return e, bound, np.sqrt(tau2) * (1 + float(gam(ident.n_mon + 8)))
 
 
-def _prove_on_face(name, ident, base, grams, kept, zeros, at, src_err) -> ConstraintProof:
+def dominated(exps, block_exps, kept):
+    """(block k, its kept rows j, weights lam_j >= 0 summing to 1) with sum_j lam_j 2 b_j = exps
+    exactly (rational lam from an LP vertex, checked in exact arithmetic), so |x^a| <= sum_j lam_j
+    z_j(x)^2 everywhere by the weighted AM-GM inequality; None if no block's kept squares have x^a in
+    their convex hull."""
+    for k, (B, mask) in enumerate(zip(block_exps, kept)):
+        rows = np.flatnonzero(mask)
+        if not rows.size:
+            continue
+        twice = 2 * B[rows]
+        res = linprog(np.zeros(rows.size), A_eq=np.vstack([twice.T, np.ones(rows.size)]),
+                      b_eq=np.append(exps, 1.0).astype(float), bounds=(0, None), method="highs")
+        if res.status != 0:
+            continue
+        lam = [Fraction(float(v)).limit_denominator(10**6) for v in res.x]
+        if sum(lam) == 1 and all(sum(lk * int(t[c]) for lk, t in zip(lam, twice)) == int(exps[c])
+                                 for c in range(exps.size)) and min(lam) >= 0:
+            on = [j for j, lk in enumerate(lam) if lk]
+            return k, np.searchsorted(rows, rows[on]), np.array([math.nextafter(float(lam[j]), math.inf) for j in on])
+    return None
+
+
+def _prove_on_face(name, ident, base, grams, kept, zeros, at, src_err, block_exps, exact=None) -> ConstraintProof:
     entries = base.copy()
     owner = np.full(ident.n_mon, -1, dtype=np.int64)
     N = np.zeros(ident.n_mon)
@@ -494,21 +292,30 @@ def _prove_on_face(name, ident, base, grams, kept, zeros, at, src_err) -> Constr
             entries[off + z * (z + 1) // 2 + z] += need[k] + spare
         e, bound, tau = _bound_of(ident, entries, at, src_err, owner, N, len(grams))
         need = _needs(entries, grams, kept, zero, tau)
-    gap = 0.0                                           # step 6 of the module docstring
+    A = [block_matrix(entries, off, size)[np.ix_(kept[k], kept[k])] for k, (size, off) in enumerate(grams)]
+    gap, cuts = 0.0, False                              # step 6 of the module docstring
     for a in np.flatnonzero((owner < 0) & (bound > 0)):
-        if exact_residual(ident, int(a), at, entries) != 0:
-            if ident.radius is None or not shared:
-                return ConstraintProof(False, reason=(
-                    f"constraint {name!r}: a residual {e[a]:.2e} on a monomial that no kept Gram "
-                    "product gives (it cannot be absorbed, and the set bounds no box)"))
-            exps = keys_to_exps(ident.keys[a:a + 1], ident.radius.size)[0]
+        if exact_residual(ident, int(a), at, entries, exact) == 0:
+            continue
+        exps = keys_to_exps(ident.keys[a:a + 1], len(block_exps[0][0]) if block_exps[0].size else 0)[0]
+        spread = dominated(exps, block_exps, kept)
+        if spread is not None:                          # |x^a| <= sum_j lam_j z_j^2 (weighted AM-GM)
+            k, rows, lam = spread
+            A[k][rows, rows] -= float(bound[a]) * lam * (1 + 1e-12)
+            cuts = True
+        elif ident.radius is not None and shared:
             gap += float(bound[a]) * float(np.prod(ident.radius ** exps))
-    A = [_matrix(entries, off, size)[np.ix_(kept[k], kept[k])] for k, (size, off) in enumerate(grams)]
+        else:
+            return ConstraintProof(False, reason=(
+                f"constraint {name!r}: a residual {e[a]:.2e} on a monomial that no kept Gram product "
+                "gives and no convex combination of their squares dominates (and the set bounds no box)"))
     if gap:
         k0 = shared[0]
-        cut = gap * (1 + 1e-12) + 4 * EPS * abs(A[k0][zero[k0], zero[k0]])
-        A[k0][zero[k0], zero[k0]] -= cut
-        need[k0] += cut
+        A[k0][zero[k0], zero[k0]] -= gap * (1 + 1e-12) + 4 * EPS * abs(A[k0][zero[k0], zero[k0]])
+    if gap or cuts:
+        need = [math.nan if zero[k] < 0 else constant_need(
+            A[k], zero[k], float(tau[k]) * (1 + 1e-9) + 16 * (A[k].shape[0] + 4) * EPS * float(np.linalg.norm(A[k])))
+            for k in range(len(grams))]
     lam = [eig_lower(Q) for Q in A]
     ok = all(lk >= tk for lk, tk in zip(lam, tau))
     worst = int(np.argmin([lk - tk for lk, tk in zip(lam, tau)])) if grams else 0
@@ -525,7 +332,7 @@ def _needs(entries, grams, kept, zero, tau) -> list:
         if zero[k] < 0:
             out.append(math.nan)
             continue
-        A = _matrix(entries, off, size)[np.ix_(kept[k], kept[k])]
+        A = block_matrix(entries, off, size)[np.ix_(kept[k], kept[k])]
         slack = 16 * (A.shape[0] + 4) * EPS * float(np.linalg.norm(A))
         out.append(constant_need(A, zero[k], float(tau[k]) * (1 + 1e-9) + slack))
     return out
@@ -534,12 +341,14 @@ def _needs(entries, grams, kept, zero, tau) -> list:
 # ---------------------------------------------------------------------- the whole program
 @dataclass
 class PointProof:
-    """:func:`prove_program`'s outcome: ``ok``; the proof of every SOS constraint (by name) and
-    the reasons of what failed."""
+    """:func:`prove_program`'s outcome: ``ok``; the proof of every SOS constraint (by name), the
+    reasons of what failed; the point proven (``x``; ``exact``: the decisions it holds as rationals)."""
 
     ok: bool
     constraints: dict
     reasons: list
+    x: np.ndarray | None = None          # the point proven: x with the corrected decisions' floats
+    exact: dict = field(default_factory=dict)   # decision id -> its rational value (step 0)
 
     def summary(self) -> str:
         return "; ".join(self.reasons) if self.reasons else "every constraint proven"
@@ -580,11 +389,15 @@ def prove_program(program, ids, x, prefer=None) -> PointProof:
     """Prove every constraint of ``program`` at the decision values x (ordered as ``ids``);
     ``prefer`` maps a constraint's name to kept masks of its Gram blocks, tried first."""
     if not np.isfinite(x).all():
-        return PointProof(False, {}, ["the point has non-finite entries"])
+        return PointProof(False, {}, ["the point has non-finite entries"], x)
+    x, exact = x.copy(), {}
     at = lambda block_ids: x[positions(ids, np.asarray(block_ids, dtype=np.int64))]  # noqa: E731
+
+    def place(d, value):
+        x[positions(ids, np.array([d], dtype=np.int64))] = float(value)
     proofs, reasons, owned = {}, [], set()
     for con in program.sos_constraints:
-        proof = prove_constraint(con, at, (prefer or {}).get(con.name))
+        proof = prove_constraint(con, at, (prefer or {}).get(con.name), exact, place)
         proofs[con.name] = proof
         if not proof.ok:
             reasons.append(proof.reason)
@@ -603,7 +416,7 @@ def prove_program(program, ids, x, prefer=None) -> PointProof:
     ok, why = cvxpy_ok(program, ids, x)
     if not ok:
         reasons.append(why)
-    return PointProof(not reasons, proofs, reasons)
+    return PointProof(not reasons, proofs, reasons, x, exact)
 
 
 def certificate_point(program, ids, x, judged: PointProof) -> np.ndarray:

@@ -58,12 +58,14 @@ def unverified_hint(solver: str) -> str:
 class Proof:
     """Where a Solution's numbers are read: ``x`` (ordered as the solution's ``data.ids``), how it
     was found (``method``), what the earlier remedies found (``tried``); ``exact`` is the
-    :class:`~.rigorous.Bound` when the exact certificate gave it."""
+    :class:`~.rigorous.Bound` when the exact certificate gave it, ``judged`` the floating-point
+    proof at x (from which :func:`certified` reads the Gram matrices to hand out)."""
 
     x: np.ndarray
     method: str
     tried: list = field(default_factory=list)
     exact: object = None
+    judged: object = None          # the judge's verdict at x (its certificates: :func:`certified`)
 
 
 def snap(program, ids):
@@ -104,12 +106,14 @@ class Pending:
     tried: list
 
 
-def certified(program, ids, y, judged) -> np.ndarray:
-    """The proven point y with its blocks replaced by the certificates proven there
+def certified(program, ids, proof: Proof) -> np.ndarray:
+    """The proven point with its blocks replaced by the certificates proven there
     (:func:`~.proof.certificate_point`: PSD multipliers, the absorbed Gram matrices), when that
-    point is proven too (it is, up to rounding), else y."""
-    z = certificate_point(program, ids, y, judged)
-    return z if prove_program(program, ids, z).ok else y
+    point is proven too (it is, up to rounding), else the point itself."""
+    if proof.judged is None:
+        return proof.x
+    z = certificate_point(program, ids, proof.x, proof.judged)
+    return z if prove_program(program, ids, z).ok else proof.x
 
 
 def cheap_proof(solution):
@@ -119,11 +123,11 @@ def cheap_proof(solution):
     x = snap(program, ids)(solution.x)
     judged = prove_program(program, ids, x)
     if judged.ok:
-        return Proof(certified(program, ids, x, judged), "as solved")
+        return Proof(judged.x, "as solved", judged=judged)
     tried = [f"as solved: {judged.summary()}"]
     moved = posterior_point(program, ids, x, judged)
     if moved is not None:
-        return Proof(certified(program, ids, moved, prove_program(program, ids, moved)), "posterior correction", tried)
+        return Proof(moved.x, "posterior correction", tried, judged=moved)
     tried.append("posterior correction: no decision of the objective makes every failing constraint "
                  "more feasible by a sum of squares" if program.objective else
                  "posterior correction: no objective to move")
@@ -144,19 +148,20 @@ def full_proof(solution, pending: Pending) -> Proof:
                     found.append(kernel_bound(program, solution.data, solution.x, keep, tol, squares))
                 except UnverifiedSolutionError as exc:
                     why.append(f"{tol:.0e}{', zero squares' if squares else ''}: {exc.detail}")
-                    if "coefficient equations" in exc.detail:       # too large at any tolerance
-                        break
+                    if "coefficient equations" in exc.detail or "exact form" in exc.detail:
+                        break                                       # the same at any tolerance
                 if found and min(found[-1].margins.values(), default=1.0) > 0:
                     break                         # a face with a margin: the one to report
             if found:
                 bound = max(found, key=lambda b: min(b.margins.values(), default=1.0))
                 return Proof(bound.x, "exact on the face of the solver's kernel", tried, bound)
             tried.append(f"exact on the kernel's face{' (constant kept)' if keep else ''}: {'; '.join(why)}")
+            if "exact form" in why[-1]:
+                break
     y, how, notes = tightened_point(solution, pending.judged, snap(program, solution.data.ids))
     tried += notes
     if y is not None:
-        return Proof(certified(program, solution.data.ids, y, prove_program(program, solution.data.ids, y)), how,
-                     tried)
+        return Proof(y.x, how, tried, judged=y)
     if small:
         try:
             bound = prove_bound(program, solution.data, solution.x, QUICK_TIGHTENINGS)

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from ..errors import (InfeasibleError, InputError, ResourceLimitError, SolverError, UnboundedError,
+from ..errors import (InfeasibleError, InputError, SolverError, UnboundedError,
                       UnverifiedSolutionError)
 from ..poly import PolyMatrix, Polynomial
 from .conic import assign_at, cvxpy_block_vars, objective_value, positions
@@ -27,8 +27,9 @@ from .decomposition import SOSDecomposition, sos_decomposition
 from .gram import svec_to_matrix
 from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
-from .proof import down, gam
-from .proven import Pending, Proof, cheap_proof, exact_bound, full_proof, refusal, unverified_hint
+from .identity import gam
+from .proof import down
+from .proven import Pending, Proof, certified, cheap_proof, exact_bound, full_proof, refusal, unverified_hint
 from .rigorous import ANSWERED, Bound
 from .verification import VerificationReport, verify_certificate
 
@@ -100,6 +101,7 @@ class Solution:
         self._bound = None
         self._bound_error = None
         self._proof = None             # the Proof, or the UnverifiedSolutionError of its search
+        self._certified = None         # the point handed out (proven, with its certificates)
 
     # ------------------------------------------------------------------ status
     @property
@@ -201,8 +203,16 @@ class Solution:
         return self.x[positions(self.data.ids, np.asarray(ids, dtype=np.int64))]
 
     def _point(self) -> np.ndarray:
-        """The decision vector handed out: the proven one (exactly proven in rigorous mode)."""
-        return self.rigorous_bound().x if self.rigorous else self.proof.x
+        """The decision vector handed out: the proven one (exactly proven in rigorous mode), its
+        blocks the certificates proven there (:func:`~.proven.certified`; read once, while the
+        program is the one solved, else the proven point as it is)."""
+        if self.rigorous:
+            return self.rigorous_bound().x
+        proof = self.proof
+        if self._certified is None:
+            unchanged = self.program_version == getattr(self.program, "version", None)
+            self._certified = certified(self.program, self.data.ids, proof) if unchanged else proof.x
+        return self._certified
 
     def _assign(self, p: Polynomial) -> Polynomial:
         return assign_at(p, self.data.ids, self._point())

@@ -21,7 +21,8 @@ import numpy as np
 from ..errors import ResourceLimitError
 from .gram import svec_pairs, svec_to_matrix
 from .posterior import posterior_point
-from .proof import entry_vector, identity_of, prove_program, term_values
+from .identity import entry_vector, identity_of, term_values
+from .proof import prove_program
 from .rigorous import ANSWERED
 
 MARGINS = (1e-12, 1e-10, 1e-8, 1e-6)      # Q[K, K] >= eps diag(Q*) on each kept row (:func:`margins`), in order
@@ -114,14 +115,17 @@ def tightened_solve(solution, kept, rel, scs=True):
     return None
 
 
-def interpolate(program, ids, x, y, snap, prefer=None):
-    """(theta, the point) for the smallest theta found in (0, 1] with snap((1 - theta) x + theta y)
-    proven, directly or after the posterior correction (y itself is)."""
+def interpolate(program, ids, x, at_y, snap, prefer=None):
+    """(theta, the judge's proof there) for the smallest theta found in (0, 1] with
+    snap((1 - theta) x + theta y) proven, directly or after the posterior correction (``at_y``: the
+    proof at y)."""
+    y = at_y.x
+
     def proven(theta):
         point = snap((1 - theta) * x + theta * y)
         judged = prove_program(program, ids, point, prefer)
-        return point if judged.ok else posterior_point(program, ids, point, judged)
-    fail, ok, best = 0.0, 1.0, y
+        return judged if judged.ok else posterior_point(program, ids, point, judged)
+    fail, ok, best = 0.0, 1.0, at_y
     for k in (30, 24, 18, 12, 8, 4, 2, 1):
         point = proven(2.0 ** -k)
         if point is not None:
@@ -139,8 +143,8 @@ def interpolate(program, ids, x, y, snap, prefer=None):
 
 
 def tightened_point(solution, judged, snap):
-    """(a proven point, how it was found) from a tightened re-solve (module docstring), else
-    (None, what was tried)."""
+    """(the judge's proof at a proven point, how it was found, notes) from a tightened re-solve
+    (module docstring), else (None, "", what was tried)."""
     program, ids = solution.program, solution.data.ids
     kept, prefer = kept_rows(program, judged)
     notes, scs = [], True
@@ -161,8 +165,8 @@ def tightened_point(solution, judged, snap):
             if moved is None:
                 notes.append(f"held above zero ({rel:.0e}{', SCS' if by_scs else ''}): {at_ys.summary()}")
                 continue
-            ys = moved
-        theta, y = interpolate(program, ids, solution.x, ys, snap, prefer)
+            at_ys = moved
+        theta, y = interpolate(program, ids, solution.x, at_ys, snap, prefer)
         return y, (f"held above zero ({rel:.0e}{', by SCS' if by_scs else ''}), then back towards the "
                    f"solver's point (theta = {theta:.2g})"), notes
     return None, "", notes
