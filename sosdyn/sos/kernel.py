@@ -6,10 +6,11 @@ of Beale's function is singular along (0, 1, 1, 1, 1) in the basis (1, x, xy, xy
 matrix of the SOS matrix [[1 + x^2, x y^2], [x y^2, 1 + y^4]] = v v^T + I along
 y_0 x - y_1 y^2; the last clique of the chained Rosenbrock function along x_n - x_(n-1)^2. The
 solver's Gram matrix Q shows these directions as its (numerical) kernel. Here each block's
-kernel is read in rational numbers (the echelon form of its eigenvectors of eigenvalue below
-``tol`` x the largest, tol in KERNEL_TOLS, entries rounded to small denominators, at most ROUNDING from the floats: an interior-point
-solver approaches its face only to about the square root of its tolerance),
-and the block restricted to the face Q = U R U^T, U a rational basis of the kernel's orthogonal
+kernel is read in rational numbers: the reduced echelon form of its eigenvectors of eigenvalue
+below ``tol`` x the largest (tol in KERNEL_TOLS), by complete pivoting -- each pivot the largest
+entry left, so the solver's noise is never divided by a small one -- with entries rounded to
+small denominators, at most ROUNDING from the floats (an interior-point solver approaches its
+face only to about the square root of its tolerance); and the block restricted to the face Q = U R U^T, U a rational basis of the kernel's orthogonal
 complement (Permenter & Parrilo's facial reduction with the solver's kernel as the certificate
 candidate). The coefficient matching over the R's and the free decisions is then solved exactly:
 an exact rational correction of the solver's numbers rounded to a grid (GRID), on unknowns
@@ -42,6 +43,7 @@ DENOMINATOR = 1000       # largest denominator of a kernel vector's entries
 ROUNDING = 1e-3          # how far the floats' echelon form may be from its rounding (an interior-point
 #                          solver's face is known to about the square root of its tolerance)
 MAX_ROWS = 400           # coefficient equations up to which the exact system is solved
+SPAN_TOL = 1e-2         # singular values of the kernel's span below this are the solver's noise
 GRID = 2.0**-40          # the solver's numbers are rounded to this grid (relative) first: short rationals
 
 
@@ -62,30 +64,29 @@ def rational_face(Q, keep_row=None, tol=1e-7, zero_rows=()):
     w, V = np.linalg.eigh(Q)
     top = max(float(w.max(initial=0.0)), 0.0)
     K = V[:, w <= tol * top] if top > 0 else V
-    if len(zero_rows):
-        K = np.hstack([K, np.eye(n)[:, list(zero_rows)]])
+    if len(zero_rows):              # an orthonormal basis of K and the rows: one K holds already
+        u, s, _ = np.linalg.svd(np.hstack([K, np.eye(n)[:, list(zero_rows)]]), full_matrices=False)
+        K = u[:, s > SPAN_TOL]      # (to the solver's accuracy) adds no direction
     if keep_row is not None and K.shape[1]:
         _, s, vt = np.linalg.svd(K[keep_row:keep_row + 1, :])
         rank = int((s > 1e-9).sum())
         K = K @ vt[rank:].T
     if not K.shape[1]:
         return [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
-    R = K.T.copy()                              # its echelon form, pivots in basis order
-    pivots, row = [], 0
-    for col in range(n):
-        if row == R.shape[0]:
-            break
-        k = row + int(np.argmax(np.abs(R[row:, col])))
-        if abs(R[k, col]) < 1e-6:
-            continue
+    R = K.T.copy()                              # its reduced echelon form, complete pivoting
+    pivots = []
+    for row in range(R.shape[0]):
+        rest = np.abs(R[row:]).copy()
+        rest[:, pivots] = 0.0
+        k, col = np.unravel_index(int(np.argmax(rest)), rest.shape)
+        k += row
         R[[row, k]] = R[[k, row]]
         R[row] /= R[row, col]
         others = np.arange(R.shape[0]) != row
         R[others] -= np.outer(R[others, col], R[row])
-        pivots.append(col)
-        row += 1
-    E = [[Fraction(float(v)).limit_denominator(DENOMINATOR) for v in r] for r in R[:row]]
-    if max(abs(float(e) - v) for r, fr in zip(R[:row], E) for e, v in zip(fr, r)) > ROUNDING:
+        pivots.append(int(col))
+    E = [[Fraction(float(v)).limit_denominator(DENOMINATOR) for v in r] for r in R]
+    if max(abs(float(e) - v) for r, fr in zip(R, E) for e, v in zip(fr, r)) > ROUNDING:
         return None
     free = [c for c in range(n) if c not in pivots]
     U = [[Fraction(0)] * len(free) for _ in range(n)]

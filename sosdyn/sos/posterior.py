@@ -28,8 +28,8 @@ import numpy as np
 from ..poly import Polynomial
 from .conic import cvxpy_block_vars, positions
 from .gram import svec_pairs
-from .objective import QuadraticForm, is_cvxpy
 from .identity import EPS
+from .objective import QuadraticForm, is_cvxpy
 from .proof import prove_program
 
 STEPS = 8          # judged attempts along one direction, each step a little longer
@@ -127,7 +127,7 @@ def _is_constant(proof, a) -> bool:
 
 
 def moved_point(program, ids, x, judged, t: int):
-    """(position of t, its new value) after the step every constraint needs, or None when t cannot
+    """(position of t, the sign of its move, the step) every constraint needs, or None when t cannot
     help: a failing constraint without t, or one whose H_c is not PSD."""
     step, sign = 0.0, 0.0
     for con in program.sos_constraints:
@@ -140,6 +140,10 @@ def moved_point(program, ids, x, judged, t: int):
             return None
         h = derivative(proof, t)
         on = np.flatnonzero(h)
+        if not on.size:                     # t cancels in this identity: it must hold already
+            if not proof.ok:
+                return None
+            continue
         s = 1.0 if h[on[0]] > 0 else -1.0
         if sign and s != sign:
             return None

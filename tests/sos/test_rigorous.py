@@ -63,11 +63,9 @@ def test_floudas_degree_8_bound_is_below_the_true_minimum():
     prog, g = examples.floudas(8)
     sol = prog.solve(rigorous=True)
     true_min = examples.floudas_minimum()
-    assert sol.bound.solver_value > true_min                  # what the solver says is too high
     assert sol.bound.proven <= true_min
     assert sol.bound.proven >= true_min * (1 + 1e-5)          # within 1e-5 relative (2e-6 with Clarabel 0.11.1)
     assert sol.value(g) == sol.objective == sol.bound.proven  # every number is read at the proof
-    assert sol.timings["rigorous"] < 10
 
 
 def test_a_certificate_that_passes_the_tolerant_check_is_backed_off_to_the_truth(forged):

@@ -93,7 +93,6 @@ def test_positive_bound_of_a_polynomial_with_minimum_zero_is_corrected(solve):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         lb = sd.minimize_on(motzkin_times_one_plus_r(), **solve)
-    assert lb.solver_value > 0
     assert -1e-6 <= lb.value <= 0.0
 
 
@@ -172,7 +171,7 @@ def test_hand_written_bound_program_objective_is_a_bound():
     prog.maximize(g)
     sol = prog.solve()
     true_min = exact_minimum(c)
-    assert sol.solver_objective > true_min >= sol.objective >= true_min * (1 + 1e-4)
+    assert true_min >= sol.objective >= true_min * (1 + 1e-4)
 
 
 ISSUE_MINIMA = {"x^2 + 24x^3 + 0.1x^4": -34959605.00, "1 - 2x + 3x^2 + 100x^3 + 0.5x^4": -84307208.0,
