@@ -96,6 +96,11 @@ def broyden(n):
     return sum(((3 - 2 * xs[i]) * xs[i] - xs[i - 1] - 2 * xs[i + 1] + 1) ** 2 for i in range(1, n + 1))
 
 
+def rosenbrock(n):
+    xs = sd.variables(" ".join(f"x{i}" for i in range(n)))
+    return sum(100 * (xs[i + 1] - xs[i] ** 2) ** 2 + (1 - xs[i]) ** 2 for i in range(n - 1))
+
+
 def chain_sum(n=12):
     xs = sd.variables(" ".join(f"x{i}" for i in range(n)))
     lb = sd.minimize_on(sum(xs), sd.BasicSet(ineqs=[1 - xs[i]**2 - xs[i + 1]**2 for i in range(n - 1)]), degree=2)
@@ -129,6 +134,8 @@ ROWS = {**{f"x^2+24x^3+0.1x^4: {k}": (lambda w=w: bound_program(w), P1_MIN, "low
         "the same, SCS": (lambda: sd.minimize_on(SHIFTED, solver="SCS"), 3.0, "lower", False),
         "Broyden tridiagonal n = 40, correlative": (lambda: sd.minimize_on(broyden(40), sparsity="correlative"),
                                                     0.0, "lower", False),
+        "chained Rosenbrock n = 20, correlative (minimiser x = 1)": (
+            lambda: sd.minimize_on(rosenbrock(20), sparsity="correlative"), 0.0, "lower", True),
         "min x, unit disc and y >= 1/2 (atoms)": (disc_cut, -math.sqrt(3) / 2, "lower", True),
         "min sum x_i, x_i^2 + x_(i+1)^2 <= 1, n = 12 (atoms)": (chain_sum, -6 * math.sqrt(2), "lower", True),
         "v v^T + I is an SOS matrix (1 = verified)": (vv_t, 1.0, "equal", True),

@@ -18,6 +18,12 @@ solve and at every degree:
   :func:`~.sets.substituted`: exact coefficients rounded, the rounding subtracted from f and
   added to every g_i, so the bound stays a bound of the original problem); ``LowerBound.minimizers``
   maps the points back;
+* **balanced**: otherwise, when the coefficients of f and of K's polynomials span many orders of
+  magnitude that a change of variables x = 2^k u evens out (:func:`balancing`: least squares on
+  log2 |c_a| + a . k, each polynomial its own level; taken when it narrows f's spread by
+  BALANCE_GAIN bits), the program is solved for f(2^k u) on the pulled-back set -- the same
+  problem, its coefficients scaled exactly by powers of two ((100 x - 1)^2 + (y/100 - 2)^2 +
+  (x y - 2)^2 + 3 becomes one with coefficients 0.6 ... 12, which SCS solves too);
 * **centred**: a global bound (K = R^n) that lost more than GAP (relative) to the solver's value
   is computed again for f(c + u), c the minimiser the moment matrix gives (:func:`recentred`);
 * **lower degree**: when no point of the degree-d relaxation is proven (UnverifiedSolutionError,
@@ -41,6 +47,7 @@ from .solution import Solution
 
 GAP = 1e-6                 # a global bound this far (relative) below the solver's value is solved again, centred
 UNIT_BOX = (0.25, 2.0)     # a box is left as it is when every half-width >= 0.25 and |centre| + half-width <= 2
+BALANCE_GAIN = 10          # bits of f's coefficient spread a change of variables x = 2^k u must save to be made
 
 
 @dataclass
@@ -85,6 +92,38 @@ def rescaling(f: Polynomial, K: BasicSet):
     return vars, center, half
 
 
+def balancing(polys, vars) -> np.ndarray | None:
+    """Integer k (one per variable of ``vars``) with x = 2^k u making the coefficients of each
+    polynomial most even (module docstring), or None when it saves f (the first) fewer than
+    BALANCE_GAIN bits of spread or a scaled coefficient would leave the normal floats."""
+    rows, logs, level = [], [], []
+    for n, p in enumerate(polys):
+        q = p.with_vars(vars)
+        on = q.coef[:, 0] != 0
+        rows.append(q.exps[on])
+        logs.append(np.log2(np.abs(q.coef[on, 0])))
+        level.append(np.full(int(on.sum()), n))
+    E, c, lv = np.vstack(rows), np.concatenate(logs), np.concatenate(level)
+    if c.size < 2:
+        return None
+    M = np.hstack([E.astype(float), -np.eye(len(polys))[lv]])
+    k = np.rint(np.linalg.lstsq(M, -c, rcond=None)[0][:len(vars)]).astype(np.int64)
+    first = lv == 0
+    after = c[first] + E[first] @ k
+    if np.ptp(c[first]) - np.ptp(after) < BALANCE_GAIN or np.abs(c + E @ k).max() > 1000:
+        return None
+    return k
+
+
+def scaled_variables(p: Polynomial, vars, k) -> Polynomial:
+    """p(2^k u) over ``vars``: every coefficient times a power of two, exact (:func:`balancing`
+    keeps them in the normal range)."""
+    q = p.with_vars(vars)
+    coef = q.coef.copy()
+    coef[:, 0] = np.ldexp(coef[:, 0], q.exps @ k)
+    return Polynomial(vars, q.exps, coef, q.ids)
+
+
 def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, sparsity=None, cone="psd",
                 **solve) -> LowerBound:
     """max gamma such that f - gamma >= 0 on K (module docstring); ``solve``: SOSProgram.solve's
@@ -112,6 +151,12 @@ def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, spars
         f, K, shift = f_u - f_err, BasicSet(ineqs), (center, half)
     else:
         shift = (None, None)
+        vars = f.vars + tuple(v for v in K.vars if v not in f.vars)
+        k = balancing((f,) + K.ineqs + K.eqs, vars) if f.is_numeric else None
+        if k is not None:
+            f, K = scaled_variables(f, vars, k), BasicSet([scaled_variables(g, vars, k) for g in K.ineqs],
+                                                          [scaled_variables(h, vars, k) for h in K.eqs])
+            shift = (np.zeros(len(vars)), np.ldexp(1.0, k))
     degrees = [degree]
     if K.ineqs and isinstance(degree, (int, np.integer)) and not isinstance(degree, bool):
         lowest = max([f.degree] + [g.degree for g in K.ineqs + K.eqs])
@@ -126,7 +171,7 @@ def minimize_on(f, K: BasicSet | None = None, degree=None, products=False, spars
             failures.append(exc)
             continue
         centre = not (K.ineqs or K.eqs or solve.get("rigorous")) and f.is_numeric   # exact proofs read f(c + u)'s
-        return recentred(lb, f, sparsity, cone, solve) if centre else lb                  # floats: not with rigorous
+        return recentred(lb, f, sparsity, cone, solve) if centre else lb              # floats: not with rigorous
     if len(failures) > 1:
         first = failures[0]
         first.args = (f"{first}\n(lower degrees {degrees[1:]} were tried too, and no bound was proven at any)",)
@@ -145,9 +190,13 @@ def recentred(lb: LowerBound, f: Polynomial, sparsity, cone, solve) -> LowerBoun
         c = lb.minimizers().points[0]
     except (SolverError, InputError):
         return lb
+    if lb.center is not None:                   # lb's points were mapped back from f's variables
+        c = (c - lb.center) / lb.half
     g, _, rounding = substituted(f, c, np.ones(c.size))
+    outer = (lb.center, lb.half) if lb.center is not None else (np.zeros(c.size), np.ones(c.size))
     try:
-        again = _lower_bound(g, BasicSet(), None, False, sparsity, cone, (c, np.ones(c.size)), solve, rounding)
+        again = _lower_bound(g, BasicSet(), None, False, sparsity, cone, (outer[0] + outer[1] * c, outer[1]),
+                             solve, rounding)
     except (SolverError, InputError):      # unproven there, or numbers no solver resolves: keep the first
         return lb
     return again if again.value > lb.value else lb

@@ -12,7 +12,7 @@ y_i^2 for "P(x) - t I an SOS matrix", g(z) y_i^2 for a margin growing like g -- 
     Delta = max_c min { Delta >= 0 : lambda_min(Q~_c + Delta H_c) >= tau_c }
 
 (the Schur complement on the constant row when h is the constant -- with several blocks
-sharing it, the sum of what they lack, :func:`~.proof.constant_need`; a bisection otherwise) is
+sharing it, the sum of what they lack, :func:`~.eigen.constant_need`; a bisection otherwise) is
 what t must move. The moved point is then judged again by :func:`~.proof.prove_program`: this
 module only proposes. Nothing here depends on how the program is written: ``maximize(g)``,
 ``minimize(-g)``, a cvxpy objective, extra rows, g bounding several constraints, a 1 x 1
@@ -71,7 +71,8 @@ def spread(proof, h: np.ndarray) -> list:
         H = np.zeros((size, size))
         H[i[on], j[on]] = h[mon[on]] / proof.N[mon[on]]
         H[j[on], i[on]] = H[i[on], j[on]]
-        out.append(H[np.ix_(proof.kept[k], proof.kept[k])])
+        H = H[np.ix_(proof.kept[k], proof.kept[k])]
+        out.append(H if proof.shift is None else np.ldexp(H, proof.shift[k][:, None] + proof.shift[k][None, :]))
     return out
 
 

@@ -358,7 +358,8 @@ class SOSProgram:
         clone.blocks = [Block(b.name, b.ids) if b.psd is not None and b.psd.cone == "psd" else b
                         for b in self.blocks]
         clone.linear, clone.sos_constraints = list(self.linear), list(self.sos_constraints)
-        clone._compiled, clone._forms, clone.cvxpy_vars = None, {}, {}
+        clone._compiled, clone._forms = None, {}
+        clone.cvxpy_vars = dict(self.cvxpy_vars)    # the same variables: a cvxpy objective still reads them
         clone._cone_parts = dict(self._cone_parts)
         for b in self.blocks:
             if b.psd is None or not b.psd.size:

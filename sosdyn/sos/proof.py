@@ -26,7 +26,10 @@ roundoff; Higham, *Accuracy and stability of numerical algorithms*, ch. 3). At t
    ||E~_k||_2 <= ||E~_k||_F <= tau_k = (sum_{a owned by k} B_a^2 / N_a)^(1/2), and e~_rest (monomials
    no kept product gives) must vanish exactly (checked in rational arithmetic);
 5. the constraint is proven when lambda_min(Q~_k) >= tau_k for every block, lambda_min bounded by
-   :func:`eig_lower` (a Cholesky factor of Q~ - tI and its rounding bound);
+   :func:`~.eigen.eig_lower` (a Cholesky factor of Q~ - tI and its rounding bound) -- or, failing
+   that, the same in balanced coordinates: lambda_min(D Q~_k D) against ||D E~_k D||_F, D a
+   diagonal of powers of two (:mod:`.eigen`; exact, and far smaller where the monomials' sizes
+   differ by orders of magnitude at the minimiser);
 6. a residual on a monomial x^a no kept product gives is dominated by the squares of the basis:
    with a = sum_j lam_j 2 b_j (lam >= 0, sum 1, exact rationals from an LP vertex) the weighted
    AM-GM inequality gives |x^a| <= sum_j lam_j z_j^2, so B_a lam_j comes off the diagonal entries
@@ -59,66 +62,15 @@ from .conic import cvxpy_block_vars, positions
 from .constraints import Basis, PsdBlock
 from .gram import (EXACT_LDL_MAX, SQRT2, absorb_residual, exact_solution, exact_sub, gram_form, matrix_to_svec,
                    proven_min_eig, svec_pairs, svec_to_matrix)
-from .identity import (EPS, UNIT, Identity, block_matrix, entry_vector, exps_over, exact_residual, faces, gam,
+from .eigen import balanced_blocks, better_guide, constant_need, eig_lower
+from .identity import (EPS, Identity, block_matrix, entry_vector, exps_over, exact_residual, faces, gam,
                        identity_of, residual, term_values, unreachable_rows)
 
 CVXPY_TOL = 1e-9
 MULTIPLIER_FACE = 1e-9   # a multiplier row whose diagonal is below this x the largest is set to zero
 
 
-def down(v: float) -> float:
-    """A float at most v (two steps towards -inf: v may itself be a rounded sum)."""
-    return math.nextafter(math.nextafter(float(v), -math.inf), -math.inf)
-
-
-def eig_lower(A: np.ndarray) -> float:
-    """A proven lower bound on lambda_min(A) for a symmetric float matrix A (-inf if none).
-
-    With t below the estimated lambda_min and L = chol(fl(A - tI)), A - tI = L L^T + R exactly,
-    |R| <= |fl(A - tI - L L^T)| (1 + 2u) + gamma_(2n+4) |L||L|^T + u |diag(A - tI)| entrywise
-    (the rounding of forming A - tI, of L L^T and of the subtraction), so lambda_min(A) >= t -
-    ||R||_F, the norm itself rounded up."""
-    n = A.shape[0]
-    if n == 0:
-        return math.inf
-    if not np.isfinite(A).all():
-        return -math.inf
-    norm = float(np.linalg.norm(A))
-    if norm == 0.0:
-        return 0.0
-    lam = float(np.linalg.eigvalsh(A)[0])
-    slack = (n + 4) * EPS * norm
-    diag = np.arange(n)
-    for k in range(6):
-        t = lam - slack * 8.0**k
-        B = A.copy()
-        B[diag, diag] -= t
-        try:
-            L = np.linalg.cholesky(B)
-        except np.linalg.LinAlgError:
-            continue
-        aL = np.abs(L)
-        err = np.abs(B - L @ L.T) * (1 + 2 * UNIT) + gam(2 * n + 4) * (aL @ aL.T)
-        err[diag, diag] += UNIT * np.abs(np.diag(B))
-        r = float(np.linalg.norm(err)) * (1 + float(gam(n * n + 4)))
-        if np.isfinite(r):
-            return down(t - r)
-    return -math.inf
-
-
 # ---------------------------------------------------------------------- one constraint
-def constant_need(A, k0: int, tau: float) -> float:
-    """The signed number c with lambda_min(A + d e_k0 e_k0^T) >= tau iff d >= c (up to rounding),
-    or inf when no d works. With A' = A without row/column k0 and b = A[others, k0]: PSD iff
-    A' - tau I > 0 and a_00 + d - tau >= b^T (A' - tau I)^{-1} b (Schur complement)."""
-    rest = np.delete(np.arange(A.shape[0]), k0)
-    Ar = A[np.ix_(rest, rest)] - tau * np.eye(rest.size)
-    if rest.size and np.linalg.eigvalsh(Ar)[0] <= 8 * (rest.size + 4) * EPS * float(np.linalg.norm(A)):
-        return math.inf
-    b = A[rest, k0]
-    return tau - A[k0, k0] + (float(b @ np.linalg.solve(Ar, b)) if rest.size else 0.0)
-
-
 @dataclass
 class ConstraintProof:
     """The outcome of :func:`prove_constraint`: ``ok``, and per Gram block the absorbed kept
@@ -126,7 +78,9 @@ class ConstraintProof:
     ``tau[k]`` it must reach, the face ``kept[k]``, the kept row of the constant monomial
     ``zero[k]`` (-1: none) and the raise of that entry the block needs, ``need[k]`` (negative:
     room to give; :func:`constant_need`); ``owner``/``N`` say which block absorbs each monomial
-    over how many ordered pairs; ``reason`` when not ok."""
+    over how many ordered pairs; ``reason`` when not ok. ``shift[k]``: when the blocks are judged
+    in balanced coordinates (:mod:`.eigen`), log2 of D's diagonal on the kept rows, and A, lam, tau
+    and need are those of D A D (None: as they are)."""
 
     ok: bool
     A: list = field(default_factory=list)
@@ -140,10 +94,8 @@ class ConstraintProof:
     ident: Identity | None = None
     reason: str = ""
     entries: np.ndarray | None = None    # the proven certificate: Q~ on the face, raised multipliers
-
-    @property
-    def margin(self) -> float:
-        return min((a - t for a, t in zip(self.lam, self.tau)), default=math.inf)
+    shift: list | None = None
+    margin: float = math.inf             # min(lam - tau) as first judged (the choice among failing faces)
 
 
 def _raise_multipliers(ident: Identity, entries: np.ndarray) -> str:
@@ -318,10 +270,18 @@ def _prove_on_face(name, ident, base, grams, kept, zeros, at, src_err, block_exp
             for k in range(len(grams))]
     lam = [eig_lower(Q) for Q in A]
     ok = all(lk >= tk for lk, tk in zip(lam, tau))
+    margin, shift = min((lk - tk for lk, tk in zip(lam, tau)), default=math.inf), None
+    if not ok:                                          # the same certificate, in balanced coordinates:
+        balanced = balanced_blocks(A, kept, block_exps, ident, grams, owner, N, bound, zero)
+        if balanced is not None:
+            ok_b = all(lk >= tk for lk, tk in zip(balanced[1], balanced[2]))
+            if ok_b or better_guide(balanced[3], need):
+                (A, lam, tau, need, shift), ok = balanced, ok_b
     worst = int(np.argmin([lk - tk for lk, tk in zip(lam, tau)])) if grams else 0
     reason = "" if ok else (f"constraint {name!r}: Gram block {worst} has proven smallest eigenvalue "
                             f"{lam[worst]:.3e}, below the residual it must absorb ({tau[worst]:.2e})")
-    return ConstraintProof(ok, A, lam, [float(t) for t in tau], kept, zero, need, owner, N, ident, reason, entries)
+    return ConstraintProof(ok, A, lam, [float(t) for t in tau], kept, zero, need, owner, N, ident, reason, entries,
+                           shift, margin)
 
 
 def _needs(entries, grams, kept, zero, tau) -> list:

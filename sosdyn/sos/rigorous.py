@@ -39,7 +39,7 @@ from .gram import (SQRT2, absorb_residual, evaluate_affine, exact, exact_affine,
                    exact_gram, exact_sub, float_down, gram_form, merge_affine, proven_min_eig,
                    svec_pairs, svec_to_matrix)
 from .objective import QuadraticForm, affine_rows, is_cvxpy
-from .proof import eig_lower
+from .eigen import eig_lower
 
 ANSWERED = ("optimal", "optimal_inaccurate")    # solver statuses that carry an answer
 FACE_TOL = 1e-7          # a Gram diagonal below this (relative) is taken as 0

@@ -28,7 +28,7 @@ from .gram import svec_to_matrix
 from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
 from .identity import gam
-from .proof import down
+from .eigen import down
 from .proven import Pending, Proof, certified, cheap_proof, exact_bound, full_proof, refusal, unverified_hint
 from .rigorous import ANSWERED, Bound
 from .verification import VerificationReport, verify_certificate

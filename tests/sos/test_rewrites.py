@@ -61,7 +61,7 @@ def written(c, sense, row, split, twice, matrix, scale, upper):
     return prog, g
 
 
-@settings(max_examples=14, deadline=None, derandomize=True)
+@settings(max_examples=24, deadline=None, derandomize=True)
 @given(st.sampled_from(list(POLYS)), st.sampled_from(["max", "min", "cvxpy"]),
        st.sampled_from([None, "below", "above"]), st.booleans(), st.booleans(), st.booleans(),
        st.sampled_from([1.0, 3.0]), st.booleans())
@@ -73,7 +73,7 @@ def test_every_rewrite_of_a_bound_program_stays_on_the_safe_side(name, sense, ro
     value = sol.value(bound)
     true_min = exact_minimum(c)
     assert value <= true_min                                   # a bound, however written
-    assert value >= true_min - 1e-4 * max(1.0, abs(true_min))  # and not a loose one
+    assert value >= true_min - 1e-6 * max(1.0, abs(true_min))  # and tight (the issue's target: 1e-6)
     objective = sol.objective                                  # the objective, on its own safe side
     if upper or sense == "min":                                # minimised: at least the optimum -min p
         assert objective >= -true_min
@@ -87,6 +87,6 @@ def test_the_issue_numbers():
     assert exact_minimum(c) == pytest.approx(-34959605.00, abs=0.01)
     prog, g = written(c, "min", None, False, False, True, 1.0, False)     # minimize(-g), 1 x 1 matrix
     sol = prog.solve()
-    assert -34959605.00 - 2000 <= sol.value(g) <= -34959605.00
+    assert -34959605.00 * (1 + 1e-6) <= sol.value(g) <= -34959605.00
     prog, g = written(POLYS["x^4 - x^2"], "max", "above", False, False, False, 1.0, False)
     assert -0.25 - 1e-9 <= prog.solve().value(g) <= -0.25              # the row g <= 1e12

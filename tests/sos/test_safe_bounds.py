@@ -190,12 +190,11 @@ def test_value_of_the_bound_variable_is_the_safe_bound(name):
     sol = prog.solve()
     true_min = exact_minimum(c)
     assert true_min == pytest.approx(ISSUE_MINIMA[name], abs=0.5)
-    assert sol.values_of(g.ids)[0] > true_min                       # the solver's g: too high
-    assert true_min * (1 + 1e-4) <= sol.value(g) <= true_min        # the returned g: a bound
+    assert true_min * (1 + 1e-6) <= sol.value(g) <= true_min        # the returned g: a bound, tight
     assert sol.value(g) == pytest.approx(sol.objective, rel=1e-15)
     assert sol.value(2 * g + 1) == pytest.approx(2 * sol.value(g) + 1, rel=1e-15)
     Q = sol.gram_matrix(con)                   # the proven certificate: PSD, and p - g = z^T Q z
-    assert np.linalg.eigvalsh(Q)[0] >= 0
+    assert sd.sos.check_gram("p - g", "sos", poly(c) - sol.value(g), con.basis.exps, Q).proven
     pts = np.linspace(-200, 20, 23)
     z = np.vstack([pts**k for k in con.basis.exps[:, 0]]).T
     lhs = np.polynomial.polynomial.polyval(pts, c) - sol.value(g)
@@ -266,21 +265,24 @@ def test_a_bound_proven_at_a_lower_degree_is_not_refused_at_a_higher_one():
     assert four.degree in (2, 4)
 
 
-def test_rigorous_bound_of_a_badly_scaled_problem():
-    # (100x - 1)^2 + (y/100 - 2)^2 + (xy - 2)^2 + 3: min 3 at (0.01, 200)
+@pytest.mark.parametrize("solve", [{}, {"rigorous": True}, {"solver": "SCS"}])
+def test_a_badly_scaled_problem_is_bounded_tightly_by_every_route(solve):
+    # (100x - 1)^2 + (y/100 - 2)^2 + (xy - 2)^2 + 3: a sum of squares + 3, all three squares zero
+    # at (0.01, 200), so min 3 (closed form); plain, rigorous and SCS (which refused it) give 3
     x, y = sd.variables("x y")
     p = (100 * x - 1) ** 2 + (y / 100 - 2) ** 2 + (x * y - 2) ** 2 + 3
     assert float(p({"x": 0.01, "y": 200.0})[0]) == pytest.approx(3.0, abs=1e-12)
-    for kw in ({}, {"rigorous": True}):
-        lb = sd.minimize_on(p, **kw)
-        assert 3 * (1 - 1e-5) <= lb.value <= 3.0
+    lb = sd.minimize_on(p, **solve)
+    assert 3 * (1 - 1e-6) <= lb.value <= 3.0
+    if not solve:                                   # solved for x = 2^k u; the points come back in x
+        np.testing.assert_allclose(lb.minimizers().points, [[0.01, 200.0]], rtol=1e-4)
 
 
 def test_broyden_correlative_bound_is_close_to_zero():
     # Broyden tridiagonal n = 10, minimum 0 (a sum of squares vanishing at a real point)
     xs = [0] + list(sd.variables(" ".join(f"x{i}" for i in range(10)))) + [0]
     p = sum(((3 - 2 * xs[i]) * xs[i] - xs[i - 1] - 2 * xs[i + 1] + 1) ** 2 for i in range(1, 11))
-    assert -1e-5 <= sd.minimize_on(p, sparsity="correlative").value <= 0.0
+    assert -1e-5 <= sd.minimize_on(p, sparsity="correlative").value <= 0.0      # 1.7e-6 measured; target 1e-6
 
 
 def test_an_upper_bound_row_far_away_does_not_make_the_program_unbounded():
@@ -292,4 +294,4 @@ def test_an_upper_bound_row_far_away_does_not_make_the_program_unbounded():
     prog.add_ge(1e12 - g)
     prog.maximize(g)
     true_min = exact_minimum(c)
-    assert true_min * (1 + 1e-4) <= prog.solve().value(g) <= true_min
+    assert true_min * (1 + 1e-6) <= prog.solve().value(g) <= true_min
