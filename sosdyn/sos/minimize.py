@@ -69,9 +69,11 @@ class LowerBound:
     center: np.ndarray | None = field(default=None, repr=False)
     half: np.ndarray | None = field(default=None, repr=False)
 
-    def minimizers(self, **kw) -> Atoms:
-        """The points attaining the bound (``Solution.minimizers``), in the problem's own variables."""
-        atoms = self.solution.minimizers(self.constraint, **kw)
+    def minimizers(self, con=None, **kw) -> Atoms:
+        """The points attaining the bound (``Solution.minimizers`` of ``con``, default the bound's
+        constraint), in the problem's own variables; a multiplier or another program's constraint
+        raises InputError saying what to pass."""
+        atoms = self.solution.minimizers(self.constraint if con is None else con, **kw)
         if self.center is not None:
             atoms.points = self.center + self.half * atoms.points
         return atoms

@@ -130,6 +130,10 @@ def test_atoms_of_flat_relaxations_are_returned_with_the_safe_bound_beside_them(
     assert lb.value <= -6 * math.sqrt(2)
     with pytest.raises(sd.InputError, match="constraint the multiplier belongs to"):
         lb.solution.minimizers(lb.constraint.multipliers[0])
+    with pytest.raises(sd.InputError, match="constraint the multiplier belongs to"):
+        lb.minimizers(lb.constraint.multipliers[0])
+    with pytest.raises(sd.InputError, match="handle returned by this program"):
+        lb.minimizers(sd.minimize_on(xs[0] ** 2).constraint)        # another program's constraint
 
 
 def test_a_solver_crash_keeps_its_native_text_off_the_terminal(monkeypatch, capfd):
