@@ -98,7 +98,8 @@ def rollout(
         names = ["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]
     t = np.asarray(traj.t)
     if out_path is not None:                     # the layout load_demos reads
-        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="", header=",".join(names))
+        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="", header=",".join(names),
+                   fmt="%.9g")                # 9 significant digits: readable, and well below any sensor's noise
         info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
     end = ", ".join(f"{v:.4g}" for v in pos[-1])
     goal = ", ".join(f"{v:.4g}" for v in goal_end)
