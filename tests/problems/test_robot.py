@@ -86,6 +86,7 @@ def test_panda_jacobian_and_inverse_kinematics():
         sim.close()
 
 
+@pytest.mark.slow      # experiment-sized: make test-slow
 def test_quick_experiment(tmp_path):
     results = run.run(tmp_path, quick=True)
     saved = json.loads((tmp_path / "results.json").read_text())

@@ -83,3 +83,10 @@ def test_methods_are_described_from_their_parameters():
     assert "2 rounds of corrective refits" in cdsp_summary({"corrective_rounds": 2})
     assert "no pre-warp" in cdsp_summary({"warp": "none"}) and "(warp='auto')" in cdsp_summary({"warp": "auto"})
     assert "M = I" in cdsp_summary({"metric": "identity"}) and "tempered gating" in cdsp_summary({"gating": "tempered"})
+
+
+def test_the_docs_home_lists_every_report_page():
+    home = (REPORTS.parent / "docs" / "index.md").read_text()
+    for html in page_files(REPORTS):
+        folder = html.parent.relative_to(REPORTS).as_posix()
+        assert (f"`reports/{folder}/`" if folder != "." else "`reports/index.html`") in home, folder
