@@ -18,6 +18,8 @@ EXPERIMENTS = {
     "lasa-all": "lasa_all",
     "lasa-dsopt": "lasa_dsopt",        # CDSP variants on the LPV-DS (ds-opt) LASA protocol
     "crossing-shapes": "crossing_shapes",   # writes the synthesised hand-drawn crossing set
+    "winding-shapes": "winding_shapes",     # writes the synthesised hand-drawn winding set
+    "winding": "winding",              # held-out accuracy on the winding set (issue 36)
     "second-order": "second_order",    # first- against second-order CDSP: crossing shapes and LASA
     "real-data": "real_data",          # held-out accuracy on the shipped real demonstration sets
     "real-data-configs": "real_data_configs",   # CDSP configurations on the real sets' training data

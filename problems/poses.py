@@ -23,7 +23,7 @@ import numpy as np
 from sosdyn.errors import InputError
 from sosdyn.evaluation.metrics import dtwd
 from sosdyn.evaluation.poses import angles_deg, arrival_index, orientation_dtw
-from sosdyn.lfd.data.poses import CHART_MARGIN, load_pose_demos
+from sosdyn.lfd.data.pose import CHART_MARGIN, load_pose_demos
 from sosdyn.lfd.model.pose import PoseCDSP
 from sosdyn.report.figures.poses import orientation_error, pose_paths
 

@@ -154,6 +154,20 @@ def second_order(r: dict) -> tuple[str, dict]:
             f"{'met' if lasa['target_met'] else 'not met'}).", numbers)
 
 
+def winding(r: dict) -> tuple[str, dict]:
+    """The default on the winding set, held out: DTWD against copying, certificate, targets."""
+    rows = {s: v["methods"]["CDSP default"] for s, v in r["sets"].items() if "CDSP default" in v["methods"]}
+    numbers = {f"{s}: CDSP() DTWD ÷ copy": d["ratio"] for s, d in rows.items()}
+    numbers.update({f"{m}: mean DTWD ÷ copy": v for m, v in r["means"].items()})
+    text = (f"CDSP() on {len(rows)} winding shapes, held out: DTWD {span([d['ratio'] for d in rows.values()])}× "
+            f"copying the nearest training demo (mean {num(r['means']['CDSP default'])}×")
+    others = [f"{m} {num(v)}×" for m, v in r["means"].items() if m != "CDSP default"]
+    text += (f"; {', '.join(others)})" if others else ")")
+    return (text + f", certified on {sum(bool(d.get('certified')) for d in rows.values())} of {len(rows)}, "
+            f"every target of the page met on {sum(bool(d.get('met')) for d in rows.values())} of {len(rows)}.",
+            numbers)
+
+
 def bench(r: dict) -> tuple[str, dict]:
     """The learner benchmark's speed targets: how many are met, and by how much the others miss."""
     targets, limits = r["targets"], r["targets_def"]
@@ -196,6 +210,7 @@ PAGES = (
     Page("poses", "Poses: position and orientation with a certificate", "make poses", poses),
     Page("robot", "A simulated Franka Panda driven by CDSP and GMR", "make robot", robot),
     Page("second_order", "Second-order CDSP on crossing demonstrations", "make second-order", second_order),
+    Page("winding", "CDSP on the winding set (held out)", "make winding", winding),
     Page("bench", "Benchmarks: solvers, profiles, scaling, prediction", "make bench; make report", bench,
          data="bench.json"),
 )

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from sosdyn.evaluation.poses import angles_deg
 from sosdyn.lfd.data.files import load_demos
-from sosdyn.lfd.data.poses import PoseDemonstrations
+from sosdyn.lfd.data.pose import PoseDemonstrations
 from sosdyn.lfd.model.files import load_model
 
 
@@ -39,11 +39,14 @@ def test_ambiguous_header_is_one_error_line(tmp_path, capsys):
 
 def test_position_only_options_refused_for_pose_files(tmp_path, capsys):
     demos = write_pose_csvs(tmp_path / "demos", n=2)
-    code, _, err = run(capsys, "fit", demos, "--smooth", "off", "--goal-tol", "0.1", "--out", tmp_path / "m.json")
-    assert_one_error_line(code, err, "--goal-tol, --smooth apply to position files", "--columns x,y,z",
+    code, _, err = run(capsys, "fit", demos, "--smooth", "off", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "smooth_window (--smooth) applies to position files", "--columns x,y,z",
                           need_try=True)
+    code, _, err = run(capsys, "fit", demos, "--goal-tol", "0.1", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "goal_tol apply to position files", "--columns", need_try=True)
     code, _, err = run(capsys, "fit", "lasa:Leaf_1", "--goal-tol-deg", "5", "--out", tmp_path / "m.json")
-    assert_one_error_line(code, err, "--goal-tol-deg applies to pose files", need_try=True)
+    assert_one_error_line(code, err, "--goal-tol-deg does not apply to a CDSP model (PoseCDSP takes it)",
+                          need_try=True)
     assert not (tmp_path / "m.json").exists()
 
 
@@ -52,7 +55,7 @@ def test_fit_export_and_plot_pose(tmp_path, capsys):
     demos = write_pose_csvs(tmp_path / "demos", scalar_last=False)
     code, out, err = run(capsys, "fit", demos, "--units", "m", "--out", tmp_path / "pose.json")
     assert code == 0, err
-    assert "fitting PoseCDSP to 8 pose demonstrations" in out and "certificate: passed" in out
+    assert "fitting PoseCDSP to 8 demonstrations" in out and "certificate: passed" in out
     model = load_model(tmp_path / "pose.json")
     assert model.certified_ and model.cdsp_.units_ == "m"
     for target, name in (("python", "pose_model.py"), ("cpp", "pose.hpp")):
@@ -79,12 +82,12 @@ def test_fit_export_and_plot_pose(tmp_path, capsys):
         model.predictor(max_speed=0.1, max_angular_speed=0.2)(x, q)), rtol=1e-12)
     assert np.linalg.norm(v) <= 0.1 * (1 + 1e-12) and np.linalg.norm(w) <= 0.2 * (1 + 1e-12)
     code, out, err = run(capsys, "plot", tmp_path / "pose.json", "--demos", demos, "--out", tmp_path / "p.png")
-    assert code == 0 and "8 demonstrations and rollouts" in out, err
+    assert code == 0 and "8 reproductions of 8 demonstrations" in out, err
     assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
     code, _, err = run(capsys, "plot", tmp_path / "pose.json", "--out", tmp_path / "p.png")
     assert_one_error_line(code, err, "pose model is drawn with the pose demonstrations", need_try=True)
     code, _, err = run(capsys, "rollout", tmp_path / "pose.json", "--start", "0,0,0")
-    assert_one_error_line(code, err, "--start has 3 numbers but a pose model takes 7: x,y,z,qw,qx,qy,qz",
+    assert_one_error_line(code, err, "--start has 3 numbers but the model takes 7: x,y,z,qw,qx,qy,qz",
                           need_try=True)
     turned = Rotation.from_rotvec([0.0, 0.0, 0.5]).as_quat(scalar_first=True)     # a rotated goal at t = 4
     goal = ",".join(f"{v:.17g}" for v in [0.2, -0.1, 0.1, *turned])

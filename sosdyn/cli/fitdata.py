@@ -3,9 +3,10 @@ table of how the fitted model reproduces each demonstration.
 
 ``dataset:NAME`` reads :func:`sosdyn.load_dataset` (positions only; the loader's notes, e.g.
 hammer's declared time step, are printed). ``--smooth``, ``--trim-rest`` and ``--align-ends``
-are :func:`sosdyn.preprocess`'s options; the fit then warns about crossing demonstrations
-(:mod:`sosdyn.lfd.data.crossing`) and prints :meth:`CDSP.score`, warning when a reproduction
-deviates by more than :data:`DEVIATION_WARN` of the data's extent (bounding-box diagonal).
+are the options of the family's ``prepare`` (:func:`sosdyn.preprocess`'s), which also warns about
+crossing demonstrations when the family cannot follow them (:mod:`sosdyn.lfd.data.crossing`); after
+the fit the model's ``score`` is printed, with a warning when a reproduction deviates by more than
+:data:`DEVIATION_WARN` of the data's extent (bounding-box diagonal).
 """
 from __future__ import annotations
 
@@ -15,9 +16,7 @@ import numpy as np
 import typer
 from rich.markup import escape
 
-from ..lfd.data.crossing import crossing_warning, find_crossings
 from ..lfd.data.datasets import dataset_info, load_dataset
-from ..lfd.data.preprocess import preprocess
 from .base import State, info, out
 
 DATASET_PREFIX = "dataset:"
@@ -63,21 +62,22 @@ def load_dataset_input(spec: str, dt: float | None):
     return data
 
 
-def prepare(data, smooth: str | int, trim_rest: bool, align):
-    """``data`` preprocessed (:func:`sosdyn.preprocess`), what was done and any crossing printed."""
+def prepare(family, data, smooth: str | int, trim_rest: bool, align):
+    """``data`` prepared by ``family`` (:meth:`~sosdyn.lfd.model.base.MotionModel.prepare`), what was
+    done and its cautions (crossings) printed."""
     max_shift = align if isinstance(align, float) else None
-    result, report = preprocess(data, smooth_window=smooth, trim_rest=trim_rest,
-                                align=True if max_shift is not None else align, max_shift=max_shift)
-    for line in report.lines(data.units):
-        info(f"preprocess: {escape(line)}")
-    message = crossing_warning(find_crossings(result), data.units)
-    if message and not State.quiet:
-        out.print(f"[yellow]warning:[/] {escape(message)}", soft_wrap=True)
+    result, notes, cautions = family.prepare(data, smooth_window=smooth, trim_rest=trim_rest,
+                                             align=True if max_shift is not None else align, max_shift=max_shift)
+    for line in notes:
+        info(escape(line))
+    for message in cautions:
+        if not State.quiet:
+            out.print(f"[yellow]warning:[/] {escape(message)}", soft_wrap=True)
     return result
 
 
 def print_score(model, data) -> None:
-    """The table of :meth:`CDSP.score` and a warning for reproductions far from their demo."""
+    """The table of the model's ``score`` and a warning for reproductions far from their demo."""
     if State.quiet:
         return
     rows = model.score(data)

@@ -12,7 +12,7 @@ from .files import load_demos
 from .crossing import crossing_warning, find_crossings
 from .datasets import dataset_names, load_dataset
 from .lasa import lasa_names, load_lasa
-from .poses import PoseDemonstration, PoseDemonstrations, load_pose_demos
+from .pose import PoseDemonstration, PoseDemonstrations, load_pose_demos
 from .preprocess import preprocess
 
 __all__ = ["Demonstration", "Demonstrations", "check_demonstrations", "crossing_warning", "dataset_names",

@@ -12,12 +12,15 @@ pouring                        3     63     m (inferred)            k * 0.01 s
 hammer                         3     10     m (inferred)            sample index: dt declared
 cleaning/cleaning_1, _2        6     1      rad (inferred, joints)  recorded, ~0.035 s
 crossing/<shape> (8, synth.)   2     7-8    px (y up, goal at 0)    logged ms, jittered
+winding/<shape> (9, synth.)    2     7      px (y up, goal at 0)    logged ms, jittered
 =============================  ====  =====  ======================  ========================
 
 ``crossing/<shape>`` (``ell``, ``e``, ``phi``, ``alpha``, ``gamma``, ``at``, ``pretzel``,
 ``cross``) is **synthetic**: hand-drawing-like mouse strokes that cross themselves or each
 other, written by ``python -m problems crossing-shapes`` (seeded; its README says how and why).
-:attr:`DatasetInfo.synthetic` marks it, and experiments on real data ask for
+``winding/<shape>`` (``spiral180``, ``spiral270``, ``spiral360``, ``hook``, ``G``, ``snail``,
+``nearhook``, ``loop``, ``curl``) is synthetic the same way: strokes that wind around the goal, written by
+``python -m problems winding-shapes``. :attr:`DatasetInfo.synthetic` marks both, and experiments on real data ask for
 ``dataset_names(synthetic=False)``.
 
 Pose sets (robottasks, pouring) also hold an orientation quaternion ``qw, qx, qy, qz``;
@@ -43,6 +46,7 @@ from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_
 DATASETS_DIR = Path(__file__).resolve().parent / "datasets"
 HAMMER_DT = 0.01        # s per sample, declared (the source has none; its loader uses dt = 1)
 CROSSING_SHAPES = ("ell", "e", "phi", "alpha", "gamma", "at", "pretzel", "cross")
+WINDING_SHAPES = ("spiral180", "spiral270", "spiral360", "hook", "G", "snail", "nearhook", "loop", "curl")
 
 
 @dataclass(frozen=True)
@@ -76,6 +80,9 @@ DATASETS = {
     **{f"crossing/{shape}": DatasetInfo(f"crossing/{shape}", ("x", "y"), "px", time="time_ms", time_unit=1e-3,
                                         synthetic=True, note="synthesised mouse strokes that cross (issue 28)")
        for shape in CROSSING_SHAPES},
+    **{f"winding/{shape}": DatasetInfo(f"winding/{shape}", ("x", "y"), "px", time="time_ms", time_unit=1e-3,
+                                       synthetic=True, note="synthesised mouse strokes that wind around the goal (issue 36)")
+       for shape in WINDING_SHAPES},
 }
 
 
@@ -138,4 +145,4 @@ def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | N
         t, pos = _read_csv(path, info)
         demos.append(Demonstration.from_positions(t * step if info.index_time else t, pos,
                                                   f"{name}/{path.name}"))
-    return check_demonstrations(Demonstrations(demos, name, info.units), goal_tol=goal_tol)
+    return check_demonstrations(Demonstrations(demos, name, info.units, columns=info.columns), goal_tol=goal_tol)

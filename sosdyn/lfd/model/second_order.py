@@ -1,46 +1,51 @@
-"""The second-order CDSP estimator: certified motions that may cross themselves.
+"""The second-order CDSP estimator: certified motions that may cross themselves; the second-order
+family of the model interface (:class:`~.base.MotionModel`).
 
 Model (scaled units, :mod:`sosdyn.lfd.fit.second_order`): e = ((x - g)/s, v T/s),
 de/dt' = sum_k h_k(e) F_k e with F_k = [[0, I], [A_k, B_k]]; certificate: one constant M > 0 with
 F_k^T M + M F_k <= -2 gamma' M for every k (gamma' = gamma T), checked independently
-(:mod:`sosdyn.lfd.fit.second_order_check`) before a model is returned. Then from EVERY (x0, v0),
+(:mod:`sosdyn.lfd.fit.second_order.certificate`) before a model is returned. Then from EVERY (x0, v0),
 || (x - g, v) || in the metric decays like exp(-gamma t): x -> g and v -> 0 (docs/theory.md,
 "Second order"). The gating h(e) depends on v, so two branches may cross at one x.
+
+Speed limit (``rollout(max_speed=...)``): the whole field (v, a) scaled by lambda = min(1, v_max / |v|)
+> 0 is a time change of the certified system (same paths in (x, v), same goal, V still decreasing),
+so the position moves at |dx/dt| = lambda |v| <= v_max; the state's v is then not dx/dt, so a
+controller that reads the measured velocity cannot apply it: the one-state predictor and the exports
+refuse ``max_speed`` (docs/theory.md).
 """
 from __future__ import annotations
 
 import inspect
 import time
 from numbers import Integral
-from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from sosdyn.errors import InputError, NotCertifiedError, NotFittedError
+from sosdyn.errors import InputError, ModelFileError, NotCertifiedError, NotFittedError
 from ..data.demonstrations import check_demonstrations, sample_step
-from ..data.poses import PoseDemonstrations
+from ..data.pose import PoseDemonstrations
 from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.params import MAX_SEED, check_params, check_solver, resolve_seed
-from ..fit.second_order import acceleration_at, fit_gating, scaled_samples
-from ..fit.second_order_fit import METHODS, fit_second_order
-from ..fit.second_order_check import check_second_order, energy_violations, excursion_bound
+from ..fit.second_order import (METHODS, acceleration_at, check_second_order, energy_violations, excursion_bound,
+                                fit_gating, fit_second_order, scaled_samples)
 from ..rollout import Trajectory, as_vector
 from ..rollout.events import is_positive_number
 from ..rollout import rollout as integrate
-from ..runtime.second_order import SecondOrderPredictor
-from ..runtime.second_order_export import to_python
-from ..runtime.states import as_state, as_states
+from ..rollout.quality import HORIZON, reproduction_table
+from ..runtime.second_order import SecondOrderPredictor, to_cpp, to_python
+from ..runtime.states import as_state, as_states, check_max_speed, speed_factor
+from .base import Layout, MotionModel, Reproductions
 from .cdsp import DEFAULTS as FIRST_ORDER_DEFAULTS
-from .fileformat import write_model_file
+from .content import SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION, check_param_names, need, second_order_state
 
-SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION = "sosdyn-second-order", 1
 MAX_COPIES = 20                 # perturbed copies per sample (each multiplies the data term's rows)
 PARAMS = ("n_components", "gamma", "margin", "max_iter", "tol", "metric_prox", "method", "tracking_copies",
           "tracking_sigma", "tracking_rate", "max_samples", "random_state", "verify_samples", "solver")
 
 
-class SecondOrderCDSP:
+class SecondOrderCDSP(MotionModel):
     """Learn a certified second-order motion ẍ = a(x, ẋ) from demonstrations (positions + times).
 
     **Parameters**: ``n_components`` (int or "bic": Gaussians of the gating GMM on (x, v)),
@@ -52,11 +57,12 @@ class SecondOrderCDSP:
     their spread in scaled units and the rate w of their pull-back labels a - w^2 dx - 2 w dv:
     :func:`~sosdyn.lfd.fit.second_order.tracking_samples`; 0 copies: the demos alone),
     ``max_samples``, ``random_state`` (EM and the sampled check), ``verify_samples`` (states of the
-    sampled check), ``solver``.
+    sampled check), ``solver``; ``progress`` (None or a callable, not saved: called with each
+    iterate's history row).
 
-    **Learned**: ``goal_``, ``dim_``, ``dt_``, ``length_scale_`` (s), ``time_scale_`` (T),
+    **Learned**: ``goal_``, ``dim_``, ``dt_``, ``units_``, ``columns_`` (as the data's), ``length_scale_`` (s), ``time_scale_`` (T),
     ``mixture_`` (the gating on e), ``C_`` (K, n, 2n) = [A_k, B_k] in scaled units, ``M_`` (2n, 2n),
-    ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`; also
+    ``certificate_`` (:class:`~sosdyn.lfd.fit.second_order.certificate.SecondOrderCertificate`; also
     ``verification_``, with ``certified_`` True, as for CDSP),
     ``energy_violations_`` (how often the training demos themselves break the certified decrease),
     ``history_`` (one row per certified iterate), ``chosen_iter_`` (the row returned: least training
@@ -66,10 +72,12 @@ class SecondOrderCDSP:
     """
 
     name = "CDSP-2"
+    file_format, file_version = SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION
+    follows_crossings = True
 
     def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=50, tol=1e-4, metric_prox=1e-2,
                  method="ica", tracking_copies=2, tracking_sigma=0.1, tracking_rate=3.0, max_samples=3000,
-                 random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL"):
+                 random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL", progress=None):
         self.n_components = n_components
         self.gamma = gamma
         self.margin = margin
@@ -84,6 +92,7 @@ class SecondOrderCDSP:
         self.random_state = random_state
         self.verify_samples = verify_samples
         self.solver = solver
+        self.progress = progress
 
     def get_params(self) -> dict:
         return {k: getattr(self, k) for k in PARAMS}
@@ -131,7 +140,7 @@ class SecondOrderCDSP:
         scaled = scaled_samples(demos, K, self.max_samples)
         mixture = fit_gating(scaled.E, self.n_components, seed)
         result = fit_second_order(scaled, mixture, float(self.gamma), float(self.margin), int(self.max_iter),
-                                  float(self.tol), float(self.metric_prox), self.method, self.solver,
+                                  float(self.tol), float(self.metric_prox), self.method, self.solver, self.progress,
                                   tracking=(int(self.tracking_copies), float(self.tracking_sigma),
                                             float(self.tracking_rate), seed))
         report = check_second_order(result.C, result.M, self.gamma, scaled.time, mixture, self.verify_samples, seed)
@@ -140,6 +149,7 @@ class SecondOrderCDSP:
                                     status="not_certified", hint="a smaller gamma or a larger margin")
         n = demos.dim
         self.seed_, self.dim_, self.goal_, self.dt_ = seed, n, scaled.goal, sample_step(demos)
+        self.units_, self.columns_ = demos.units, demos.columns
         self.length_scale_, self.time_scale_, self.window_ = scaled.length, scaled.time, scaled.window
         self.mixture_, self.C_, self.M_, self.margin_ = mixture, result.C, result.M, result.margin
         self.verification_, self.certified_ = report, True
@@ -151,7 +161,7 @@ class SecondOrderCDSP:
 
     @property
     def certificate_(self):
-        """The certificate as last checked (:class:`~sosdyn.lfd.fit.second_order_check.SecondOrderCertificate`:
+        """The certificate as last checked (:class:`~sosdyn.lfd.fit.second_order.certificate.SecondOrderCertificate`:
         M, gamma, per-LMI margins, the verdict); ``verification_`` under the first-order name."""
         self._check_fitted()
         return self.verification_
@@ -184,19 +194,40 @@ class SecondOrderCDSP:
         n, T = self.dim_, self.time_scale_
         return self.C_[:, :, :n] / T ** 2, self.C_[:, :, n:] / T
 
-    def predictor(self) -> SecondOrderPredictor:
-        """A one-state evaluator ``step(x, v, goal=None) -> acceleration`` (:mod:`~sosdyn.lfd.runtime.second_order`)."""
+    def predictor(self, max_speed=None, **other) -> SecondOrderPredictor:
+        """A one-state evaluator ``step(x, v, goal=None) -> acceleration`` (:mod:`~sosdyn.lfd.runtime.second_order`);
+        ``max_speed`` is refused (module docstring: it applies to rollouts)."""
+        self.refuse(other, "predictor")
+        self._no_speed_limit(max_speed)
         self._check_fitted()
         return SecondOrderPredictor(self.goal_, self.length_scale_, self.time_scale_, self.mixture_, self.C_)
 
-    def export(self) -> str:
+    def to_python(self, max_speed=None, **other) -> str:
         """A standalone Python module (numpy only) with ``acceleration(X, V, goal=None)``
-        (:mod:`~sosdyn.lfd.runtime.second_order_export`)."""
+        (:mod:`~sosdyn.lfd.runtime.second_order`); ``max_speed`` refused as by :meth:`predictor`."""
+        self.refuse(other, "to_python")
+        self._no_speed_limit(max_speed)
         return to_python(self)
 
-    def excursion_bound(self, x0, v0=None, goal=None) -> float:
+    def to_cpp(self, namespace=None, max_speed=None, **other) -> str:
+        """A header-only C++17 ``bool acceleration(const double* x, const double* v, double* a, const
+        double* goal = nullptr)`` in ``namespace`` (default second_order_model); ``max_speed`` refused."""
+        self.refuse(other, "to_cpp")
+        self._no_speed_limit(max_speed)
+        return to_cpp(self, "second_order_model" if namespace is None else namespace)
+
+    @staticmethod
+    def _no_speed_limit(max_speed) -> None:
+        if check_max_speed(max_speed) is not None:
+            raise InputError("max_speed: a second-order model's speed limit is a time change of its state (x, v), "
+                             "which a controller reading the measured velocity cannot apply. Try: "
+                             "rollout(..., max_speed=...) (sosdyn rollout --max-speed) to plan a limited motion, "
+                             "or no limit here.")
+
+    def excursion_bound(self, x0, v0=None, goal=None, **other) -> float:
         """The certified bound on max_t |x(t) - goal| (data units) from (x0, v0): the projection on x
-        of the ellipsoid {e : e^T M e <= e0^T M e0} (:func:`~sosdyn.lfd.fit.second_order_check.excursion_bound`)."""
+        of the ellipsoid {e : e^T M e <= e0^T M e0} (:func:`~sosdyn.lfd.fit.second_order.certificate.excursion_bound`)."""
+        self.refuse(other, "excursion_bound")
         self._check_fitted()
         x0, v0, goal = self._start(x0, v0, goal)
         e0 = np.concatenate([(x0 - goal) / self.length_scale_, v0 * self.time_scale_ / self.length_scale_])
@@ -208,26 +239,31 @@ class SecondOrderCDSP:
         v0 = np.zeros(n) if v0 is None else as_state(v0, n, "v0")
         return x0, v0, self.goal_ if goal is None else as_state(goal, n, "goal")
 
-    def rollout(self, x0, duration, v0=None, dt=None, goal=None, perturbations=(), goal_changes=()) -> Trajectory:
+    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None, v0=None,
+                **other) -> Trajectory:
         """Integrate (x, v) from (x0, v0) (v0 None: at rest) for ``duration`` s on a grid of step ``dt``
         (None: ``dt_``). Pushes ``[(t, dx)]`` with dx of shape (n,) (position) or (2n,) (position and
-        velocity); goal changes ``[(t, g)]`` (the motion translates). The Trajectory has ``vel``; a
-        push's ``before`` / ``after`` are (x, v) states (:func:`sosdyn.lfd.rollout.rollout`)."""
+        velocity); goal changes ``[(t, g)]`` (the motion translates); ``max_speed``: the field (v, a)
+        scaled by min(1, max_speed / |v|), a time change (module docstring). The Trajectory has
+        ``vel`` (dx/dt); a push's ``before`` / ``after`` are (x, v) states (:func:`sosdyn.lfd.rollout.rollout`)."""
+        self.refuse(other, "rollout")
         self._check_fitted()
         n = self.dim_
         x0, v0, goal = self._start(x0, v0, goal)
         pushes = _lifted(perturbations, n, "perturbation", (n, 2 * n))
         goals = _lifted(goal_changes, n, "goal change", (n,))
+        max_speed = check_max_speed(max_speed)
 
         def field(Y, G):
-            return np.hstack([Y[:, n:], self.acceleration(Y[:, :n], Y[:, n:], G[:n])])
+            return speed_factor(Y[:, n:], max_speed) * np.hstack([Y[:, n:], self.acceleration(Y[:, :n], Y[:, n:], G[:n])])
 
         traj = integrate(field, np.concatenate([x0, v0]), duration=duration, dt=self.dt_ if dt is None else dt,
                          goal=np.concatenate([goal, np.zeros(n)]), perturbations=pushes, goal_changes=goals,
                          scale=self.length_scale_)
         events = [dict(e, before=e["before"][:n], after=e["after"][:n]) if e["kind"] == "goal_change" else e
                   for e in traj.events]
-        return Trajectory(traj.t, traj.pos[:, :n], traj.goal_history[:, :n], events, vel=traj.pos[:, n:])
+        return Trajectory(traj.t, traj.pos[:, :n], traj.goal_history[:, :n], events,
+                          vel=speed_factor(traj.pos[:, n:], max_speed) * traj.pos[:, n:])
 
     # ------------------------------------------------------------------ evidence and files
     def verify(self, n_samples=None, seed=None):
@@ -241,21 +277,78 @@ class SecondOrderCDSP:
                                   self.verify_samples if n_samples is None else n_samples,
                                   self.seed_ if seed is None else seed)
 
-    def state(self) -> dict:
-        """The learned values a model file holds (plain lists)."""
+    def score(self, demos) -> list[dict]:
+        """Per demonstration, its reproduction from its first position and velocity by semi-implicit
+        Euler at step ``dt_`` (as the fit's training rollouts), scored as :meth:`CDSP.score`
+        (:func:`~sosdyn.lfd.rollout.quality.reproduction_table`)."""
+        self._check_fitted()
+        demos = check_demonstrations(demos, goal_tol=np.inf)
+        n, dt = self.dim_, self.dt_
+        if demos.dim != n:
+            raise InputError(f"the demonstrations are {demos.dim}-D but the model is {n}-D. Try: the "
+                             "demonstrations it was fitted to.")
+
+        def step(Z):            # explicit Euler on z = (x, v) with z' = (v + dt a, a): semi-implicit Euler
+            A = self.acceleration(Z[:, :n], Z[:, n:], self.goal_)
+            return np.hstack([Z[:, n:] + dt * A, A])
+        starts = np.array([np.concatenate([d.pos[0], d.vel[0]]) for d in demos])
+        return reproduction_table(step, demos, self.goal_, dt, starts)
+
+    def content(self) -> dict:
+        """The parameters (``random_state`` = the seed used) and the learned values (plain lists)."""
         self._check_fitted()
         mix = self.mixture_
-        return {"goal": self.goal_, "dt": self.dt_, "length_scale": self.length_scale_,
-                "time_scale": self.time_scale_, "window": self.window_, "weights": mix.weights,
-                "means": mix.means, "covariances": mix.covariances, "C": self.C_, "M": self.M_,
-                "margin": self.margin_}
+        return {"params": dict(self.get_params(), random_state=self.seed_),
+                "state": {"goal": self.goal_, "dt": self.dt_, "length_scale": self.length_scale_,
+                          "time_scale": self.time_scale_, "window": self.window_, "weights": mix.weights,
+                          "means": mix.means, "covariances": mix.covariances, "C": self.C_, "M": self.M_,
+                          "margin": self.margin_, "units": self.units_, "columns": self.columns_}}
 
-    def save(self, path, key=None) -> Path:
-        """Write the model file (JSON, checksummed, atomic; signed with ``key``); ``sd.load_model`` reads it."""
-        params = dict(self.get_params(), random_state=self.seed_)
-        return write_model_file({"format": SECOND_ORDER_FORMAT, "version": SECOND_ORDER_VERSION,
-                                 "params": params, "state": self.state()}, path, key)
+    @classmethod
+    def from_content(cls, content: dict) -> SecondOrderCDSP:
+        """A model (not yet verified) from a file's content (:func:`~.content.second_order_state`)."""
+        params = need(content, "params", "", dict)
+        check_param_names(params, PARAMS)
+        model = cls(**params)
+        try:
+            model.check_params()
+        except InputError as exc:
+            raise ModelFileError(f"invalid params: {exc}") from None
+        st = second_order_state(need(content, "state", "", dict))
+        n = len(st["goal"])
+        model.seed_, model.dim_, model.goal_, model.dt_ = int(params["random_state"]), n, st["goal"], st["dt"]
+        model.length_scale_, model.time_scale_, model.margin_ = st["length_scale"], st["time_scale"], st["margin"]
+        model.window_, model.units_, model.columns_ = st["window"], st["units"], st["columns"]
+        model.mixture_, model.C_, model.M_, model.history_ = st["mixture"], st["C"], st["M"], []
+        return model
 
+    # ------------------------------------------------------------------ for people
+    def layout(self) -> Layout:
+        names = self.names()
+        return Layout(names, (names, names + tuple(f"v{a}" for a in names)), names, names)
+
+    def reproductions(self, demos=None, duration=None) -> Reproductions:
+        """Rollouts from the demonstrations' first (x, v) (without: from the gating mixture's means),
+        each for ``duration`` s (default HORIZON x its demo's duration; 10 s without demos)."""
+        self._check_fitted()
+        s, T, n = self.length_scale_, self.time_scale_, self.dim_
+        starts = [(d.pos[0], d.vel[0]) for d in demos] if demos else \
+            [(self.goal_ + s * m[:n], m[n:] * s / T) for m in self.mixture_.means]
+        spans = [duration or HORIZON * d.duration for d in demos] if demos else [duration or 10.0] * len(starts)
+        runs = [self.rollout(x0, span, v0=v0) for (x0, v0), span in zip(starts, spans)]
+        return Reproductions(list(demos or []), runs, self.goal_, self.names(), self.units_)
+
+    def summary(self) -> list[str]:
+        """The certificate's numbers and how often the demonstrations themselves break its decrease."""
+        r = self.verification_
+        worst = min((m if m is not None else -np.inf) for m in r.proven_margins)
+        lines = [f"metric M and {len(r.proven_margins)} LMIs proven in exact arithmetic (min margin {worst:.2e}), "
+                 f"max sampled decrease rate {r.max_sampled_rate:.2e} over {r.n_samples} states x 2 gatings"]
+        v = getattr(self, "energy_violations_", None)
+        if v:
+            lines.append(f"the demonstrations decay slower than certified at {v['slower_than_certified']:.0%} of "
+                         f"{v['samples']} samples and gain M-energy at {v['energy_gain']:.0%}")
+        return lines
 
 def _lifted(items, n: int, kind: str, sizes: tuple) -> list:
     """``[(time, vector)]`` with vectors of a length in ``sizes``, an n-vector lifted to (vector, 0) in

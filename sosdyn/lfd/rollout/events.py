@@ -39,6 +39,11 @@ class Trajectory:
     events: list[dict] = field(default_factory=list)
     vel: np.ndarray | None = None
 
+    @property
+    def states(self) -> np.ndarray:
+        """The rows a model's rollout reports (the positions; a pose rollout adds its quaternions)."""
+        return self.pos
+
 
 def as_vector(value, n: int | None, what: str) -> np.ndarray:
     """``value`` as a finite float vector (of shape (n,) unless n is None); InputError otherwise."""

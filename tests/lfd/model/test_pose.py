@@ -13,12 +13,12 @@ from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import InputError, ModelFileError
 from sosdyn.evaluation.poses import angles_deg
-from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations, chart
+from sosdyn.lfd.data.pose import PoseDemonstration, PoseDemonstrations, chart
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model import pose as pose_module
 from sosdyn.lfd.model.files import load_model, load_pose_model
 from sosdyn.lfd.model.pose import PoseCDSP, body_velocity, chart_bound
-from sosdyn.lfd.model.pose_export import pose_to_cpp, pose_to_python
+from sosdyn.lfd.runtime.pose import pose_to_cpp, pose_to_python
 
 K_RATE = 0.8
 X_GOAL = np.array([0.4, -0.2, 0.3])
@@ -78,7 +78,7 @@ def test_predictor_gives_world_angular_velocity(fitted):
               ).as_rotvec() / h
     np.testing.assert_allclose(w, w_true, atol=2e-3)
     goal = np.concatenate([fitted.goal_pos_ + 1.0, fitted.goal_quat_])  # a moved goal: translated field
-    v2, w2 = fitted.predictor(goal)(x0 + 1.0, q0)
+    v2, w2 = fitted.predictor(goal=goal)(x0 + 1.0, q0)
     np.testing.assert_allclose(np.concatenate([v2, w2]), np.concatenate([v, w]), atol=1e-12)
 
 
@@ -94,7 +94,7 @@ def test_goal_change_and_push(fitted):
     p0 = np.concatenate([X_GOAL + 0.2, Q_GOAL])
     turned = Rotation.from_rotvec([0, 0, 0.6]) * R_GOAL
     goal2 = np.concatenate([X_GOAL - 0.1, turned.as_quat(scalar_first=True)])
-    traj = fitted.rollout(p0, 20.0, dt=0.05, pushes=[(2.0, [0.1, 0, 0, 0.3, 0, 0])], goal_changes=[(6.0, goal2)])
+    traj = fitted.rollout(p0, 20.0, dt=0.05, perturbations=[(2.0, [0.1, 0, 0, 0.3, 0, 0])], goal_changes=[(6.0, goal2)])
     assert np.all(np.diff(traj.t) > 0)
     assert angles_deg(traj.quat[-1], goal2[3:])[0] < 0.1 and np.linalg.norm(traj.pos[-1] - goal2[:3]) < 1e-3
 
@@ -235,3 +235,25 @@ def test_rollout_leaving_the_chart_is_refused(fitted, monkeypatch):
     monkeypatch.setattr("sosdyn.lfd.model.pose.chart_bound", lambda *args: np.inf)
     with pytest.raises(InputError, match="out of the chart"):
         fitted.rollout(np.concatenate([fitted.goal_pos_, fitted.goal_quat_]), 1.0, dt=0.05)
+
+
+def test_a_pose_model_through_a_twist_keeps_its_bound_file_and_export(tmp_path):
+    """The known system through a fitted twist (and no bump): certified, the chart bound (|z| <= |u| /
+    b_lo, b_lo = 1 / lam(K) here) holds along a rollout, the file round-trips and the export agrees."""
+    t = np.linspace(0.0, 12.0, 240)
+    demos = PoseDemonstrations([PoseDemonstration(t, *exact(x0, r0, t), f"start {i}")
+                                for i, (x0, r0) in enumerate(STARTS)], "known", "m")
+    m = PoseCDSP(n_components=1, warp={"n_maps": 0, "twist": 2.0}, max_samples=400).fit(demos)
+    assert m.certified_ and "twist" in m.cdsp_.warp_ and m.verify().passed
+    r0 = 2.0 * np.array([0.6, 0.0, 0.8])
+    p0 = np.concatenate([X_GOAL + 0.3, (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)])
+    traj = m.rollout(p0, 10.0, dt=0.05)
+    assert np.deg2rad(angles_deg(traj.quat, Q_GOAL)).max() <= traj.chart_bounds[0] + 1e-9
+    x, q = np.array([0.5, 0.1, 0.2]), Rotation.from_rotvec([0.1, 0.2, 0.3]).as_quat(scalar_first=True)
+    loaded = load_model(m.save(tmp_path / "twisted_pose.json"))
+    np.testing.assert_allclose(np.concatenate(loaded.predictor()(x, q)), np.concatenate(m.predictor()(x, q)),
+                               rtol=1e-12, atol=1e-14)
+    namespace = {}
+    exec(compile(pose_to_python(m), "pose_model.py", "exec"), namespace)
+    np.testing.assert_allclose(np.concatenate(namespace["predict_pose"](x, q, None)),
+                               np.concatenate(m.predictor()(x, q)), rtol=1e-12, atol=1e-14)

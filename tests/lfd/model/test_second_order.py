@@ -10,7 +10,7 @@ import sosdyn as sd
 from sosdyn.errors import DemonstrationError, InputError, ModelFileError, NotFittedError
 from sosdyn.evaluation.metrics import dtwd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
-from sosdyn.lfd.fit.second_order_check import check_second_order, energy_violations, excursion_bound
+from sosdyn.lfd.fit.second_order.certificate import check_second_order, energy_violations, excursion_bound
 
 A_OSC = np.diag([-9.0, -4.0])           # a lightly damped anisotropic oscillator: frequencies 3 and 2,
 B_OSC = -0.6 * np.eye(2)                # decay 0.3/s; its path crosses itself (a damped Lissajous figure)
@@ -102,7 +102,7 @@ def test_predictor_matches_predict(linear_model, second_order_system):
 def test_python_export_matches_predict(linear_model, second_order_system, tmp_path):
     goal = second_order_system[2]
     path = tmp_path / "acc.py"
-    path.write_text(linear_model.export())
+    path.write_text(linear_model.export("python"))
     space = {}
     exec(compile(path.read_text(), str(path), "exec"), space)
     X, V = np.random.default_rng(3).normal(0, 5, (2, 7, 2))
