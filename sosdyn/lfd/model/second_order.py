@@ -8,8 +8,8 @@ F_k^T M + M F_k <= -2 gamma' M for every k (gamma' = gamma T), checked independe
 || (x - g, v) || in the metric decays like exp(-gamma t): x -> g and v -> 0 (docs/theory.md,
 "Second order"). The gating h(e) depends on v, so two branches may cross at one x.
 
-Speed limit (``rollout(max_speed=...)``): the whole field (v, a) scaled by lambda = min(1, v_max / |v|)
-> 0 is a time change of the certified system (same paths in (x, v), same goal, V still decreasing),
+Speed limit (``rollout(max_speed=...)``): the whole field (v, a) scaled by the speed limit's factor
+lambda(|v| / v_max) > 0 (:func:`~sosdyn.lfd.runtime.states.speed_factor`) is a time change of the certified system (same paths in (x, v), same goal, V still decreasing),
 so the position moves at |dx/dt| = lambda |v| <= v_max; the state's v is then not dx/dt, so a
 controller that reads the measured velocity cannot apply it: the one-state predictor and the exports
 refuse ``max_speed`` (docs/theory.md).
@@ -244,7 +244,7 @@ class SecondOrderCDSP(MotionModel):
         """Integrate (x, v) from (x0, v0) (v0 None: at rest) for ``duration`` s on a grid of step ``dt``
         (None: ``dt_``). Pushes ``[(t, dx)]`` with dx of shape (n,) (position) or (2n,) (position and
         velocity); goal changes ``[(t, g)]`` (the motion translates); ``max_speed``: the field (v, a)
-        scaled by min(1, max_speed / |v|), a time change (module docstring). The Trajectory has
+        scaled by the speed limit's factor of |v| (< max_speed), a time change (module docstring). The Trajectory has
         ``vel`` (dx/dt); a push's ``before`` / ``after`` are (x, v) states (:func:`sosdyn.lfd.rollout.rollout`)."""
         self.refuse(other, "rollout")
         self._check_fitted()
