@@ -28,7 +28,6 @@ import time
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.markup import escape
 
@@ -36,12 +35,12 @@ from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.learner import COST_FLOOR, stalled
-from ..lfd.data.pose import GOAL_TOL_DEG, is_pose_file
+from ..lfd.data.pose import GOAL_TOL_DEG
 from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from ..lfd.model.base import FAMILIES, family_for
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
-from .paths import check_folder, check_output, demo_inputs
+from .paths import LASA_PREFIX, check_folder, check_output, demo_inputs
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
 
@@ -165,7 +164,8 @@ def _default(name: str) -> str:
 def fit(
     demos: Annotated[list[str], typer.Argument(
         help="Demonstration files (CSV/NPY, one demonstration each, or several with a demo column), "
-             "folders of them, quoted patterns like 'demos/*.csv', or lasa:NAME.", show_default=False)],
+             "folders of them, quoted patterns like 'demos/*.csv', or one lasa:NAME or dataset:NAME alone.",
+        show_default=False)],
     out_path: Annotated[Path, typer.Option("--out", "-o", help="Where to save the model (JSON).")] = Path("model.json"),
     order: Annotated[int, typer.Option(
         "--order", min=1, max=2, help="1: a first-order model xdot = f(x) (CDSP; PoseCDSP for pose files); 2: a "
@@ -210,9 +210,9 @@ def fit(
                               "plots; the numbers are not rescaled.", show_default="none")] = None,
     goal_tol: Annotated[float | None, typer.Option(
         "--goal-tol", min=0.0, help="Largest distance of a demonstration's end point from the mean end point "
-                                    "(data units) as recorded; demonstrations ending farther apart are refused.",
-        show_default=f"{GOAL_TOL_FRACTION:.0%} of the data's bounding-box diagonal with --align-ends off; "
-                     "else --align-ends' limit")] = None,
+                                    "(data units) after preprocessing (--align-ends moves the ends onto their "
+                                    "mean); demonstrations ending farther apart are refused, as by Python's fit.",
+        show_default=f"{GOAL_TOL_FRACTION:.0%} of the data's bounding-box diagonal")] = None,
     smooth: Annotated[str, typer.Option(
         parser=parse_smooth, help="Savitzky-Golay smoothing before differentiation: auto = a window from the "
                                   "noise and the sampling (off for smooth data such as LASA), off, or an odd "
@@ -240,7 +240,7 @@ def fit(
     """
     import sosdyn as sd
 
-    lasa = len(demos) == 1 and demos[0].startswith("lasa:")
+    lasa = len(demos) == 1 and demos[0].startswith(LASA_PREFIX)
     shipped = len(demos) == 1 and demos[0].startswith(DATASET_PREFIX)
     if lasa and (dt, units, goal_tol, time_units, columns) != (None,) * 5:
         raise InputError("--dt, --units, --goal-tol, --time-units and --columns apply to files, not to "
@@ -252,14 +252,12 @@ def fit(
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
-    pose_files = columns is None and any(map(is_pose_file, paths))    # read as poses: no end tolerance here
-    raw_tol = goal_tol if goal_tol is not None or align_ends is False or pose_files else np.inf
-    read = {"units": units, "goal_tol": raw_tol, "name": Path(demos[0]).resolve().name if folder else None}
+    read = {"units": units, "goal_tol": goal_tol, "name": Path(demos[0]).resolve().name if folder else None}
     if shipped:
         data = load_dataset_input(demos[0], dt)
     else:
-        data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
-            paths, **{k: v for k, v in read.items() if v is not None},   # aligning: --align-ends refuses
+        data = sd.load_lasa(demos[0].removeprefix(LASA_PREFIX)) if lasa else sd.load_demos(
+            paths, **{k: v for k, v in read.items() if v is not None},   # the ends: checked after prepare
             **read_options(dt, time_units, columns))
     family = family_for(data, order)
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,

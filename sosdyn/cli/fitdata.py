@@ -18,8 +18,7 @@ from rich.markup import escape
 
 from ..lfd.data.datasets import dataset_info, load_dataset
 from .base import State, info, out
-
-DATASET_PREFIX = "dataset:"
+from .paths import DATASET_PREFIX
 DEVIATION_WARN = 0.10
 
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from sosdyn.errors import InputError, WorkLimitError
-from sosdyn.limits import check_bytes, check_count, get_limits
+from sosdyn.limits import check_bytes, check_count, env_name, get_limits
 
 Field = Callable[[np.ndarray, np.ndarray], np.ndarray]  # field(X (m, n), goal (n,)) -> Xdot (m, n)
 
@@ -111,7 +111,8 @@ class WorkMeter:
                 f"{self.t:.4g} of {self.duration:g} s, x = {self.x} ({dist:.3g} from the goal): over "
                 f"max_rollout_calls = {self.max_calls} or max_rollout_seconds = {self.max_seconds}.",
                 "a start nearer the data or a shorter duration; or raise the limits, e.g. "
-                "sosdyn.set_limits(max_rollout_calls=10**6, max_rollout_seconds=3600).",
+                "sosdyn.set_limits(max_rollout_calls=10**6, max_rollout_seconds=3600) (the sosdyn command: "
+                f"{env_name('max_rollout_calls')}=... and {env_name('max_rollout_seconds')}=... in the environment).",
                 t=self.t, x=self.x, calls=self.calls, seconds=seconds)
 
 
