@@ -198,7 +198,8 @@ def time_problem(t: np.ndarray) -> str | None:
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
         return f"time t is not finite (NaN or inf) at sample {bad[0]} of {len(t)}"
-    back = np.flatnonzero(np.diff(t) <= 0)
+    steps = np.diff(t)
+    back = np.flatnonzero(steps < 0) if (steps < 0).any() else np.flatnonzero(steps == 0)   # going back first
     if back.size:
         k = back[0] + 1
         return (f"time is not strictly increasing at sample {k} of {len(t)} "
