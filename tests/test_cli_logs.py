@@ -1,15 +1,18 @@
 """Logs as they come through ``sosdyn fit`` (issue 34 item 3, issue 35 items 6 and 8): the note about
 repeated time stamps on one line, one rule for the ends in Python and the CLI, a shipped set read
 alone, tiny time steps refused once."""
+import importlib
+
 import numpy as np
 import pytest
 
 import cli_support
 import sosdyn as sd
-from sosdyn import limits
 from sosdyn.errors import DemonstrationError, InputError
 from sosdyn.lfd.data.datasets import DATASETS_DIR
 from sosdyn.lfd.data.files import load_demos
+
+LIMITS = importlib.import_module("sosdyn.limits")      # the module (sosdyn.limits is also a function)
 
 
 def reach(path, header, t, *columns):
@@ -88,9 +91,9 @@ def test_the_limits_are_raised_for_the_command_through_the_environment(capsys, t
     for value, fragments in (("1000", ("over the limit of 1000 B", "SOSDYN_MAX_BYTES=... in the environment")),
                              ("lots", ("the environment variable SOSDYN_MAX_BYTES = 'lots' is not an integer",))):
         monkeypatch.setenv("SOSDYN_MAX_BYTES", value)
-        monkeypatch.setattr(limits, "_current", None)          # a new session: the limits are read again
+        monkeypatch.setattr(LIMITS, "_current", None)          # a new session: the limits are read again
         code, _, err = cli_support.run(capsys, "fit", path, "--out", tmp_path / "m.json")
         cli_support.assert_one_error_line(code, err, *fragments)
     monkeypatch.setenv("SOSDYN_MAX_BYTES", "12345")
-    monkeypatch.setattr(limits, "_current", None)
+    monkeypatch.setattr(LIMITS, "_current", None)
     assert sd.get_limits().max_bytes == 12345
