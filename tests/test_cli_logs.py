@@ -97,3 +97,22 @@ def test_the_limits_are_raised_for_the_command_through_the_environment(capsys, t
     monkeypatch.setenv("SOSDYN_MAX_BYTES", "12345")
     monkeypatch.setattr(LIMITS, "_current", None)
     assert sd.get_limits().max_bytes == 12345
+
+
+def test_late_arrivals_are_said_under_the_certificate(capsys, tmp_path, monkeypatch):
+    """The caution stands right under 'certificate: passed' (before: a bare warning after the table)."""
+    t = np.linspace(0.0, 2.0, 60)
+    paths = [reach(tmp_path / f"r{k}.csv", ["t", "x", "y"], t, (1 - t / 2) ** 2 * (3 + k), (1 - t / 2) ** 2 * (1 - k))
+             for k in range(2)]
+
+    def late(self, demos):
+        return [{"demo": i, "source": d.source, "mean_dev": 0.0, "max_dev": 0.0, "arrival_s": np.inf,
+                 "duration_s": d.duration, "final_error": 1.0, "at_goal": False} for i, d in enumerate(demos)]
+    monkeypatch.setattr(sd.CDSP, "score", late)
+    code, out, err = cli_support.run(capsys, "fit", *paths, "--components", 1, "--warp", "none", "--out", tmp_path / "m.json")
+    assert code == 0, err
+    lines = out.splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("certificate: passed"))
+    assert lines[k + 1].startswith("arrival: 2 of 2 reproductions do not reach the goal within twice"), lines[k + 1]
+    assert "eventual arrival, not arrival within the demonstrations' time" in lines[k + 1]
+    assert any(line.split()[:1] == ["0"] and "never" in line for line in lines)     # the table's time to the goal

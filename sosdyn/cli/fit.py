@@ -18,8 +18,10 @@ reported when the family cannot follow them. An option the family has no paramet
 naming the family that takes it. Progress: one plain line per
 convex step on stdout (step, cost, seconds of the step and since the start) when stdout is not a
 terminal, a live status line when it is; nothing with ``--quiet``. After the fit: the
-certificate and the model's summary (e.g. which warp candidate was kept), a line for every fit that
-stopped at the iteration cap, and a table of how the model reproduces each demonstration.
+certificate, right under it a caution when reproductions do not reach the goal within twice their
+demonstration's duration (what the certificate does and does not promise), the model's summary (e.g.
+which warp candidate was kept), a line for every fit that stopped at the iteration cap, and a table of
+how the model reproduces each demonstration (with the time each takes to reach the goal).
 """
 from __future__ import annotations
 
@@ -39,7 +41,7 @@ from ..lfd.data.pose import GOAL_TOL_DEG
 from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from ..lfd.model.base import FAMILIES, family_for
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
-from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
+from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_arrival, print_score
 from .paths import LASA_PREFIX, check_folder, check_output, demo_inputs
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
@@ -276,10 +278,12 @@ def fit(
     info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} demonstrations, fit in "
          f"{time.perf_counter() - progress.start:.1f} s, {len(model.history_)} convex steps)")
     lines = model.summary()
+    rows = None if State.quiet else model.score(data)
     info(f"certificate: {'[green]passed[/]' if model.certified_ else '[red]FAILED[/]'} — {escape(lines[0])}")
+    params = model.get_params()
+    print_arrival(rows, params.get("gamma"))
     for line in lines[1:]:
         info(escape(line))
-    params = model.get_params()
     for line in progress.caps(params["max_iter"], params["tol"]):
         info(f"[yellow]iteration cap[/]: {escape(line)}")
-    print_score(model, data)
+    print_score(rows, data)
