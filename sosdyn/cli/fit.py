@@ -40,6 +40,7 @@ from ..lfd.fit.learner import COST_FLOOR, stalled
 from ..lfd.data.pose import GOAL_TOL_DEG
 from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from ..lfd.model.base import FAMILIES, family_for
+from ..lfd.model.second_order import FIELDS as SECOND_ORDER_FIELDS
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_arrival, print_score
 from .paths import LASA_PREFIX, check_folder, check_output, demo_inputs
@@ -54,12 +55,13 @@ class SolverMethod(str, enum.Enum):
 
 Warp = enum.Enum("Warp", {name: name for name in WARPS}, type=str)
 Gating = enum.Enum("Gating", {name: name for name in GATINGS}, type=str)
+SecondOrderField = enum.Enum("SecondOrderField", {name: name for name in SECOND_ORDER_FIELDS}, type=str)
 
 #: The model parameter each fit option sets (an option whose parameter the family lacks is refused).
 OPTIONS = {"n_components": "--components", "metric_degree": "--metric-degree", "field_degree": "--field-degree",
            "gamma": "--gamma", "solver": "--solver", "solver_method": "--solver-method", "random_state": "--seed",
            "corrective_rounds": "--corrective-rounds", "warp": "--warp", "max_iter": "--max-iter",
-           "gating": "--gating", "goal_tol_deg": "--goal-tol-deg"}
+           "gating": "--gating", "goal_tol_deg": "--goal-tol-deg", "field": "--field"}
 
 
 class Switch(str, enum.Enum):
@@ -231,6 +233,10 @@ def fit(
         "--goal-tol-deg", min=0.0, max=180.0, help="Pose files: refuse end orientations farther than this (deg) "
                                                    "from their chordal mean; nearer ones are aligned to it.",
         show_default=f"{GOAL_TOL_DEG:g}")] = None,
+    field: Annotated[SecondOrderField | None, typer.Option(
+        "--field", help="Second order: tracking = the demonstrations tracked in (x, v), certified by an energy "
+                        "tank; mixture = a mixture of linear fields under one quadratic certificate.",
+        show_default="tracking")] = None,
     time_units: TimeUnitsOption = None,
     columns: ColumnsOption = None,
 ) -> None:
@@ -265,7 +271,8 @@ def fit(
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value,
-               "max_iter": max_iter, "gating": gating and gating.value, "goal_tol_deg": goal_tol_deg}
+               "max_iter": max_iter, "gating": gating and gating.value, "goal_tol_deg": goal_tol_deg,
+               "field": field and field.value}
     given = {k: v for k, v in options.items() if v is not None}
     check_options(family, given)
     data = prepare(family, data, smooth, trim_rest is Switch.on, align_ends)

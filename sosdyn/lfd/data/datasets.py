@@ -12,6 +12,7 @@ pouring                        3     63     m (inferred)            k * 0.01 s
 hammer                         3     10     m (inferred)            sample index: dt declared
 cleaning/cleaning_1, _2        6     1      rad (inferred, joints)  recorded, ~0.035 s
 crossing/<shape> (8, synth.)   2     7-8    px (y up, goal at 0)    logged ms, jittered
+crossing_letters/<l> (6, syn.) 2     7      px (0.1 px, goal at 0)  5 ms reports, some lost
 winding/<shape> (9, synth.)    2     7      px (y up, goal at 0)    logged ms, jittered
 =============================  ====  =====  ======================  ========================
 
@@ -20,7 +21,10 @@ winding/<shape> (9, synth.)    2     7      px (y up, goal at 0)    logged ms, j
 other, written by ``python -m problems crossing-shapes`` (seeded; its README says how and why).
 ``winding/<shape>`` (``spiral180``, ``spiral270``, ``spiral360``, ``hook``, ``G``, ``snail``,
 ``nearhook``, ``loop``, ``curl``) is synthetic the same way: strokes that wind around the goal, written by
-``python -m problems winding-shapes``. :attr:`DatasetInfo.synthetic` marks both, and experiments on real data ask for
+``python -m problems winding-shapes``. ``crossing_letters/<letter>`` (``b``, ``h``, ``f``, ``g``,
+``eight``, ``four``) is a second synthetic crossing set from another generator (sigma-lognormal
+strokes, a pen-tablet log; ``python -m problems crossing-letters``), held out: models are tuned
+on ``crossing`` only. :attr:`DatasetInfo.synthetic` marks them, and experiments on real data ask for
 ``dataset_names(synthetic=False)``.
 
 Pose sets (robottasks, pouring) also hold an orientation quaternion ``qw, qx, qy, qz``;
@@ -46,6 +50,7 @@ from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_
 DATASETS_DIR = Path(__file__).resolve().parent / "datasets"
 HAMMER_DT = 0.01        # s per sample, declared (the source has none; its loader uses dt = 1)
 CROSSING_SHAPES = ("ell", "e", "phi", "alpha", "gamma", "at", "pretzel", "cross")
+CROSSING_LETTERS = ("b", "h", "f", "g", "eight", "four")
 WINDING_SHAPES = ("spiral180", "spiral270", "spiral360", "hook", "G", "snail", "nearhook", "loop", "curl")
 
 
@@ -80,6 +85,10 @@ DATASETS = {
     **{f"crossing/{shape}": DatasetInfo(f"crossing/{shape}", ("x", "y"), "px", time="time_ms", time_unit=1e-3,
                                         synthetic=True, note="synthesised mouse strokes that cross (issue 28)")
        for shape in CROSSING_SHAPES},
+    **{f"crossing_letters/{letter}": DatasetInfo(f"crossing_letters/{letter}", ("x", "y"), "px", time="time_ms",
+                                                 time_unit=1e-3, synthetic=True,
+                                                 note="held-out synthesised pen-tablet letters that cross (issue 36)")
+       for letter in CROSSING_LETTERS},
     **{f"winding/{shape}": DatasetInfo(f"winding/{shape}", ("x", "y"), "px", time="time_ms", time_unit=1e-3,
                                        synthetic=True, note="synthesised mouse strokes that wind around the goal (issue 36)")
        for shape in WINDING_SHAPES},

@@ -225,3 +225,12 @@ inline double joint_factor(double a, double b) {{
   return rho <= speed_knee ? 1.0 : saturated_speed(rho) / rho;
 }}
 """
+
+
+def as_levels(tank, m: int) -> np.ndarray:
+    """Tank levels (m,) from a number or m numbers, each finite and >= 0 (else InputError)."""
+    b = np.broadcast_to(np.asarray(tank, dtype=float), (m,)) if np.ndim(tank) == 0 else np.asarray(tank, dtype=float)
+    if b.shape != (m,) or not np.isfinite(b).all() or (b < 0).any():
+        raise InputError(f"tank must be a number or {m} numbers, finite and >= 0, got shape {np.shape(tank)}. "
+                         "Try: tank=None (a full tank: motions starting at these states).")
+    return b
