@@ -16,9 +16,10 @@ Both are checked independently (:mod:`sosdyn.lfd.fit.second_order.certificate`) 
 returned (docs/theory.md, "Second order"). The field depends on v, so two branches may cross at one x.
 
 Speed limit (``rollout(max_speed=...)``): the whole field (v, a, db/dt) scaled by the speed limit's
-factor lambda(|v| / v_max) > 0 (:func:`~sosdyn.lfd.runtime.states.speed_factor`) is a time change of the certified system (same paths, same goal, V + b still
-decreasing), so |dx/dt| = lambda |v| < v_max; the state's v is then not dx/dt, so a controller that
-reads the measured velocity cannot apply it: the predictor and the exports refuse ``max_speed``.
+factor lambda(|v| / v_max) > 0 (:func:`~sosdyn.lfd.runtime.states.speed_factor`) is a time change of
+the certified system (same paths, same goal, V + b still decreasing), so |dx/dt| = lambda |v| <
+v_max; the state's v is then not dx/dt, so a controller that reads the measured velocity cannot apply
+it: the predictor and the exports refuse ``max_speed``.
 """
 from __future__ import annotations
 
