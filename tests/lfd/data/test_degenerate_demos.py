@@ -16,13 +16,17 @@ def still_demos(offset=(1.0, 2.0), noise=0.0):
                            for _ in range(2)], "still", "m")
 
 
-@pytest.mark.parametrize("family", [sd.CDSP, sd.SecondOrderCDSP])
+FAMILIES = {"CDSP": lambda: sd.CDSP(n_components=1), "second order": lambda: sd.SecondOrderCDSP(),
+            "second order, mixture": lambda: sd.SecondOrderCDSP(field="mixture", n_components=1)}
+
+
+@pytest.mark.parametrize("family", FAMILIES)
 @pytest.mark.parametrize("offset, noise", [((1.0, 2.0), 0.0), ((1.0, 2.0), 1e-16), ((0.0, 0.0), 0.0), ((3e6, -1e5), 1e-15)])
 def test_demos_that_do_not_move_are_refused_by_every_family(family, offset, noise):
     """Before: CDSP and SecondOrderCDSP both fitted a 'certified' model of round-off (issue 35)."""
     with pytest.raises(DemonstrationError, match=r"demo 0 of 'still': the positions do not move .* Try: check that "
                                                  r"the position columns are the moving ones"):
-        family(n_components=1).fit(still_demos(offset, noise))
+        FAMILIES[family]().fit(still_demos(offset, noise))
 
 
 def test_a_small_motion_far_from_the_origin_still_moves():
@@ -64,8 +68,9 @@ def test_a_resampling_grid_over_the_memory_limit_is_refused_before_allocation():
         resample_uniform(gap_demos()[0])
     with pytest.raises(ResourceLimitError, match=pattern):
         preprocess(gap_demos())
-    with pytest.raises(ResourceLimitError, match=pattern):
-        sd.SecondOrderCDSP(n_components=1).fit(gap_demos())
+    for family in ("second order", "second order, mixture"):
+        with pytest.raises(ResourceLimitError, match=pattern):
+            FAMILIES[family]().fit(gap_demos())
     with sd.limits(max_bytes=2**20), pytest.raises(ResourceLimitError, match="over the limit of 1.0 MiB"):
         resample_uniform(Demonstration.from_positions(np.r_[np.arange(40) * 1e-3, 100.0],
                                                       np.linspace(0, 1, 41)[:, None]))
