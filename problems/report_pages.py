@@ -138,19 +138,17 @@ def robot(r: dict) -> tuple[str, dict]:
 def second_order(r: dict) -> tuple[str, dict]:
     """Second against first order on the crossing shapes and on LASA, against the page's targets."""
     crossing, lasa, targets = r["crossing"], r["lasa"], r["meta"]["targets"]
-    numbers = {f"{s}: second-order DTWD ÷ copy": v["second"] for s, v in crossing["shapes"].items()
-               if v.get("second") is not None}
-    numbers.update({f"{s}: first-order DTWD ÷ copy": v["first"] for s, v in crossing["shapes"].items()
-                    if v.get("first") is not None})
-    numbers["crossing target (× copy)"] = targets["crossing"]
+    ratios = {s: v["ratios"] for s, v in crossing["shapes"].items()}
+    numbers = {f"{s}: second-order DTWD ÷ copy": v["SecondOrderCDSP"] for s, v in ratios.items()}
+    numbers.update({f"{s}: first-order DTWD ÷ copy": v["CDSP"] for s, v in ratios.items()})
     numbers["LASA second / first order"] = lasa["ratio"]
-    numbers["LASA target"] = targets["lasa"]
-    second = [v for k, v in numbers.items() if "second-order" in k]
-    first = [v for k, v in numbers.items() if "first-order" in k]
-    return (f"Second-order CDSP on {crossing['n_shapes']} crossing shapes: test DTWD {span(second)}× copy "
-            f"(first order {span(first)}×), the target (≤ {targets['crossing']:g}× copy, certified) met "
-            f"on {crossing['n_met']} of {crossing['n_shapes']}; on {lasa['n_shapes']} LASA shapes its mean "
-            f"DTWD is {num(lasa['ratio'])}× first order's (target ≤ {targets['lasa']:g}: "
+    second = [v["SecondOrderCDSP"] for v in ratios.values()]
+    first = [v["CDSP"] for v in ratios.values()]
+    n = len(ratios)
+    return (f"SecondOrderCDSP() on {n} crossing shapes: test DTWD {span(second)}× copy (first order "
+            f"{span(first)}×), the page's targets (≤ {targets['crossing']:g}× copy, certified) met on "
+            f"{sum(bool(v['met']) for v in crossing['shapes'].values())} of {n}; on {lasa['n_shapes']} LASA "
+            f"shapes its mean DTWD is {num(lasa['ratio'])}× first order's (target ≤ {targets['lasa']:g}: "
             f"{'met' if lasa['target_met'] else 'not met'}).", numbers)
 
 
