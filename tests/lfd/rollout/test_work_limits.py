@@ -30,15 +30,21 @@ def test_a_rollout_over_its_call_budget_says_how_far_it_got():
     assert "sosdyn.set_limits(max_rollout_calls=" in str(exc)
 
 
-def test_a_rollout_over_its_time_budget_stops_within_it():
+def test_a_rollout_over_its_time_budget_stops_within_it(monkeypatch):
+    """On a fake clock where each field evaluation costs 1/64 s: with max_rollout_seconds = 1 the 65th
+    evaluation is the first to end past the budget, and the next call stops the rollout before
+    evaluating (66 calls counted, 65 evaluated), far from done (rtol 1e-12 over 1e6 s)."""
+    step = 1 / 64                               # exact in binary: the clock reads 1.0 after 64 evaluations
+    clock = [0.0]
+    monkeypatch.setattr(time, "perf_counter", lambda: clock[0])
+
     def slow(X, goal):
-        time.sleep(0.01)
+        clock[0] += step
         return -(X - goal)
 
-    t0 = time.perf_counter()
-    with sd.limits(max_rollout_seconds=1), pytest.raises(WorkLimitError, match="max_rollout_seconds = 1"):
+    with sd.limits(max_rollout_seconds=1), pytest.raises(WorkLimitError, match="max_rollout_seconds = 1") as info:
         rollout(slow, GOAL + 1.0, duration=1e6, dt=1e3, goal=GOAL, integrator="RK45", rtol=1e-12)
-    assert time.perf_counter() - t0 < 2.0
+    assert clock[0] == info.value.seconds == 65 * step and info.value.calls == 66 and info.value.t < 1e6
 
 
 def test_the_default_budget_lets_ordinary_rollouts_through():
