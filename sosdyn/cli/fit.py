@@ -36,11 +36,11 @@ from rich.markup import escape
 from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
-from ..lfd.fit.learner import COST_FLOOR, stalled
 from ..lfd.data.pose import GOAL_TOL_DEG
-from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
+from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, METHODS, PRESETS, WARPS
+from ..lfd.fit.second_order import METHODS as SECOND_ORDER_METHODS
+from ..lfd.fit.second_order.params import FIELDS as SECOND_ORDER_FIELDS
 from ..lfd.model.base import FAMILIES, family_for
-from ..lfd.model.second_order import FIELDS as SECOND_ORDER_FIELDS
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_arrival, print_score
 from .paths import LASA_PREFIX, check_folder, check_output, demo_inputs
@@ -48,11 +48,7 @@ from .paths import LASA_PREFIX, check_folder, check_output, demo_inputs
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
 
 
-class SolverMethod(str, enum.Enum):
-    alternating = "alternating"
-    ica = "ica"
-
-
+SolverMethod = enum.Enum("SolverMethod", {m: m for m in dict.fromkeys(METHODS + SECOND_ORDER_METHODS)}, type=str)
 Warp = enum.Enum("Warp", {name: name for name in WARPS}, type=str)
 Gating = enum.Enum("Gating", {name: name for name in GATINGS}, type=str)
 SecondOrderField = enum.Enum("SecondOrderField", {name: name for name in SECOND_ORDER_FIELDS}, type=str)
@@ -77,22 +73,6 @@ def progress_line(row: dict, step_s: float, total_s: float) -> str:
         (f"corrective round {row['round']}, " if row.get("round") else "")
     return (f"{head}step {row['iteration'] + 1} ({row['step']}): cost {row['cost']:.6g} "
             f"({step_s:.2f} s; {total_s:.1f} s since start)")
-
-
-def iteration_cap(rows: list[dict], max_iter: int, tol: float) -> str | None:
-    """``stopped at max_iter=20 with relative change 3.1e-04 > tol=0.0001`` when the rows of one
-    fit (one candidate / round) used all ``max_iter`` iterations (ica or metric steps) and the
-    last one still changed the cost by more than ``tol`` (the learner's stopping test,
-    :func:`~sosdyn.lfd.fit.learner.stalled`); None otherwise."""
-    iterations = sum(r["step"] in ("ica", "metric") for r in rows)
-    costs = [r["cost"] for r in rows if r["step"].startswith("dynamics")]
-    if iterations < max_iter or len(costs) < 2 or not rows[-1]["step"].startswith("dynamics"):
-        return None
-    old, new = costs[-2], costs[-1]
-    if stalled(old, new, tol):
-        return None
-    change = (old - new) / max(old, COST_FLOOR)
-    return f"stopped at max_iter={max_iter} with relative change {change:.2e} > tol={tol:g}"
 
 
 class FitProgress:
@@ -128,11 +108,11 @@ class FitProgress:
         elif not State.quiet:
             out.print(line, highlight=False, soft_wrap=True)
 
-    def caps(self, max_iter: int, tol: float) -> list[str]:
-        """One line per fit (candidate / round) that hit the iteration cap."""
+    def caps(self, model) -> list[str]:
+        """One line per fit (candidate / round) that hit the iteration cap (``model.iteration_cap``)."""
         lines = []
         for (warp, round_), rows in self.rows.items():
-            cap = iteration_cap(rows, max_iter, tol)
+            cap = model.iteration_cap(rows)
             if cap:
                 who = " ".join(filter(None, (warp and f"warp {warp}", round_ and f"corrective round {round_}")))
                 lines.append(f"{who or 'the fit'}: {cap} (more iterations: --max-iter)")
@@ -141,8 +121,9 @@ class FitProgress:
 
 def check_options(family, given: dict) -> None:
     """InputError naming the options (:data:`OPTIONS`) whose parameter ``family`` does not have, and
-    the families that have it."""
-    params = set(family().get_params())
+    the families that have it; or an option whose parameter applies only when another has a value
+    (``family.only_with``) given without it, naming the option that sets it."""
+    params = family().get_params()
     bad = [name for name in given if name not in params]
     if bad:
         owners = sorted({cls.__name__ for cls in FAMILIES.values() for name in bad if name in cls().get_params()})
@@ -150,6 +131,12 @@ def check_options(family, given: dict) -> None:
         raise InputError(f"{listed} {'does' if len(bad) == 1 else 'do'} not apply to a {family.__name__} model"
                          f"{' (' + ' and '.join(owners) + ' take' + ('s' if len(owners) == 1 else '') + ' it)' if owners else ''}"
                          f". Try: drop {'it' if len(bad) == 1 else 'them'}.")
+    for name in given:
+        other, value = family.only_with.get(name, (None, None))
+        if other is not None and given.get(other, params[other]) != value:
+            now = f"{OPTIONS[other]} {given[other]}" if other in given else f"the default {OPTIONS[other]} {params[other]}"
+            raise InputError(f"{OPTIONS[name]} applies to a {family.__name__} model with {OPTIONS[other]} {value} "
+                             f"only, not with {now}. Try: add {OPTIONS[other]} {value}, or drop {OPTIONS[name]}.")
 
 
 def _units(value: str | None) -> str | None:
@@ -189,7 +176,8 @@ def fit(
     solver: Annotated[str | None, typer.Option(help="Conic solver, e.g. CLARABEL or SCS.",
                                                show_default=str(DEFAULTS["solver"]))] = None,
     solver_method: Annotated[SolverMethod | None, typer.Option(
-        "--solver-method", "--method", help="How the bilinear program is solved (CDSP's solver_method).",
+        "--solver-method", "--method", help="How the bilinear program is solved: ica (joint convex steps) or "
+                                            "alternating; a second-order mixture (--field mixture) also energy.",
         show_default=_default("solver_method"))] = None,
     corrective_rounds: Annotated[int | None, typer.Option(
         min=0, max=MAX_CORRECTIVE_ROUNDS, help="Refits on corrective data from the model's own rollouts of the demonstrations (0 = plain "
@@ -291,6 +279,6 @@ def fit(
     print_arrival(rows, params.get("gamma"))
     for line in lines[1:]:
         info(escape(line))
-    for line in progress.caps(params["max_iter"], params["tol"]):
+    for line in progress.caps(model):
         info(f"[yellow]iteration cap[/]: {escape(line)}")
     print_score(rows, data)

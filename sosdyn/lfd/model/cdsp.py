@@ -36,7 +36,7 @@ from ..fit.certificate import DEFAULT_SAMPLES, CertificateReport
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
 from ..data.demonstrations import check_demonstrations
 from ..data.pose import PoseDemonstrations
-from ..fit.learner import Settings, reuse_steps
+from ..fit.learner import Settings, capped, reuse_steps
 from ..fit.params import LEGACY_PARAMS, MAX_SEED, PARAMS, check_params, check_solver, preset_params, resolve_seed
 from ..fit.composite import maps_of, twist_of
 from ..fit.pipeline import check_fit, field_at
@@ -352,6 +352,10 @@ class CDSP(MotionModel):
             lines.append(f"warp candidates, training deviation (lower is better): {listed} -> kept "
                          f"{min(scores, key=scores.get)} (the lowest)")
         return lines
+
+    def iteration_cap(self, rows: list[dict]) -> str | None:
+        """The fit's rows against ``max_iter`` and ``tol`` (:func:`~sosdyn.lfd.fit.learner.capped`)."""
+        return capped(rows, self.max_iter, self.tol)
 
     @property
     def n_iter_(self) -> int:

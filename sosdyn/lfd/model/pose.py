@@ -369,3 +369,7 @@ class PoseCDSP(MotionModel):
             lines.append(f"end orientations aligned onto their chordal mean by {moved} deg (refused beyond "
                          f"goal_tol_deg {self.goal_tol_deg:g})")
         return lines
+
+    def iteration_cap(self, rows: list[dict]) -> str | None:
+        """As the 6-D chart model's (:meth:`CDSP.iteration_cap`): its rows are this fit's."""
+        return CDSP(**self.cdsp_params).iteration_cap(rows)
