@@ -15,7 +15,9 @@ with no role is refused, never dropped).
 Before the fit the demonstrations are prepared by the family (``--smooth``, ``--trim-rest``,
 ``--align-ends``: the model's ``prepare``; pose demonstrations take none) and crossings are
 reported when the family cannot follow them. An option the family has no parameter for is refused,
-naming the family that takes it. Progress: one plain line per
+naming the family that takes it; an option whose parameter applies only with another's value
+(``only_with``: the second-order mixture's --components, --max-iter, --solver-method) is refused
+without it, naming the option to add. Progress: one plain line per
 convex step on stdout (step, cost, seconds of the step and since the start) when stdout is not a
 terminal, a live status line when it is; nothing with ``--quiet``. After the fit: the
 certificate, right under it a caution when reproductions do not reach the goal within twice their
