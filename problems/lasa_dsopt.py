@@ -94,7 +94,7 @@ def job_key(shape: str, kwargs: dict, split: str) -> str:
     """The cache key: protocol version, shape, CDSP settings and, for a split other than the
     standard one, its demo indices (so the standard split's earlier entries stay valid)."""
     key = {"version": CACHE_VERSION, "shape": shape,
-           "settings": dict(corrective.key_params(kwargs), **warp.key_extra(kwargs))}
+           "settings": warp.cdsp_key(kwargs)}
     if split != STANDARD:
         key["split"] = [list(i) for i in dsopt.SPLITS[split]]
     return key_hash(key)

@@ -11,19 +11,22 @@ from sosdyn.evaluation import dsopt, realdata
 
 
 def test_quick_run_writes_results_page_and_figure(tmp_path):
-    paths = real_data.run(("hammer",), ("CDSP default", "GMR"), quick=True, out_dir=tmp_path)
+    paths = real_data.run(("hammer",), ("CDSP default", "GMR", "DMP"), quick=True, out_dir=tmp_path)
     res = json.loads(paths["results"].read_text())
     hammer = res["sets"]["hammer"]
     assert hammer["n_demos"] == 10 and hammer["dim"] == 3 and hammer["units"] == "m (inferred)"
-    cdsp, gmr = hammer["methods"]["CDSP default"], hammer["methods"]["GMR"]
+    cdsp, gmr, dmp = (hammer["methods"][m] for m in ("CDSP default", "GMR", "DMP"))
     assert cdsp["n_train"] == 6 and cdsp["n_test"] == 4            # ceil(4 * 10 / 7) = 6
-    assert cdsp["certified"] is True and gmr["certified"] is None
-    for r in (cdsp, gmr):
+    assert cdsp["certified"] is True and gmr["certified"] is None and dmp["certified"] is None
+    for r in (cdsp, gmr, dmp):
         assert not r["error"] and not r["failure"] and len(r["tests"]) == 4
         assert math.isclose(r["ratio"], r["dtwd_mean"] / r["copy_mean"])
         assert r["excursion"] == max(t["excursion"] for t in r["tests"]) >= 0
+        assert all(0 <= t["excursion_beyond_start"] <= t["excursion"] for t in r["tests"])
         assert all(t["dtwd"] > 0 and t["copy"] > 0 for t in r["tests"])
-    assert cdsp["copy_mean"] == gmr["copy_mean"]                    # the reference does not depend on the method
+        assert r["arrived"] == [sum(t["arrival_ratio"] <= 2 for t in r["tests"]), 4]
+    assert cdsp["copy_mean"] == gmr["copy_mean"] == dmp["copy_mean"]   # the reference does not depend on the method
+    assert cdsp["targets"]["dmp"] == (cdsp["ratio"] <= dmp["ratio"])
     # the certified bound holds for every measured rollout; GMR has no certificate, so no bound
     assert all(t["excursion"] <= t["excursion_bound"] for t in cdsp["tests"]) and gmr["excursion_bound"] is None
     assert cdsp["excursion_bound"] == max(t["excursion_bound"] for t in cdsp["tests"])
@@ -31,7 +34,8 @@ def test_quick_run_writes_results_page_and_figure(tmp_path):
     assert set(blocks["numbers"]) == {"hammer"} and (tmp_path / blocks["figures"]["dtwd"]).is_file()
     # copy is the per-test-demo minimum over training demos, so copying one chosen by its start scores >= copy
     assert blocks["numbers"]["hammer"]["start_copy_ratio"] >= 1.0
-    assert ("starts hammer" in blocks["figures"]) == (cdsp["excursion"] > 0.25)
+    assert ("starts hammer" in blocks["figures"]) == (cdsp["excursion_beyond_start"] > 0.25)
+    assert blocks["numbers"]["hammer"]["dmp_ratio"] == dmp["ratio"]
     assert cdsp["smoothing_window"] == 13                           # hammer is noisy: Savitzky-Golay on
     page = paths["html"].read_text()
     assert "figures/hammer.png" in page and (tmp_path / "figures" / "hammer.png").read_bytes()[:4] == b"\x89PNG"
@@ -40,11 +44,16 @@ def test_quick_run_writes_results_page_and_figure(tmp_path):
 
 
 def test_targets_flag_each_miss():
-    entry = {"ratio": 2.5, "excursion": 0.1, "arrival_ratio": 3.0, "certified": True, "error": None, "failure": None}
+    entry = {"ratio": 2.5, "excursion_beyond_start": 0.1, "arrival_ratio": 3.0, "certified": True, "error": None,
+             "failure": None}
     assert real_data.targets(entry) == {"dtwd": False, "excursion": True, "arrival": False, "certified": True,
                                         "all": False}
-    assert real_data.targets(dict(entry, ratio=1.5, arrival_ratio=1.0))["all"] is True
-    assert real_data.targets(dict(entry, ratio=1.5, arrival_ratio=1.0, certified=None))["all"] is False
+    met = dict(entry, ratio=1.4, arrival_ratio=1.0)
+    assert real_data.targets(met)["all"] is True
+    assert real_data.targets(met, dict(met, ratio=1.2)) == {"dtwd": True, "excursion": True, "arrival": True,
+                                                            "certified": True, "dmp": False, "all": False}
+    assert real_data.targets(dict(met, excursion_beyond_start=0.3))["excursion"] is False
+    assert real_data.targets(dict(entry, ratio=1.4, arrival_ratio=1.0, certified=None))["all"] is False
 
 
 def test_configs_scores_training_and_test_reproductions(tmp_path):
