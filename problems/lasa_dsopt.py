@@ -43,6 +43,8 @@ CACHE_VERSION = 2
 #: Variant name -> CDSP keyword arguments (random_state is set per seed).
 VARIANTS = {
     "CDSP default": {}, "CDSP plain": PLAIN,           # CDSP(), and its core alone (no warp, no corrective refits)
+    "CDSP posterior gating": {"gating": "posterior"},  # CDSP() with the gating it had before issue 34 (the posterior)
+    "CDSP tempered gating": {"gating": "tempered"},
     "CDSP paper": PRESETS["paper"],
     "CDSP-ICA": PRESETS["ica"],
     "CDSP-ICA g0.02": dict(PRESETS["ica"], gamma=0.02),

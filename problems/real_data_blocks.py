@@ -65,7 +65,7 @@ def dtwd_figure(numbers: dict, out_dir: Path) -> dict:
     """Per set: the default's and DMP's DTWD / copy, the nearest-start training demo's and the training
     demos' mutual DTWD over copy, with the target."""
     names = list(numbers)
-    fig = new_figure(9.0, 3.6)
+    fig = new_figure(9.0, 4.0)
     ax = fig.add_subplot(1, 1, 1)
     x = np.arange(len(names))
     for k, (key, label, color) in enumerate((("ratio", "CDSP default", "#0072B2"), ("dmp_ratio", "DMP", "#CC79A7"),
@@ -78,7 +78,8 @@ def dtwd_figure(numbers: dict, out_dir: Path) -> dict:
     ax.set_xticks(x, [s.replace("robottasks/", "rt/") for s in names], fontsize=8)
     ax.set_ylabel("test DTWD / copy (nearest demo, oracle)")
     ax.set_yscale("log")
-    ax.legend(fontsize=7, loc="upper left")
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=3, fontsize=7)
     ax.yaxis.set_major_formatter(ScalarFormatter())
     ax.yaxis.set_minor_formatter(ScalarFormatter())
     fig.suptitle("Test DTWD over copy (copy picks the training demo nearest to the whole test demo; reproductions\n"

@@ -200,8 +200,9 @@ def fit(
         "--max-iter", min=0, help="Iteration cap of the alternation (each fit, candidate or round).",
         show_default=f"{DEFAULTS['max_iter']}, or the preset's (second order: 50)")] = None,
     gating: Annotated[Gating | None, typer.Option(
-        help="The mixture weights h_k: posterior, or tempered (the posterior at the data, turning smoothly off "
-             "it: smoother motions away from the demonstrations).", show_default=_default("gating"))] = None,
+        help="The mixture weights h_k: posterior; tempered (the posterior at the data, turning smoothly off it); "
+             "smooth (the posterior at the data, fading to constant weights far off it: the smoothest motions away "
+             "from the demonstrations).", show_default=_default("gating"))] = None,
     dt: Annotated[float | None, typer.Option(
         callback=positive, help="Sampling step (s) of files without a time column: sample k is at k*dt.",
         show_default="none: the files' time column")] = None,

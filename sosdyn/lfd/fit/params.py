@@ -26,7 +26,7 @@ PARAMS = ("n_components", "metric_degree", "field_degree", "gamma", "metric", "s
           "solver_method", "max_iter", "tol", "eps", "margin", "metric_prox", "refine_gmm", "max_samples",
           "random_state", "verify_samples", "allow_uncertified", "corrective_rounds", "corrective_tau",
           "corrective_min_dist", "warp", "gating")                    # what get_params and a file hold
-GATINGS = ("posterior", "tempered")     # the mixture weights: plain, or tempered off the data (.gmm)
+GATINGS = ("posterior", "tempered", "smooth")   # the mixture weights: plain, or tempered off the data (.gmm)
 WARPS = ("auto", "none")        # warp: one of these, or a dict of WARP_DEFAULTS' keys (one fixed warp)
 MAX_POINTS = 10_000
 CORRECTIVE_OFF = {"corrective_rounds": 0}     # no corrective refits

@@ -40,7 +40,7 @@ from ..data.demonstrations import Demonstrations, sample_step
 from .certificate import CertificateReport, certify, check_certificate, collapse_diagnostic, extract_certificate
 from .contraction import eval_fields, field_exponents, metric_exponents
 from .corrective import score_steps
-from .gmm import (MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, fit_joint_gmm, gate_bound, gmr_cost,
+from .gmm import (FADE, MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, fit_joint_gmm, gate_bound, gmr_cost,
                   responsibilities_of, weights_from, with_bound)
 from .learner import History, Settings, learn, subsample
 from .params import resolve_seed, warp_settings
@@ -153,8 +153,8 @@ def fit_plain(demos: Demonstrations, maps, params: dict, progress, t_start: floa
 
     t0 = time.perf_counter()
     C, W, mixture_ = learn(U, Udot, mixture, s, history)
-    if params["gating"] == "tempered":                               # tempered off the training points
-        mixture_ = with_bound(mixture_, gate_bound(mixture_, U))
+    if params["gating"] != "posterior":                             # tempered off the training points
+        mixture_ = with_bound(mixture_, gate_bound(mixture_, U), FADE if params["gating"] == "smooth" else None)
     timings["learn_s"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

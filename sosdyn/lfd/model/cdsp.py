@@ -90,11 +90,15 @@ class CDSP(MotionModel):
       diffeomorphism of Gaussian bumps fixing the goal (``sosdyn.lfd.fit.warp``); a dict (keys of
       ``WARP_DEFAULTS``) is one fixed warp; "auto" fits no warp and each ``AUTO_WARPS`` candidate
       and keeps the one whose rollouts from the training demos' starts deviate least from them.
-    - ``gating`` ("posterior" or "tempered"): the weights h_k; "tempered" divides the quadratic
-      forms by max(1, min_k d_k^2 / c) (c = max(chi^2_n(0.999), the training points' largest
-      min_k d_k^2), so the weights are the posterior, bit for bit, at every training point and turn
-      smoothly off the data instead of switching between thin Gaussians: the 7-D reproductions'
-      kinks (``sosdyn.lfd.fit.gmm``; docs/findings.md). The certificate holds for either.
+    - ``gating`` ("smooth", "tempered" or "posterior"): the weights h_k. "posterior": the GMM's
+      posterior. "tempered" divides the quadratic forms by tau = max(1, min_k d_k^2 / c) (c =
+      max(chi^2_n(0.999), the training points' largest min_k d_k^2)), so the weights are the
+      posterior, bit for bit, at every training point and turn smoothly off the data instead of
+      switching between thin Gaussians: the 7-D reproductions' kinks (``sosdyn.lfd.fit.gmm``;
+      docs/findings.md). "smooth" (the default) keeps those weights up to tau = 3 and beyond fades
+      them to the mixing weights pi (one linear field far off the data): smooth joint motions from
+      starts off the demonstrations. The fit is the same for all three; the certificate holds for
+      every gating.
 
     Warp (z = (x - x*)/s): the core f is fitted on (phi(z_i), J_phi(z_i) zdot_i) and certified in
     u as always; the model is zdot = J_phi(z)^{-1} f(phi(z)). Since du = J_phi dz, the x-system is
@@ -136,7 +140,7 @@ class CDSP(MotionModel):
                  margin=1e-4, metric_prox=METRIC_PROX, refine_gmm=False, max_samples=3000, random_state=0,
                  verify_samples=DEFAULT_SAMPLES, allow_uncertified=False, progress=None,
                  corrective_rounds=ROUNDS, corrective_tau=TAU, corrective_min_dist=MIN_DIST, warp="auto",
-                 gating="posterior"):
+                 gating="smooth"):
         self.n_components = n_components
         self.metric_degree = metric_degree
         self.field_degree = field_degree

@@ -157,7 +157,7 @@ def state_record(state: dict) -> dict:
     """``state`` (STATE_FIELDS) as file content: the mixture as its three arrays."""
     m = state["mixture_"]
     return dict(state, mixture_={"weights": m.weights, "means": m.means, "covariances": m.covariances,
-                                 "bound": m.bound})
+                                 "bound": m.bound, "fade": m.fade})
 
 
 def validate_state(st: dict, n_components, field_degree: int, metric_degree: int, eps: float) -> dict:
@@ -248,7 +248,8 @@ def _exponents(st, name, n, count, expected):
 def _mixture(mx, K, n, where: str = "state.mixture_") -> PositionMixture:
     """Weights > 0 summing to 1, means (K, n), covariances (K, n, n) symmetric positive definite,
     the gating's bound null or a positive number (absent in files older than it: null, the plain
-    posterior, so such a model evaluates as it did)."""
+    posterior, so such a model evaluates as it did) and its fade null or a positive number (absent in
+    files older than it: null, no fade)."""
     w = array(need(mx, "weights", where), f"{where}.weights", (K,))
     means = array(need(mx, "means", where), f"{where}.means", (K, n))
     cov = array(need(mx, "covariances", where), f"{where}.covariances", (K, n, n))
@@ -264,9 +265,10 @@ def _mixture(mx, K, n, where: str = "state.mixture_") -> PositionMixture:
         except np.linalg.LinAlgError:
             raise ModelFileError(f"malformed: {where}.covariances[{k}] is not positive definite "
                                  "(no Cholesky factor)") from None
-    bound = mx.get("bound")
-    check_fields(mx, ("weights", "means", "covariances", "bound"), where)
-    return PositionMixture(w, means, cov, None if bound is None else positive(bound, f"{where}.bound"))
+    bound, fade = mx.get("bound"), mx.get("fade")
+    check_fields(mx, ("weights", "means", "covariances", "bound", "fade"), where)
+    return PositionMixture(w, means, cov, None if bound is None else positive(bound, f"{where}.bound"),
+                           None if fade is None else positive(fade, f"{where}.fade"))
 
 
 def _certificate(cert, K, eps) -> dict:

@@ -39,7 +39,7 @@ import inspect
 
 import numpy as np
 
-from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _twist, _warp
+from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _twist, _warp, gating_py
 from .predictor import (_monomial, field2, fieldn, gating, tables, twist_back, twist_forward, twist_tables, warp_back,
                         warp_back2, warp_forward, warp_forward2, warp_tables)
 from .states import check_max_speed
@@ -117,8 +117,7 @@ MAX_SPEED = {max_speed!r}     # None, or the largest |xdot| (units/s): xdot scal
 WEIGHTS = np.array({_literal(mix.weights)})
 MEANS = np.array({_literal(mix.means)})
 COVARIANCES = np.array({_literal(mix.covariances)})
-BOUND = {None if mix.bound is None else float(mix.bound)!r}     # the gating's bound c (None: not tempered)
-EXPONENTS = np.array({_literal(model.field_exps_)}, dtype=np.int64)
+{gating_py(mix)}EXPONENTS = np.array({_literal(model.field_exps_)}, dtype=np.int64)
 COEFFICIENTS = np.array({_literal(model.C_)})     # (K, n, m): f_k,i(z) = sum_j C[k, i, j] z^e_j
 
 DIM = GOAL.size

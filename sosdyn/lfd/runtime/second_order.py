@@ -21,7 +21,8 @@ import numpy as np
 from sosdyn.errors import NotFittedError
 from ..fit.gmm import PositionMixture
 from ..fit.second_order import acceleration_at
-from .codegen import MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _flat, _literal, check_namespace, cpp_string, cpp_strings
+from .codegen import (MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _flat, _literal, check_namespace, cpp_string, cpp_strings,
+                      gating_py)
 from .export_cpp import cpp_mixture
 from .states import as_state
 
@@ -69,8 +70,7 @@ TIME = {float(model.time_scale_)!r}    # T
 WEIGHTS = np.array({_literal(mix.weights)})
 MEANS = np.array({_literal(mix.means)})
 COVARIANCES = np.array({_literal(mix.covariances)})
-BOUND = {None if mix.bound is None else float(mix.bound)!r}     # the gating's bound c (None: not tempered)
-FIELDS = np.array({_literal(model.C_)})     # (K, n, 2n): C_k = [A_k, B_k], scaled units
+{gating_py(mix)}FIELDS = np.array({_literal(model.C_)})     # (K, n, 2n): C_k = [A_k, B_k], scaled units
 DIM = GOAL.size
 {MIXTURE_PY}
 
