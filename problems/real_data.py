@@ -31,12 +31,12 @@ from .cache import key_hash
 from .jobs import parallel_map
 from .jsonio import jsonable, rounded, write_json
 from .lasa_warp import cdsp_key
-from .real_data_blocks import DEFAULT, TARGETS, blocks
+from .real_data_blocks import DEFAULT, TARGETS, blocks, metric_profiles
 from .real_data_report import figure, write_html
 from .settings import REPORTS
 
 OUT = REPORTS / "real_data"
-CACHE_VERSION = 3            # 2: start_excursion and the certified excursion_bound per test demo; 3: DTWD at the demos' period
+CACHE_VERSION = 4            # 2: start_excursion and the certified excursion_bound per test demo; 3: DTWD at the demos' period; 4: metric profiles
 SETS = ("robottasks/openbox", "robottasks/bottle2shelf", "robottasks/platestandingtolying",
         "robottasks/pouring", "pouring", "hammer")
 NOT_APPLICABLE = {"cleaning/cleaning_1": "one demonstration (no held-out split)",
@@ -99,12 +99,21 @@ def cached_job(cache_dir: Path, name: str, method: str, quick: bool, key: dict, 
 
 
 def run_job(name: str, method: str, quick: bool, cache_dir: Path, force: bool) -> dict:
-    """:func:`sosdyn.evaluation.realdata.evaluate_set` of one (set, method), cached (:func:`cached_job`)."""
+    """:func:`sosdyn.evaluation.realdata.evaluate_set` of one (set, method), cached (:func:`cached_job`);
+    a CDSP's entry adds its gamma and the training demos' metric distance to the goal
+    (:func:`problems.real_data_blocks.metric_profiles`)."""
     kind, kwargs = METHODS[method]
     settings = cdsp_key(dict(kwargs, **(QUICK if quick else {}))) if kind == "cdsp" else kwargs
+    fitted, fit_fn = [], fitter(method, quick)
+
+    def compute():
+        out = realdata.evaluate_set(lambda train: fitted.append(fit_fn(train)) or fitted[-1], load(name))
+        if kind == "cdsp" and fitted and not out["failure"]:
+            out.update(gamma=fitted[-1].gamma, metric_profiles=metric_profiles(fitted[-1], realdata.prepare(load(name))[1]))
+        return out
+
     return cached_job(cache_dir, name, method, quick,
-                      {"version": CACHE_VERSION, "set": name, "method": [kind, settings], "quick": quick}, force,
-                      lambda: realdata.evaluate_set(fitter(method, quick), load(name)))
+                      {"version": CACHE_VERSION, "set": name, "method": [kind, settings], "quick": quick}, force, compute)
 
 
 def job_label(e: dict, widths: tuple[int, int] = (32, 13)) -> str:

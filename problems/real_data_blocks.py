@@ -13,8 +13,13 @@ default's entry:
   certified bound (:func:`sosdyn.lfd.model.reach.reach_box`).
 * arrival: per demo the speed at its last kept sample over its peak speed (a demo cut while
   moving ends fast), and per test reproduction the distance to the goal over time.
+* what the certificate forbids (:func:`metric_profiles`, stored in the default's entry): along each
+  training demo the metric distance to the goal D = |phi(z)|_M in the certificate's coordinates
+  (z = (x - goal) / scale, phi the warp, M the constant metric). Every trajectory of the model has
+  D(t) <= D(s) e^{-gamma (t - s) / 2} for s < t (docs/theory.md), whatever its timing: where D rises
+  along a demo, no reproduction can follow it there; ``rise`` = max over s < t of D(t) / D(s).
 
-Figures (``<out>/figures/blocks_*.png``): ``blocks_dtwd`` and ``blocks_excursion`` (all sets),
+Figures (``<out>/figures/blocks_*.png``): ``blocks_dtwd``, ``blocks_excursion`` and ``blocks_metric`` (all sets),
 ``blocks_arrival__<set>`` (sets missing the arrival target), ``blocks_starts__<set>`` (sets missing
 the excursion target: test starts against the training box and goal). Targets: :data:`TARGETS`.
 """
@@ -29,11 +34,14 @@ from matplotlib.ticker import ScalarFormatter
 
 from sosdyn.evaluation import dsopt, realdata
 from sosdyn.evaluation.metrics import dtwd
+from sosdyn.lfd.fit.composite import apply as warp_apply
+from sosdyn.lfd.model.reach import metric_matrix
 from sosdyn.report.figures import save_figure
 from sosdyn.report.figures.style import new_figure, styled
 
 DEFAULT = "CDSP default"
 CUT_MOVING = 0.1        # a demo "ends while moving" when its last speed exceeds this fraction of its peak
+PROFILE_POINTS = 200    # samples kept of each demo's metric-distance profile
 #: Issue 36's targets: DTWD <= 1.5x copy (and no worse than DMP's), excursion beyond the training box widened to
 #: hold the start <= 0.25 of its diagonal, arrival within 2x the demo's remaining duration (and certified).
 TARGETS = {"ratio": 1.5, "excursion_beyond_start": 0.25, "arrival_ratio": 2.0}
@@ -57,7 +65,55 @@ def set_numbers(demos, entry: dict, dmp: dict | None = None) -> dict:
             "excursion_beyond_start": [t["excursion_beyond_start"] for t in entry["tests"]],
             "excursion_bound": [t["excursion_bound"] for t in entry["tests"]],
             "end_speed": end_speed, "n_train": len(recorded),
+            "rise": None if not entry.get("metric_profiles") else [p["rise"] for p in entry["metric_profiles"]],
             "cut_moving": int(sum(v > CUT_MOVING for v in end_speed))}
+
+
+def metric_profiles(model, demos) -> list[dict] | None:
+    """Per demo of ``demos``: its times from 0 (``t``), the metric distance to the goal D (``d``,
+    module docstring; at most PROFILE_POINTS samples) and its largest rise max_{s<t} D(t) / D(s)
+    (``rise``, from every sample); None when the model's metric is not constant."""
+    M = metric_matrix(model)
+    if M is None:
+        return None
+    out = []
+    for d in demos:
+        Z = (d.pos - model.goal_) / model.scale_
+        U = Z if model.warp_ is None else warp_apply(Z, model.warp_)
+        D = np.sqrt(np.maximum(np.einsum("ti,ij,tj->t", U, M, U), 0.0))
+        low = np.minimum.accumulate(D)
+        rise = float(np.max(np.divide(D, low, out=np.ones_like(D), where=low > 0)))
+        keep = np.unique(np.linspace(0, len(D) - 1, min(PROFILE_POINTS, len(D))).astype(int))
+        out.append({"t": (d.t[keep] - d.t[0]).tolist(), "d": D[keep].tolist(), "rise": rise})
+    return out
+
+
+@styled
+def metric_figure(entries: dict, out_dir: Path) -> dict:
+    """One panel per set with profiles (``entries`` {set: the default's entry}): each training demo's
+    metric distance to the goal over its first value against time over its duration, the certified
+    decay e^{-gamma t / 2} from its start (gamma from the entry), the demo of largest rise drawn dark."""
+    names = [s for s, e in entries.items() if e.get("metric_profiles")]
+    cols = min(3, len(names))
+    fig = new_figure(4.0 * cols, 3.2 * ((len(names) + cols - 1) // cols) + 0.6)
+    for k, s in enumerate(names):
+        ax = fig.add_subplot((len(names) + cols - 1) // cols, cols, k + 1)
+        profiles = entries[s]["metric_profiles"]
+        worst = int(np.argmax([p["rise"] for p in profiles]))
+        for i, p in enumerate(profiles):
+            t, d = np.asarray(p["t"]), np.asarray(p["d"])
+            ax.plot(t / t[-1], d / d[0], color="#D55E00" if i == worst else "0.6", lw=1.2 if i == worst else 0.6,
+                    zorder=3 if i == worst else 2)
+        t, d = np.asarray(profiles[worst]["t"]), np.asarray(profiles[worst]["d"])
+        ax.plot(t / t[-1], np.exp(-entries[s]["gamma"] * t / 2), color="black", ls="--", lw=0.8)
+        ax.set_yscale("log")
+        ax.set_title(f"{s.replace('robottasks/', 'rt/')}: rise up to {profiles[worst]['rise']:.2f}x", fontsize=8)
+        ax.set_xlabel("t / demo duration", fontsize=7)
+        ax.set_ylabel("D(t) / D(0)", fontsize=7)
+    fig.suptitle("What the certificate forbids: each training demo's metric distance to the goal D = |phi(z)|_M "
+                 "(grey; largest rise in red).\nEvery reproduction has D(t) <= D(s) exp(-gamma (t - s) / 2) for "
+                 "s < t (dashed: from the red demo's start): it cannot follow a demo where D rises", fontsize=8)
+    return save_figure(fig, Path(out_dir) / "figures" / "blocks_metric", dpi=110)
 
 
 @styled
@@ -201,6 +257,8 @@ def blocks(entries: dict, load, out_dir: Path, dmp: dict | None = None) -> dict:
     numbers = {s: set_numbers(load(s), e, (dmp or {}).get(s)) for s, e in ok.items()}
     rel = lambda paths: str(paths["png"].relative_to(out_dir))          # noqa: E731
     figures = {"dtwd": rel(dtwd_figure(numbers, out_dir)), "excursion": rel(excursion_figure(numbers, out_dir))}
+    if any(e.get("metric_profiles") for e in ok.values()):
+        figures["metric"] = rel(metric_figure(ok, out_dir))
     for s, e in ok.items():
         if e["arrival_ratio"] > TARGETS["arrival_ratio"]:
             figures[f"arrival {s}"] = rel(arrival_figure(s, load(s), e, numbers[s], out_dir))

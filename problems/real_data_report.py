@@ -92,6 +92,9 @@ def blocks_html(found: dict | None) -> str:
                          f"{max(d['excursion']):.3f}; the test starts themselves lie up to "
                          f"{max(d['start_excursion']):.3f} outside it; certified bound "
                          f"{fmt(max((b for b in d['excursion_bound'] if b is not None), default=None), 3)})")
+        if parts and d.get("rise"):
+            parts.append(f"the training demos' metric distance to the goal rises by up to {max(d['rise']):.2f}× "
+                         f"(the certificate forbids any rise: blocks_metric)")
         if d["arrival_ratio"] > TARGETS["arrival_ratio"]:
             parts.append(f"arrival {d['arrival_ratio']:.2f}× the duration: {d['cut_moving']} of {len(d['end_speed'])} "
                          "demos end at more than 10 % of their peak speed (cut while moving)")

@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 
 from problems import real_data
@@ -36,6 +37,7 @@ def test_quick_run_writes_results_page_and_figure(tmp_path):
     assert blocks["numbers"]["hammer"]["start_copy_ratio"] >= 1.0
     assert ("starts hammer" in blocks["figures"]) == (cdsp["excursion_beyond_start"] > 0.25)
     assert blocks["numbers"]["hammer"]["dmp_ratio"] == dmp["ratio"]
+    assert (tmp_path / blocks["figures"]["metric"]).is_file() and all(r >= 1 for r in blocks["numbers"]["hammer"]["rise"])
     assert cdsp["smoothing_window"] == 13                           # hammer is noisy: Savitzky-Golay on
     page = paths["html"].read_text()
     assert "figures/hammer.png" in page and (tmp_path / "figures" / "hammer.png").read_bytes()[:4] == b"\x89PNG"
@@ -64,3 +66,21 @@ def test_configs_scores_training_and_test_reproductions(tmp_path):
     _, recorded, test, _ = realdata.prepare(real_data.load("hammer"))
     assert row["test"]["copy"] == pytest.approx(dsopt.nearest_demo_score(recorded, test))
     assert row["train"]["copy"] == 0.0            # from a training start, the nearest training demo is itself
+
+
+def test_metric_profiles_measure_the_rise_of_the_distance_to_the_goal():
+    """M = I, no warp, goal 0, scale 1: D = |x|. A demo straight to the goal never rises (1); one from
+    (1, 0) in to (0.5, 0), out to (2, 0) and back rises 2 / 0.5 = 4 times."""
+    from types import SimpleNamespace
+
+    from problems.real_data_blocks import metric_profiles
+    from sosdyn.lfd.data.demonstrations import Demonstration
+    model = SimpleNamespace(W_=np.eye(2)[:, :, None], metric_exps_=np.zeros((1, 2), dtype=int), goal_=np.zeros(2),
+                            scale_=1.0, warp_=None, dim_=2)
+    t = np.linspace(0, 1, 301)
+    straight = Demonstration.from_positions(t, np.column_stack([1 - t, np.zeros_like(t)]))
+    x = np.interp(t, [0, 0.3, 0.6, 1], [1, 0.5, 2, 0])
+    swing = Demonstration.from_positions(t, np.column_stack([x, np.zeros_like(t)]))
+    flat, out_in = metric_profiles(model, [straight, swing])
+    assert flat["rise"] == 1.0 and out_in["rise"] == pytest.approx(4.0)
+    assert len(out_in["t"]) == len(out_in["d"]) <= 200 and out_in["d"][0] == pytest.approx(1.0)
