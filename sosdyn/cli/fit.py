@@ -37,7 +37,7 @@ from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.learner import COST_FLOOR, stalled
 from ..lfd.data.pose import GOAL_TOL_DEG, is_pose_file
-from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
+from ..lfd.fit.params import FLOORS, GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from ..lfd.model.base import FAMILIES, family_for
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
@@ -58,7 +58,7 @@ Gating = enum.Enum("Gating", {name: name for name in GATINGS}, type=str)
 OPTIONS = {"n_components": "--components", "metric_degree": "--metric-degree", "field_degree": "--field-degree",
            "gamma": "--gamma", "solver": "--solver", "solver_method": "--solver-method", "random_state": "--seed",
            "corrective_rounds": "--corrective-rounds", "warp": "--warp", "max_iter": "--max-iter",
-           "gating": "--gating", "goal_tol_deg": "--goal-tol-deg"}
+           "gating": "--gating", "speed_floor": "--speed-floor", "goal_tol_deg": "--goal-tol-deg"}
 
 
 class Switch(str, enum.Enum):
@@ -161,6 +161,19 @@ def _default(name: str) -> str:
     return f"{DEFAULTS[name]}, or the preset's"
 
 
+def parse_floor(value: str | None) -> str | float | None:
+    """``--speed-floor``: auto, none, or a rate > 0 (1/s)."""
+    if value is None or value in FLOORS:
+        return value
+    try:
+        rate = float(value)
+    except ValueError:
+        raise typer.BadParameter(f"must be auto, none or a rate > 0 (1/s), got {value!r}.") from None
+    if not (np.isfinite(rate) and rate > 0):
+        raise typer.BadParameter(f"the rate must be a finite number > 0 (1/s), got {value!r}.")
+    return rate
+
+
 @app.command()
 def fit(
     demos: Annotated[list[str], typer.Argument(
@@ -203,6 +216,12 @@ def fit(
         help="The mixture weights h_k: posterior; tempered (the posterior at the data, turning smoothly off it); "
              "smooth (the posterior at the data, fading to constant weights far off it: the smoothest motions away "
              "from the demonstrations).", show_default=_default("gating"))] = None,
+    speed_floor: Annotated[str | None, typer.Option(
+        "--speed-floor", callback=parse_floor, metavar="auto|none|RATE",
+        help="A time change of the field (same paths, same certificate): at least RATE (1/s) x the distance to the "
+             "goal, at most 10x the field's speed; auto = the least that makes the reproductions of the "
+             "demonstrations arrive within 1.5x their duration (none if they do).",
+        show_default=_default("speed_floor"))] = None,
     dt: Annotated[float | None, typer.Option(
         callback=positive, help="Sampling step (s) of files without a time column: sample k is at k*dt.",
         show_default="none: the files' time column")] = None,
@@ -266,7 +285,8 @@ def fit(
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value,
-               "max_iter": max_iter, "gating": gating and gating.value, "goal_tol_deg": goal_tol_deg}
+               "max_iter": max_iter, "gating": gating and gating.value, "speed_floor": speed_floor,
+               "goal_tol_deg": goal_tol_deg}
     given = {k: v for k, v in options.items() if v is not None}
     check_options(family, given)
     data = prepare(family, data, smooth, trim_rest is Switch.on, align_ends)

@@ -25,9 +25,10 @@ MAX_CORRECTIVE_ROUNDS = 10      # corrective refits of one fit (each a whole CDS
 PARAMS = ("n_components", "metric_degree", "field_degree", "gamma", "metric", "solver",
           "solver_method", "max_iter", "tol", "eps", "margin", "metric_prox", "refine_gmm", "max_samples",
           "random_state", "verify_samples", "allow_uncertified", "corrective_rounds", "corrective_tau",
-          "corrective_min_dist", "warp", "gating")                    # what get_params and a file hold
+          "corrective_min_dist", "warp", "gating", "speed_floor")     # what get_params and a file hold
 GATINGS = ("posterior", "tempered", "smooth")   # the mixture weights: plain, or tempered off the data (.gmm)
 WARPS = ("auto", "none")        # warp: one of these, or a dict of WARP_DEFAULTS' keys (one fixed warp)
+FLOORS = ("auto", "none")       # speed_floor: one of these, or a rate kappa > 0 (1/s) (.floor)
 MAX_POINTS = 10_000
 CORRECTIVE_OFF = {"corrective_rounds": 0}     # no corrective refits
 PLAIN = {**CORRECTIVE_OFF, "warp": "none"}    # one plain fit: no corrective refits, no warp
@@ -50,7 +51,7 @@ PRESETS = {
 #: Parameters added after earlier model files were written, with the value those fits used
 #: (tau and min_dist are unused at 0 rounds; recorded as the defaults).
 LEGACY_PARAMS = {"metric_prox": 0.0, "corrective_rounds": 0, "corrective_tau": TAU, "corrective_min_dist": MIN_DIST,
-                 "warp": "none", "gating": "posterior"}
+                 "warp": "none", "gating": "posterior", "speed_floor": "none"}
 
 
 def check_params(p: Mapping, defaults: Mapping) -> None:
@@ -101,6 +102,10 @@ def check_params(p: Mapping, defaults: Mapping) -> None:
             fail(name, "a finite number >= 0")
     choice("metric", METRICS)
     choice("gating", GATINGS)
+    if not (isinstance(p["speed_floor"], str) and p["speed_floor"] in FLOORS):
+        if isinstance(p["speed_floor"], (str, bool, np.bool_)) or not isinstance(p["speed_floor"], Real) \
+                or not np.isfinite(p["speed_floor"]) or p["speed_floor"] <= 0:
+            fail("speed_floor", f"one of {FLOORS} or a rate > 0 (1/s)")
     choice("solver_method", METHODS)
     if not isinstance(p["solver"], str) or not p["solver"]:
         fail("solver", f"the name of a conic solver, e.g. one of {SOLVERS}")

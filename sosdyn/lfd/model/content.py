@@ -50,7 +50,7 @@ SECOND_ORDER_STATE = ("goal", "dt", "length_scale", "time_scale", "window", "wei
 OPTIONAL_STATE = ("units", "columns")     # absent in files older than them: "" and unnamed
 STATE_FIELDS = ("dim_", "goal_", "scale_", "dt_", "units_", "columns_", "n_components_", "gmr_cost_", "C_", "W_",
                 "field_exps_", "metric_exps_", "mixture_", "certificate_", "history_", "metric_collapse_",
-                "timings_", "warp_")
+                "timings_", "warp_", "floor_")
 WARP_KEYS = ("centers", "vectors", "sigmas")          # warp_: null, or these arrays (z-units) and an optional twist
 
 
@@ -196,8 +196,21 @@ def validate_state(st: dict, n_components, field_degree: int, metric_degree: int
     if not (collapse is None or isinstance(collapse, dict)):
         raise ModelFileError("malformed: state.metric_collapse_ must be null or an object")
     out["warp_"] = _warp(st.get("warp_"), n)              # absent in files older than the warp: none
+    out["floor_"] = _floor(st.get("floor_"))              # absent in files older than the speed floor: none
     check_fields(st, STATE_FIELDS, "state")
     return out
+
+
+def _floor(f) -> dict | None:
+    """None, or the speed floor {"rate": kappa > 0 (1/s), "boost": B >= 1} (:mod:`~sosdyn.lfd.fit.floor`)."""
+    if f is None:
+        return None
+    if not isinstance(f, dict) or set(f) != {"rate", "boost"}:
+        raise ModelFileError('malformed: state.floor_ must be null or an object with exactly "rate" and "boost"')
+    rate, boost = positive(f["rate"], "state.floor_.rate"), positive(f["boost"], "state.floor_.boost")
+    if boost < 1:
+        raise ModelFileError(f"malformed: state.floor_.boost must be >= 1 (the floor never slows the field), got {boost!r}")
+    return {"rate": rate, "boost": boost}
 
 
 def _warp(w, n) -> dict | None:

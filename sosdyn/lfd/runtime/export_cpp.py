@@ -132,6 +132,18 @@ inline bool solve(double* A, double* b) {{
     for (int i = 0; i < N; ++i) xdot[i] *= f;
   }
 """
+    floor = "" if model.floor_ is None else f"""  // the speed floor: xdot scaled by min(boost, max(1, rate |x - g| / |xdot|))
+  double dmax = 0.0, vmax = 0.0, d2 = 0.0, v2 = 0.0;     // norms scaled by the largest entry: no overflow
+  for (int i = 0; i < N; ++i) {{ dmax = std::fmax(dmax, std::fabs(x[i] - g[i])); vmax = std::fmax(vmax, std::fabs(xdot[i])); }}
+  for (int i = 0; i < N; ++i) {{
+    if (dmax > 0.0) d2 += ((x[i] - g[i]) / dmax) * ((x[i] - g[i]) / dmax);
+    if (vmax > 0.0) v2 += (xdot[i] / vmax) * (xdot[i] / vmax);
+  }}
+  const double want = {float(model.floor_["rate"])!r} * dmax * std::sqrt(d2), speed = vmax * std::sqrt(v2);
+  const double boost = {float(model.floor_["boost"])!r};
+  const double sigma = speed > 0.0 ? std::fmin(boost, std::fmax(1.0, want / speed)) : (want > 0.0 ? boost : 1.0);
+  for (int i = 0; i < N; ++i) xdot[i] *= sigma;
+"""
     speed_def = "" if max_speed is None else (
         f"// the largest |xdot| (units/s): xdot scaled by min(1, max_speed / |xdot|)\n"
         f"constexpr double max_speed = {max_speed!r};\n")
@@ -182,7 +194,7 @@ inline bool predict(const double* x, double* xdot, const double* goal = nullptr)
     xdot[i] = v * scale;
     finite = finite && std::isfinite(xdot[i]);
   }}
-{from_u}{limit}  return finite;
+{from_u}{floor}{limit}  return finite;
 }}
 
 }}  // namespace {namespace}

@@ -30,8 +30,10 @@ the C++ namespace an ASCII identifier.
 
 Run-time goal: ``predict(X, goal=None)`` / ``predict(x, xdot, goal = nullptr)`` evaluate the
 field with the goal moved to ``goal`` (z = (x - goal) / s; the goal-shifted model translated,
-as a rollout's goal change does). Speed limit (``max_speed``, written into the code): xdot
-scaled by min(1, max_speed / |xdot|), same direction (:func:`~.states.limit_speed`).
+as a rollout's goal change does). Speed floor (the model's ``floor_``, :mod:`~sosdyn.lfd.fit.floor`):
+xdot scaled by min(B, max(1, kappa |x - goal| / |xdot|)). Speed limit (``max_speed``, written into the
+code, applied after the floor): xdot scaled by min(1, max_speed / |xdot|), same direction
+(:func:`~.states.limit_speed`).
 """
 from __future__ import annotations
 
@@ -40,7 +42,7 @@ import inspect
 import numpy as np
 
 from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _twist, _warp, gating_py
-from .predictor import (_monomial, field2, fieldn, gating, tables, twist_back, twist_forward, twist_tables, warp_back,
+from .predictor import (_monomial, field2, fieldn, floor_factor, gating, tables, twist_back, twist_forward, twist_tables, warp_back,
                         warp_back2, warp_forward, warp_forward2, warp_tables)
 from .states import check_max_speed
 
@@ -113,6 +115,8 @@ COLUMNS = {ascii(tuple(map(str, model.names())))}     # the names of the state's
 GOAL = np.array({_literal(model.goal_)})
 SCALE = {float(model.scale_)!r}
 MAX_SPEED = {max_speed!r}     # None, or the largest |xdot| (units/s): xdot scaled by min(1, MAX_SPEED / |xdot|)
+# None, or the speed floor (RATE 1/s, BOOST): xdot scaled by min(BOOST, max(1, RATE |x - goal| / |xdot|))
+FLOOR = {None if model.floor_ is None else (float(model.floor_["rate"]), float(model.floor_["boost"]))!r}
 # the mixture of h_k(z), in z coordinates: weights pi_k, means mu_k, covariances S_k
 WEIGHTS = np.array({_literal(mix.weights)})
 MEANS = np.array({_literal(mix.means)})
@@ -158,6 +162,12 @@ def predict(X, goal=None):
     if bad.size:
         raise ValueError(f"X row {{bad[0]}} is so far from the data (scale {{SCALE:.3g}}) that the field "
                          "overflows float. Try: states within a few orders of magnitude of the data.")
+    if FLOOR is not None:
+        speed = np.hypot.reduce(V, axis=1, keepdims=True)
+        want = FLOOR[0] * np.hypot.reduce(X - goal, axis=1, keepdims=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            V = V * np.where(speed > 0, np.minimum(FLOOR[1], np.maximum(1.0, want / speed)),
+                             np.where(want > 0, FLOOR[1], 1.0))
     if MAX_SPEED is not None:
         speed = np.linalg.norm(V, axis=1, keepdims=True)
         with np.errstate(divide="ignore"):
@@ -174,7 +184,7 @@ def _one_state(model, mix, warp, twist, max_speed) -> str:
     their tables (literals: ``repr`` of floats round-trips), ``one_state(x)`` -> xdot or None
     where the batch path must decide (a form overflows, or the velocity is not finite)."""
     n = model.dim_
-    funcs = [gating, _monomial, field2 if n == 2 else fieldn]
+    funcs = [gating, _monomial, field2 if n == 2 else fieldn, floor_factor]
     if warp is not None:
         funcs += [warp_forward2, warp_back2] if n == 2 else [warp_forward, warp_back]
     if twist is not None:
@@ -211,6 +221,9 @@ def one_state(x, goal):
     v = [SCALE * a for a in v]
     if not math.isfinite(sum(v)):
         return None
+    if FLOOR is not None:
+        f = floor_factor((x - goal).tolist(), v, *FLOOR)
+        v = [f * a for a in v]
     if MAX_SPEED is not None:
         speed = math.sqrt(sum(a * a for a in v))
         if speed > MAX_SPEED:

@@ -68,12 +68,13 @@ class StatePredictor:
 
     Built from a fitted model's arrays (:meth:`sosdyn.lfd.model.cdsp.CDSP.predictor` does this):
     goal x* (n,), scale s, the position mixture, coefficients C (K, n, m), exponents E (m, n),
-    the warp (centers, vectors, sigmas) in z-units or None, the speed limit or None, and the twist
-    after the warp's bumps (plane, amplitudes, widths; z-units) or None.
+    the warp (centers, vectors, sigmas) in z-units or None, the speed limit or None, the twist
+    after the warp's bumps (plane, amplitudes, widths; z-units) or None, and the speed floor
+    ({"rate", "boost"}, :mod:`~sosdyn.lfd.fit.floor`) or None (applied before the speed limit).
     """
 
     def __init__(self, goal: np.ndarray, scale: float, mixture: PositionMixture, C: np.ndarray,
-                 exps: np.ndarray, warp=None, max_speed: float | None = None, twist=None):
+                 exps: np.ndarray, warp=None, max_speed: float | None = None, twist=None, floor=None):
         n = C.shape[1]
         self.dim, self._shape = n, (n,)
         self._goal = np.array(goal, dtype=float)
@@ -85,6 +86,7 @@ class StatePredictor:
         self._forward, self._back = (warp_forward2, warp_back2) if n == 2 else (warp_forward, warp_back)
         self.max_speed = check_max_speed(max_speed)
         self._field = field2 if n == 2 else fieldn
+        self._floor = None if floor is None else (float(floor["rate"]), float(floor["boost"]))
 
     def __call__(self, x, goal=None) -> np.ndarray:
         """xdot (n,) at the state x (n,), in the data's units, for the goal ``goal`` (None: the
@@ -110,6 +112,9 @@ class StatePredictor:
             raise InputError(f"x = {x} is so far from the data (scale {self._scale:.3g}) that the field "
                              "overflows float. Try: states within a few orders of magnitude of the "
                              "demonstrations.")
+        if self._floor is not None:
+            f = floor_factor((x - goal).tolist(), v, *self._floor)
+            v = [f * a for a in v]
         if self.max_speed is not None:
             speed = math.sqrt(sum(a * a for a in v))
             if speed > self.max_speed:
@@ -202,6 +207,15 @@ def fieldn(T: tuple, z: list, far) -> list:
         return [sum(map(mul, g[i * m:(i + 1) * m], mono)) for i in range(n)]
     except OverflowError:
         return [math.inf] * n
+
+
+def floor_factor(d: list, v: list, rate: float, boost: float) -> float:
+    """sigma = min(boost, max(1, rate |d| / |v|)) for d = x - x* and v = f(x) (data units; the speed
+    floor, :func:`~sosdyn.lfd.fit.floor.floored`): 1 at the goal, boost where v = 0 elsewhere."""
+    want, speed = rate * math.hypot(*d), math.hypot(*v)       # hypot: no overflow where |v|^2 would
+    if speed > 0:
+        return min(boost, max(1.0, want / speed))
+    return boost if want > 0 else 1.0
 
 
 def _monomial(z: list, e: tuple) -> float:
