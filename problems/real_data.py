@@ -36,7 +36,7 @@ from .real_data_report import figure, write_html
 from .settings import REPORTS
 
 OUT = REPORTS / "real_data"
-CACHE_VERSION = 4            # 2: start_excursion and the certified excursion_bound per test demo; 3: DTWD at the demos' period; 4: metric profiles
+CACHE_VERSION = 5            # 2: start_excursion and the certified excursion_bound per test demo; 3: DTWD at the demos' period; 4, 5: metric profiles
 SETS = ("robottasks/openbox", "robottasks/bottle2shelf", "robottasks/platestandingtolying",
         "robottasks/pouring", "pouring", "hammer")
 NOT_APPLICABLE = {"cleaning/cleaning_1": "one demonstration (no held-out split)",

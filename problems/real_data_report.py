@@ -94,7 +94,8 @@ def blocks_html(found: dict | None) -> str:
                          f"{fmt(max((b for b in d['excursion_bound'] if b is not None), default=None), 3)})")
         if parts and d.get("rise"):
             parts.append(f"the training demos' metric distance to the goal rises by up to {max(d['rise']):.2f}× "
-                         f"(the certificate forbids any rise: blocks_metric)")
+                         f"(the certificate forbids any rise: blocks_metric); they cross {d['crossings']} times "
+                         "(a first-order field follows one path per state)")
         if d["arrival_ratio"] > TARGETS["arrival_ratio"]:
             parts.append(f"arrival {d['arrival_ratio']:.2f}× the duration: {d['cut_moving']} of {len(d['end_speed'])} "
                          "demos end at more than 10 % of their peak speed (cut while moving)")
