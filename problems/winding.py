@@ -7,7 +7,7 @@ kept sample; every reproduction read at its test demo's own period before the cu
 and final error are read from the whole 0.01 s rollout). Copy: the nearest training demo's DTWD.
 
 Methods: ``CDSP before`` is the default as it was before issue 36 (``warp="auto"`` choosing among the
-plain fit and the two radial warps by the same rule, :func:`before`); ``CDSP default`` is ``sd.CDSP()``
+plain fit and the two radial warps by the same rule, :func:`before`; the posterior gating, no speed floor); ``CDSP default`` is ``sd.CDSP()``
 (random_state 0); ``CDSP isotonic + twist`` is one fixed warp: the isotonic target matched to every demo,
 then a twist about the goal of shear bound K = 3 (docs/theory.md). One JSON per (shape, method) is
 cached in ``<out>/cache``; ``<out>`` = ``reports/winding``: ``results.json``, ``index.html`` and one
@@ -35,15 +35,17 @@ from sosdyn.report.figures.style import METHOD_COLORS, data_bounds, new_figure, 
 
 from .jobs import parallel_map
 from .jsonio import write_json
+from .lasa_warp import cdsp_key
 from .real_data import QUICK, cached_job, parser
 from .real_data_report import fmt
 from .settings import REPORTS
 
 OUT = REPORTS / "winding"
-CACHE_VERSION = 1
+CACHE_VERSION = 2              # 2: CDSP before with the posterior gating and no speed floor
 SETS = tuple(f"winding/{s}" for s in WINDING_SHAPES)
 TWIST = {"n_maps": 60, "decay": 1.0, "target": "isotonic", "match": "each", "twist": 3.0}
-METHODS = {"CDSP before": {}, "CDSP default": {}, "CDSP isotonic + twist": {"warp": TWIST}}
+METHODS = {"CDSP before": {"gating": "posterior", "speed_floor": "none"}, "CDSP default": {},
+           "CDSP isotonic + twist": {"warp": TWIST}}
 COLORS = {"CDSP before": "#E69F00", "CDSP default": METHOD_COLORS["cdsp"], "CDSP isotonic + twist": "#CC79A7"}
 BEFORE_WARPS = {k: AUTO_WARPS[k] for k in ("60 maps, decay 0.75", "60 maps, decay 1")}
 TARGET_RATIO, TARGET_EXCURSION, TARGET_ARRIVAL = 3.0, 0.25, 2.0
@@ -63,7 +65,7 @@ def before(train, settings: dict) -> sd.CDSP:
     params = dict(model.get_params(), random_state=settings["random_state"])
     kept, scores = warp_choice(candidate_fits(train, {"none": None, **BEFORE_WARPS}, params, None), train,
                                block_field)
-    model.__dict__.update(vars(kept), warp_scores_=scores)
+    model.__dict__.update(vars(kept), warp_scores_=scores, floor_=None)
     return model
 
 
@@ -87,8 +89,8 @@ def evaluate(fit_fn, demos) -> dict:
 
 
 def run_job(name: str, method: str, quick: bool, cache_dir: Path, force: bool) -> dict:
-    key = {"version": CACHE_VERSION, "set": name, "method": METHODS[method], "quick": quick,
-           "auto_warps": AUTO_WARPS if method == "CDSP default" else None}
+    key = {"version": CACHE_VERSION, "set": name, "method": cdsp_key(dict(METHODS[method], **(QUICK if quick else {}))),
+           "quick": quick}
     return cached_job(cache_dir, name, method, quick, key, force, lambda: evaluate(fitter(method, quick),
                                                                                    sd.load_dataset(name)))
 
