@@ -7,7 +7,7 @@ PYTEST  := $(BIN)/python -m pytest
 # Small-matrix workloads: a multi-threaded OpenBLAS spin-waits (10-100x slower on 2 cores).
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: venv run test test-slow wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes winding winding-shapes warp-figure demo3d demo7d sweep report learner-table poses robot docs clean
+.PHONY: venv run test test-slow wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes crossing-letters winding winding-shapes warp-figure demo3d demo7d sweep report learner-table poses robot docs clean
 
 venv: $(STAMP)
 $(STAMP): pyproject.toml
@@ -19,12 +19,19 @@ $(STAMP): pyproject.toml
 run: venv
 	$(BIN)/python -m problems run
 
+# The suite in TEST_JOBS processes (pytest-xdist), a test file's tests in one process (its module
+# fixtures built once); the workers share the toy experiment's cache (tests/problems/conftest.py).
+# `make test TEST_JOBS=0` runs it in one process.
+TEST_JOBS ?= 2
+XDIST    := $(if $(filter 0,$(TEST_JOBS)),,-n $(TEST_JOBS) --dist loadfile)
+
 test: venv
 	$(BIN)/lint-imports
-	$(PYTEST) -q -m "not slow"
+	$(PYTEST) -q -m "not slow" $(XDIST)
 
+# Experiment-sized runs (quick versions of the experiments, benchmarks, the wheel): not in `make test`.
 test-slow: venv
-	$(PYTEST) -q -m slow
+	$(PYTEST) -q -m slow $(XDIST)
 
 # Build the wheel, install it into a fresh venv, run `sosdyn --version` and `sosdyn fit lasa:Sshape` (~1 min).
 wheel: venv
@@ -38,7 +45,7 @@ bench-sos: venv
 	$(BIN)/python -m pip install -q -e '.[bench]'
 	$(BIN)/python -m problems bench-sos
 
-fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes winding winding-shapes warp-figure demo3d demo7d sweep report learner-table poses: venv
+fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes crossing-letters winding winding-shapes warp-figure demo3d demo7d sweep report learner-table poses: venv
 	$(BIN)/python -m problems $@
 
 # CDSP and GMR drive a simulated Franka Panda (pybullet, the [robot] extra, in [all]): reports/robot/

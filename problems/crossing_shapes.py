@@ -123,9 +123,10 @@ def generate(seed: int = SEED, shapes: dict = SHAPES) -> dict:
     return out
 
 
-def write_set(data: dict, out_dir: Path, columns: list[str], row_of) -> None:
+def write_set(data: dict, out_dir: Path, columns: list[str], row_of, lines=None) -> None:
     """The CSVs of ``data`` ({shape: [(time_ms, xy)]}) and one manifest: file, then ``columns``,
-    their values ``row_of(shape, k, time_ms, xy)`` for demo k."""
+    their values ``row_of(shape, k, time_ms, xy)`` for demo k. A CSV's lines are ``lines(time_ms, xy)``
+    (default: the numbers as they are, integers for a mouse log)."""
     rows = []
     for name, demos in data.items():
         folder = Path(out_dir) / name
@@ -135,7 +136,7 @@ def write_set(data: dict, out_dir: Path, columns: list[str], row_of) -> None:
             with open(folder / file, "w", newline="") as handle:
                 w = csv.writer(handle)
                 w.writerow(["time_ms", "x", "y"])
-                w.writerows(np.column_stack([ms, xy]).tolist())
+                w.writerows(np.column_stack([ms, xy]).tolist() if lines is None else lines(ms, xy))
             rows.append([f"{name}/{file}", *row_of(name, k, ms, xy)])
     with open(Path(out_dir) / "manifest.csv", "w", newline="") as handle:
         w = csv.writer(handle)
@@ -173,15 +174,17 @@ def overview(data: dict, png: Path, shapes: dict = SHAPES) -> Path:
     return png
 
 
-def generator_main(argv, name: str, description: str, out: Path, seed: int, shapes: dict, write_set) -> int:
+def generator_main(argv, name: str, description: str, out: Path, seed: int, shapes: dict, write_set,
+                   make=None) -> int:
     """The command line of a set generator ``python -m problems NAME [--out DIR] [--seed S] [--figure PNG]``:
-    :func:`generate` ``shapes``, ``write_set(data, out)`` and (``--figure``) :func:`overview`."""
+    ``make(seed, shapes)`` (default :func:`generate`), ``write_set(data, out)`` and (``--figure``)
+    :func:`overview` (the families of ``shapes``)."""
     p = argparse.ArgumentParser(prog=f"python -m problems {name}", description=description)
     p.add_argument("--out", type=Path, default=out, help="output folder (default: the shipped set)")
     p.add_argument("--seed", type=int, default=seed)
     p.add_argument("--figure", type=Path, default=None, help="also write an overview PNG here")
     args = p.parse_args(list(argv or []))
-    data = generate(args.seed, shapes)
+    data = (make or generate)(args.seed, shapes)
     write_set(data, args.out)
     if args.figure:
         overview(data, args.figure, shapes)

@@ -5,6 +5,7 @@ controller; column names and units remembered by the model file."""
 from __future__ import annotations
 
 import importlib.util
+import re
 import shutil
 import subprocess
 
@@ -45,12 +46,11 @@ int main(int argc, char** argv) {
 
 @pytest.fixture(scope="module")
 def second_order_file(tmp_path_factory):
-    """``sosdyn fit LOG --order 2`` on the crossing log (a small fit: 3 components, 3 iterations)."""
+    """``sosdyn fit LOG --order 2`` on the crossing log (the default, tracking field)."""
     folder = tmp_path_factory.mktemp("o2")
     logs = crossing_log(folder / "e")
     model = folder / "o2.json"
-    code, out, err = _run_uncaptured("fit", logs, "--order", "2", "--components", "3", "--max-iter", "3",
-                                     "--out", model)
+    code, out, err = _run_uncaptured("fit", logs, "--order", "2", "--out", model)
     assert code == 0, err
     return model, logs, out
 
@@ -140,7 +140,22 @@ def test_options_of_other_families_are_refused_by_name(second_order_file, capsys
                           need_try=True)
     code, _, err = run(capsys, "fit", logs, "--order", "2", "--preset", "ica", "--out", tmp_path / "m.json")
     assert_one_error_line(code, err, "SecondOrderCDSP has none", need_try=True)
+    code, _, err = run(capsys, "fit", logs, "--order", "2", "--components", "3", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "n_components applies to field='mixture' only", need_try=True)
+    code, _, err = run(capsys, "fit", logs, "--field", "mixture", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "--field does not apply to a CDSP model (SecondOrderCDSP takes it)",
+                          need_try=True)
     assert not (tmp_path / "m.json").exists()
+
+
+def test_fit_order_2_field_mixture(capsys, tmp_path):
+    """``--field mixture`` gives the mixture of linear fields, with its options."""
+    logs = crossing_log(tmp_path / "e")
+    code, out, err = run(capsys, "fit", logs, "--order", "2", "--field", "mixture", "--components", "3",
+                         "--max-iter", "3", "--out", tmp_path / "m.json")
+    assert code == 0, err
+    loaded = sd.load_model(tmp_path / "m.json")
+    assert loaded.field == "mixture" and loaded.C_.shape[0] == 3 and loaded.certified_
 
 
 def test_first_order_fit_of_crossings_points_to_order_2(capsys, tmp_path):
@@ -148,7 +163,7 @@ def test_first_order_fit_of_crossings_points_to_order_2(capsys, tmp_path):
     code, out, err = run(capsys, "fit", logs, "--components", "2", "--warp", "none", "--max-iter", "2",
                          "--out", tmp_path / "m.json")
     assert code == 0, err
-    assert "crossing(s) of the demonstrations" in out and "sosdyn fit --order 2" in out
+    assert re.search(r"\d+ crossings? involving \d+ demonstrations?", out) and "sosdyn fit --order 2" in out
     code, _, err = run(capsys, "rollout", tmp_path / "m.json", "--start", "1,2", "--start-velocity", "0,0")
     assert_one_error_line(code, err, "--start-velocity does not apply to a CDSP model (SecondOrderCDSP takes it)",
                           need_try=True)

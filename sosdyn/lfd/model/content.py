@@ -45,8 +45,10 @@ SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION = "sosdyn-second-order", 1
 #: Each format's top-level fields besides ``format`` and ``version`` (the digests are the container's).
 TOP_LEVEL = {FORMAT: ("params", "state"), SECOND_ORDER_FORMAT: ("params", "state"),
              POSE_FORMAT: ("params", "state", "goal_quat", "rot_factor", "goal_tol_deg")}
-SECOND_ORDER_STATE = ("goal", "dt", "length_scale", "time_scale", "window", "weights", "means", "covariances",
-                      "C", "M", "margin")
+SECOND_ORDER_STATE = ("goal", "dt", "length_scale", "time_scale", "window", "C", "M", "margin")
+#: A second-order state's own fields by its ``field`` parameter: the gating mixture, or the tracked samples and the tank.
+SECOND_ORDER_OWN = {"mixture": ("weights", "means", "covariances"),
+                    "tracking": ("samples", "sample_accelerations", "beta")}
 OPTIONAL_STATE = ("units", "columns")     # absent in files older than them: "" and unnamed
 STATE_FIELDS = ("dim_", "goal_", "scale_", "dt_", "units_", "columns_", "n_components_", "gmr_cost_", "C_", "W_",
                 "field_exps_", "metric_exps_", "mixture_", "certificate_", "history_", "metric_collapse_",
@@ -131,6 +133,9 @@ def check_load_work(fmt: str, content: dict) -> None:
     if fmt == SECOND_ORDER_FORMAT:
         check_count((K + 1) * (2 * n) ** 3, "max_exact_work", f"the exact check of its certificate "
                     f"(K + 1 = {K + 1} exact LDL^T of {2 * n} x {2 * n} rational matrices), (K + 1)(2n)^3", hint)
+        N = len(state.get("samples", []) if isinstance(state.get("samples"), list) else [])
+        check_count(2 * DEFAULT_SAMPLES * N * 2 * n, "max_sampled_work", f"the sampled check of its tank ("
+                    f"{2 * DEFAULT_SAMPLES} states x {N} tracked samples of {2 * n} numbers), 2 S N 2n", hint)
         return
     params = need(content, "params", "", dict)
     F = integer(need(params, "field_degree", "params"), "params.field_degree", 1)
@@ -310,11 +315,13 @@ def _certificate(cert, K, eps) -> dict:
 
 
 # ---------------------------------------------------------------------- the second-order state
-def second_order_state(st: dict) -> dict:
-    """The checked fields of a second-order file's ``state``: goal (n,), C (K, n, 2n), M (2n, 2n), the
-    gating mixture on e (weights > 0, means (K, 2n), covariances (K, 2n, 2n) symmetric positive
-    definite), dt, length_scale, time_scale and margin > 0, window an integer >= 1, units and columns."""
-    check_fields(st, SECOND_ORDER_STATE + OPTIONAL_STATE, "state")
+def second_order_state(st: dict, field: str = "mixture") -> dict:
+    """The checked fields of a second-order file's ``state``: goal (n,), C (K, n, 2n), M (2n, 2n), dt,
+    length_scale, time_scale and margin > 0, window an integer >= 1, units and columns; for the
+    ``field`` "mixture" the gating mixture on e (weights > 0, means (K, 2n), covariances (K, 2n, 2n)
+    symmetric positive definite), for "tracking" (K = 1) the tracked samples (N, 2n), their
+    accelerations (N, n) and the tank factor beta >= 0."""
+    check_fields(st, SECOND_ORDER_STATE + SECOND_ORDER_OWN[field] + OPTIONAL_STATE, "state")
     goal = need(st, "goal", "state", list)
     n = len(goal)
     K = len(need(st, "C", "state", list))
@@ -324,8 +331,21 @@ def second_order_state(st: dict) -> dict:
         out[name] = positive(need(st, name, "state"), f"state.{name}")
     out["window"] = integer(need(st, "window", "state"), "state.window", 1)
     out["units"], out["columns"] = labels(st.get("units", ""), st.get("columns"), n, "state.units", "state.columns")
-    out["mixture"] = _mixture({"weights": need(st, "weights", "state"), "means": need(st, "means", "state"),
-                               "covariances": need(st, "covariances", "state")}, K, 2 * n, "state")
+    if field == "mixture":
+        out["mixture"] = _mixture({"weights": need(st, "weights", "state"), "means": need(st, "means", "state"),
+                                   "covariances": need(st, "covariances", "state")}, K, 2 * n, "state")
+    else:
+        N = len(need(st, "samples", "state", list))
+        if K != 1 or N < 1:
+            raise ModelFileError(f"malformed: a tracking state holds one witness field (state.C has {K}) and at "
+                                 f"least one sample (state.samples has {N})")
+        out["samples"] = array(st["samples"], "state.samples", (N, 2 * n))
+        out["sample_accelerations"] = array(need(st, "sample_accelerations", "state"), "state.sample_accelerations",
+                                            (N, n))
+        beta = need(st, "beta", "state")
+        if isinstance(beta, bool) or not isinstance(beta, (int, float)) or not beta >= 0:
+            raise ModelFileError(f"malformed: state.beta must be a number >= 0, got {beta!r:.40}")
+        out["beta"] = float(beta)
     if n < 1 or K < 1:
         raise ModelFileError("malformed: state.goal and state.C must not be empty")
     return out

@@ -22,7 +22,8 @@ angular velocity omega = R J_r(r) rdot (:func:`body_velocity`, the right Jacobia
 R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r)).
 
 Speed limits (``max_speed`` on |v|, data units / s; ``max_angular_speed`` on |omega|, rad / s): the
-chart velocity is scaled by lambda = min(1, v_max / |v|, w_max / |omega|) (:func:`pose_speed_factor`);
+chart velocity is scaled by one factor lambda, the speed limit's of the joint ratio of |v| / v_max and
+|omega| / w_max (:func:`pose_speed_factor`; |v| < v_max, |omega| < w_max);
 omega is linear in rdot, so both are scaled by lambda, and one positive factor on the 6-D field
 keeps its paths and its goal (the limited system is a time change of the certified one).
 """

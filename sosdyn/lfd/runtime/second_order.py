@@ -9,7 +9,11 @@ exactly (``repr`` round-trips):
     e = ((x - g)/s, v T/s),   a = (s / T^2) sum_k h_k(e) C_k e,   h_k: the gating GMM on e,
 
 (:func:`~sosdyn.lfd.fit.second_order.acceleration_at`, the one formula). The certificate does not
-involve h, g, s or T, so a moved goal keeps it: the state still converges to (goal, 0). The
+involve h, g, s or T, so a moved goal keeps it: the state still converges to (goal, 0). A tracking
+model (``field="tracking"``) carries a tank b: :class:`TankPredictor` keeps it, the Python module has
+``derivatives(X, V, tank, goal=None)``, ``initial_tank`` and ``acceleration(X, V, goal=None, tank=None)``
+and the C++ header ``initial_tank``, ``acceleration(x, v, a, tank, dt, goal)``, which advances the
+tank by dt, and ``acceleration(x, v, a, goal)`` (a full tank, as predict) (:mod:`~sosdyn.lfd.fit.second_order.tank`, :func:`~sosdyn.lfd.fit.second_order.tank.derivatives_at`). The
 generated mixture code is shared with the first-order exports (:data:`~.codegen.MIXTURE_PY`,
 :data:`~.codegen.RESPONSIBILITIES_PY`, :func:`~.export_cpp.cpp_mixture`). The opening comment is fixed text and numbers only
 (:data:`~.codegen.PREAMBLE`); no string from the model reaches the file.
@@ -21,9 +25,11 @@ import numpy as np
 from sosdyn.errors import NotFittedError
 from ..fit.gmm import PositionMixture
 from ..fit.second_order import acceleration_at
+from ..fit.second_order.tank import TankField, derivatives_at, initial_tank, scaled_states
 from .codegen import (MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _flat, _literal, check_namespace, cpp_string, cpp_strings,
                       gating_py)
 from .export_cpp import cpp_mixture
+from .second_order_tank import tank_cpp, tank_python
 from .states import as_state
 
 
@@ -43,12 +49,45 @@ class SecondOrderPredictor:
     step = __call__
 
 
+class TankPredictor:
+    """``pred(x, v, goal=None, dt=None)`` (also ``pred.step``): the acceleration (n,) at (x, v) with the
+    predictor's tank level ``tank``, full (beta V(e)) at the first state after construction or
+    :meth:`reset`; with ``dt`` (s) the tank is then advanced one explicit Euler step (kept >= 0), as
+    a control loop at period dt does."""
+
+    def __init__(self, field: TankField, goal: np.ndarray, length: float, time: float):
+        self.field, self.goal, self.length, self.time = field, np.array(goal, dtype=float), float(length), float(time)
+        self.dim, self.tank = len(goal), None
+
+    def reset(self) -> None:
+        """Start a new motion: the tank fills at the next state."""
+        self.tank = None
+
+    def __call__(self, x, v, goal=None, dt=None) -> np.ndarray:
+        n = self.dim
+        g = self.goal if goal is None else as_state(goal, n, "goal")
+        X, V = as_state(x, n, "x")[None], as_state(v, n, "v")[None]
+        if self.tank is None:
+            self.tank = float(initial_tank(self.field, scaled_states(X, V, g, self.length, self.time))[0])
+        A, bdot = derivatives_at(self.field, X, V, g, self.length, self.time, np.array([self.tank]))
+        if dt is not None:
+            self.tank = max(0.0, self.tank + float(dt) * float(bdot[0]))
+        return A[0]
+
+    step = __call__
+
+
 def _head(model, comment: str) -> str:
     """The generated file's opening comment: :data:`~.codegen.PREAMBLE`, then numbers only."""
     if not hasattr(model, "C_"):
         raise NotFittedError("only a fitted SecondOrderCDSP can be exported. Try: model.fit(demos) or "
                              "sosdyn.load_model(path) first.")
     K, n, _ = model.C_.shape
+    if model.tank_ is not None:
+        return "".join(f"{comment} {line}\n" for line in (
+            *PREAMBLE, f"Second order, tracking: n = {n} positions, state (x, v, tank), {len(model.tank_.samples)} "
+            "tracked samples; positions in UNITS.", "a = the tracking field filtered by the energy tank, "
+            "e = ((x - goal) / s, v T / s)."))
     return "".join(f"{comment} {line}\n" for line in (
         *PREAMBLE, f"Second order: n = {n} positions, state (x, v), K = {K} components; positions in UNITS.",
         "a = (s / T^2) sum_k h_k(e) C_k e, e = ((x - goal) / s, v T / s)."))
@@ -57,6 +96,8 @@ def _head(model, comment: str) -> str:
 def to_python(model) -> str:
     """Source of the standalone module of the fitted second-order ``model``."""
     head = _head(model, "#")
+    if model.tank_ is not None:
+        return head + tank_python(model)
     mix = model.mixture_
     return head + f'''"""Standalone evaluator of a second-order CDSP motion: acceleration(X, V, goal=None)."""
 import numpy as np
@@ -104,6 +145,8 @@ def to_cpp(model, namespace: str = "second_order_model") -> str:
     the acceleration is not finite (a state or goal not finite, or so far away that it overflows)."""
     head = _head(model, "//")
     namespace = check_namespace(namespace, "second_order_model")
+    if model.tank_ is not None:
+        return head + tank_cpp(model, namespace)
     K, n, _ = model.C_.shape
     return head + f"""#pragma once
 #include <array>

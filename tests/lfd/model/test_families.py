@@ -30,7 +30,7 @@ def pose_demos():
     return PoseDemonstrations(demos, "known", "m")
 
 
-@pytest.fixture(scope="module", params=["first", "pose", "second"])
+@pytest.fixture(scope="module", params=["first", "pose", "second", "tracking"])
 def case(request, linear_demos, second_order_system):
     """(model, its demonstrations, a start x0, a goal to move to) for each family."""
     if request.param == "first":
@@ -42,7 +42,8 @@ def case(request, linear_demos, second_order_system):
         start = np.concatenate([demos[0].pos[0], demos[0].quat[0]])
         return model, demos, start, np.concatenate([X_GOAL + 0.1, R_GOAL.as_quat(scalar_first=True)])
     demos = second_order_system[3]
-    model = sd.SecondOrderCDSP(n_components=1, tracking_copies=0, max_iter=5).fit(demos)
+    model = (sd.SecondOrderCDSP(field="mixture", n_components=1, tracking_copies=0, max_iter=5)
+             if request.param == "second" else sd.SecondOrderCDSP()).fit(demos)
     return model, demos, demos[0].pos[0], demos.goal + [1.0, -1.0]
 
 
@@ -190,7 +191,7 @@ def test_second_order_cpp_export_matches_predict(second_order_system, tmp_path):
     """The C++ header, compiled with -Wall -Wextra -Werror, gives predict's accelerations to 1e-9
     relative at the model's goal and at a moved one; a state that is not finite gives false."""
     demos = second_order_system[3]
-    model = sd.SecondOrderCDSP(n_components=3, max_iter=3).fit(demos)
+    model = sd.SecondOrderCDSP(field="mixture", n_components=3, max_iter=3).fit(demos)
     (tmp_path / "model.hpp").write_text(model.to_cpp())
     (tmp_path / "main.cpp").write_text(MAIN_SECOND_ORDER)
     exe = tmp_path / "main"

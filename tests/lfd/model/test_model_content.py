@@ -26,7 +26,7 @@ def files(tmp_path_factory, linear_demos, second_order_system):
     folder = tmp_path_factory.mktemp("families")
     return {"first": sd.CDSP(n_components=2, warp="none").fit(linear_demos).save(folder / "first.json"),
             "pose": sd.PoseCDSP(n_components=1, warp="none", max_samples=400).fit(pose_demos()).save(folder / "pose.json"),
-            "second": sd.SecondOrderCDSP(n_components=2, tracking_copies=0, max_iter=3).fit(
+            "second": sd.SecondOrderCDSP(field="mixture", n_components=2, tracking_copies=0, max_iter=3).fit(
                 second_order_system[3]).save(folder / "second.json")}
 
 

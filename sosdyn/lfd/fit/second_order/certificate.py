@@ -62,7 +62,7 @@ class SecondOrderCertificate:
         return (f"second-order certificate: gamma {self.gamma:.3g}/s, {len(self.proven_margins)} LMIs, "
                 f"max eigenvalue of L_k {max(self.lmi_max_eigs):.3e}, proven min margin {worst:.3e}, "
                 f"proven min eig M {self.metric_min_eig if self.metric_min_eig is not None else float('nan'):.3e}; "
-                f"sampled ({self.n_samples} states x 2 gatings): max rate {self.max_sampled_rate:.3e} "
+                f"sampled ({self.n_samples} states x 2 gatings or tank levels): max rate {self.max_sampled_rate:.3e} "
                 f"-> {'PASSED' if self.passed else 'FAILED'}")
 
 
@@ -91,25 +91,36 @@ def sampled_rates(C, M, gamma_scaled, H, E) -> np.ndarray:
     return 2.0 * np.einsum("ti,ij,tj->t", E, M, Edot) / V + 2.0 * gamma_scaled
 
 
+def exact_part(C, M, gamma_scaled) -> tuple[list, list, float | None]:
+    """Check 1 of the module docstring: (largest eigenvalue of each L_k (float), proven lower bounds
+    on the smallest eigenvalue of each -L_k, proven lower bound on that of M)."""
+    negL = exact_lmis(C, M, gamma_scaled)
+    maxeig = [float(-np.linalg.eigvalsh(Q.astype(float))[0]) for Q in negL]
+    return maxeig, [proven_min_eig(Q) for Q in negL], proven_min_eig(exact_matrix(0.5 * (M + M.T)))
+
+
+def certificate(C, M, gamma, gamma_scaled, worst_rate: float, n_samples: int) -> SecondOrderCertificate:
+    """The certificate of the fields C (their LMIs proven exactly) and a sampled worst rate: passed
+    only if every proven bound is > 0 and the rate is finite and <= SAMPLED_TOL."""
+    maxeig, proven, metric = exact_part(C, M, gamma_scaled)
+    passed = (all(p is not None and p > 0 for p in proven) and metric is not None and metric > 0
+              and np.isfinite(worst_rate) and worst_rate <= SAMPLED_TOL)
+    return SecondOrderCertificate(M, float(gamma), gamma_scaled, maxeig, proven, metric, float(worst_rate),
+                                  n_samples, bool(passed))
+
+
 def check_second_order(C, M, gamma, time_scale, mixture: PositionMixture, n_samples: int,
                        seed: int) -> SecondOrderCertificate:
     """Both checks of the module docstring for the fields C (K, n, 2n) and metric M (scaled units)."""
     n_samples = check_sample_count(n_samples)
     C, M = np.asarray(C, dtype=float), np.asarray(M, dtype=float)
     g = float(gamma) * float(time_scale)
-    negL = exact_lmis(C, M, g)
-    proven = [proven_min_eig(Q) for Q in negL]
-    metric = proven_min_eig(exact_matrix(0.5 * (M + M.T)))
-    maxeig = [float(-np.linalg.eigvalsh(Q.astype(float))[0]) for Q in negL]
     rng = np.random.default_rng(seed)
     K, n = C.shape[:2]
     E = rng.uniform(-SAMPLE_BOX, SAMPLE_BOX, size=(n_samples, 2 * n))
     rates = np.concatenate([sampled_rates(C, M, g, mixture.responsibilities(E), E),
                             sampled_rates(C, M, g, rng.dirichlet(np.ones(K), size=n_samples), E)])
-    worst = float(rates.max())
-    passed = (all(p is not None and p > 0 for p in proven) and metric is not None and metric > 0
-              and np.isfinite(worst) and worst <= SAMPLED_TOL)
-    return SecondOrderCertificate(M, float(gamma), g, maxeig, proven, metric, worst, n_samples, bool(passed))
+    return certificate(C, M, gamma, g, float(rates.max()), n_samples)
 
 
 def excursion_bound(M, e0) -> float:
