@@ -26,6 +26,7 @@ how the model reproduces each demonstration (with the time each takes to reach t
 from __future__ import annotations
 
 import enum
+import math
 import time
 from pathlib import Path
 from typing import Annotated
@@ -172,7 +173,7 @@ def parse_floor(value: str | None) -> str | float | None:
         rate = float(value)
     except ValueError:
         raise typer.BadParameter(f"must be auto, none or a rate > 0 (1/s), got {value!r}.") from None
-    if not (np.isfinite(rate) and rate > 0):
+    if not (math.isfinite(rate) and rate > 0):
         raise typer.BadParameter(f"the rate must be a finite number > 0 (1/s), got {value!r}.")
     return rate
 
