@@ -76,6 +76,14 @@ def fmt(value, digits=2) -> str:
     return "∞" if not math.isfinite(value) else f"{value:,.{digits}f}"
 
 
+def met_cell(t: dict) -> str:
+    """The targets cell: "all", the missed ones, or for a method without a certificate the others' verdict."""
+    missed = [k for k, v in t.items() if k != "all" and v is False]
+    if t["all"]:
+        return "all"
+    return ("missed: " + ", ".join(missed)) if missed else "the others met (no certificate)"
+
+
 def blocks_html(found: dict | None) -> str:
     """The section "What blocks each missed target" from :func:`problems.real_data_blocks.blocks`."""
     if not found:
@@ -125,8 +133,7 @@ def write_html(results: dict, out_dir: Path) -> Path:
                          fmt(r.get("excursion_bound"), 3), fmt(r["arrival_ratio"]),
                          f"{r['arrived'][0]} of {r['arrived'][1]}",
                          fmt(r["final_error"], 3), "—" if r["certified"] is None else fmt(r["certified"]),
-                         fmt(r["fit_s"], 1), "all" if t["all"] else "missed: " + ", ".join(
-                             k for k, v in t.items() if k != "all" and v is False)]
+                         fmt(r["fit_s"], 1), met_cell(t)]
             rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
         pre = next(iter(d["methods"].values()))["preprocess"] or []
         fig = results["figures"][s]
