@@ -31,15 +31,15 @@ WARPS = ("auto", "none")        # warp: one of these, or a dict of WARP_DEFAULTS
 FLOORS = ("auto", "none")       # speed_floor: one of these, or a rate kappa > 0 (1/s) (.floor)
 MAX_POINTS = 10_000
 CORRECTIVE_OFF = {"corrective_rounds": 0}     # no corrective refits
-PLAIN = {**CORRECTIVE_OFF, "warp": "none"}    # one plain fit: no corrective refits, no warp
+PLAIN = {**CORRECTIVE_OFF, "warp": "none", "speed_floor": "none"}    # one plain fit: no refits, warp or floor
 #: Named configurations (``CDSP.preset(name)``): the parameters each sets, the rest default.
 #: "paper": the paper's formulation as first implemented (K = 6 linear sub-systems, constant
 #: metric, plain alternation with the max-margin metric step) -- the reproduction's base;
 #: "ica": the same model learned by the inner convex approximation (CDSP() is "ica" with K = 8
 #: and warp="auto", :mod:`.warp`);
 #: "cubic": cubic sub-systems, degree-2 metric M(z), started from "ica", proximal alternation.
-#: Every preset is one plain fit (PLAIN: no warp, no corrective refits; the configurations as
-#: measured alone); ``CDSP.preset(name, warp="auto")`` adds the default's choice of warp.
+#: Every preset is one plain fit (PLAIN: no warp, no corrective refits, no speed floor; the configurations
+#: as measured alone); ``CDSP.preset(name, warp="auto")`` adds the default's choice of warp.
 PRESETS = {
     "paper": {"n_components": 6, "metric_degree": 0, "field_degree": 1, "gamma": 0.1,
               "solver_method": "alternating", "metric_prox": 0.0, **PLAIN},

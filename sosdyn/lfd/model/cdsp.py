@@ -121,8 +121,8 @@ class CDSP(MotionModel):
     inside the warps did not help (1257 vs 1258). K = 8 and K = 10 had the lowest training means
     of the single plain configurations (1511, 1508 mm; K = 8 is faster).
     Presets (``CDSP.preset(name, **overrides)``, :data:`~sosdyn.lfd.fit.params.PRESETS`) are one plain
-    fit each (warp="none", corrective_rounds=0): ``"paper"`` the paper's alternating formulation
-    (the reproduction ``python -m problems run`` sets its parameters explicitly); ``"ica"`` the
+    fit each (warp="none", corrective_rounds=0, speed_floor="none"): ``"paper"`` the paper's alternating
+    formulation (the reproduction ``python -m problems run`` sets its parameters explicitly); ``"ica"`` the
     same linear model by the inner convex approximation, K = 6; ``"cubic"`` cubic sub-systems and
     a degree-2 metric. A choice per data set among configurations from the training demonstrations
     alone: :func:`sosdyn.evaluation.dsopt.select_fit` (the "CDSP selected" variants).
