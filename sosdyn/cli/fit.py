@@ -28,6 +28,7 @@ how the model reproduces each demonstration (with the time each takes to reach t
 from __future__ import annotations
 
 import enum
+import math
 import time
 from pathlib import Path
 from typing import Annotated
@@ -39,7 +40,7 @@ from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.data.pose import GOAL_TOL_DEG
-from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, METHODS, PRESETS, WARPS
+from ..lfd.fit.params import FLOORS, GATINGS, MAX_CORRECTIVE_ROUNDS, METHODS, PRESETS, WARPS
 from ..lfd.fit.second_order import METHODS as SECOND_ORDER_METHODS
 from ..lfd.fit.second_order.params import FIELDS as SECOND_ORDER_FIELDS
 from ..lfd.model.base import FAMILIES, family_for
@@ -59,7 +60,7 @@ SecondOrderField = enum.Enum("SecondOrderField", {name: name for name in SECOND_
 OPTIONS = {"n_components": "--components", "metric_degree": "--metric-degree", "field_degree": "--field-degree",
            "gamma": "--gamma", "solver": "--solver", "solver_method": "--solver-method", "random_state": "--seed",
            "corrective_rounds": "--corrective-rounds", "warp": "--warp", "max_iter": "--max-iter",
-           "gating": "--gating", "goal_tol_deg": "--goal-tol-deg", "field": "--field"}
+           "gating": "--gating", "speed_floor": "--speed-floor", "goal_tol_deg": "--goal-tol-deg", "field": "--field"}
 
 
 class Switch(str, enum.Enum):
@@ -153,6 +154,19 @@ def _default(name: str) -> str:
     return f"{DEFAULTS[name]}, or the preset's"
 
 
+def parse_floor(value: str | None) -> str | float | None:
+    """``--speed-floor``: auto, none, or a rate > 0 (1/s)."""
+    if value is None or value in FLOORS:
+        return value
+    try:
+        rate = float(value)
+    except ValueError:
+        raise typer.BadParameter(f"must be auto, none or a rate > 0 (1/s), got {value!r}.") from None
+    if not (math.isfinite(rate) and rate > 0):
+        raise typer.BadParameter(f"the rate must be a finite number > 0 (1/s), got {value!r}.")
+    return rate
+
+
 @app.command()
 def fit(
     demos: Annotated[list[str], typer.Argument(
@@ -194,8 +208,15 @@ def fit(
         "--max-iter", min=0, help="Iteration cap of the alternation (each fit, candidate or round).",
         show_default=f"{DEFAULTS['max_iter']}, or the preset's (second order: 50)")] = None,
     gating: Annotated[Gating | None, typer.Option(
-        help="The mixture weights h_k: posterior, or tempered (the posterior at the data, turning smoothly off "
-             "it: smoother motions away from the demonstrations).", show_default=_default("gating"))] = None,
+        help="The mixture weights h_k: posterior; tempered (the posterior at the data, turning smoothly off it); "
+             "smooth (the posterior at the data, fading to constant weights far off it: the smoothest motions away "
+             "from the demonstrations).", show_default=_default("gating"))] = None,
+    speed_floor: Annotated[str | None, typer.Option(
+        "--speed-floor", callback=parse_floor, metavar="auto|none|RATE",
+        help="A time change of the field (same paths, same certificate): at least RATE (1/s) x the distance to the "
+             "goal, at most 10x the field's speed; auto = the least that makes the reproductions of the "
+             "demonstrations arrive within 1.5x their duration (none if they do).",
+        show_default=_default("speed_floor"))] = None,
     dt: Annotated[float | None, typer.Option(
         callback=positive, help="Sampling step (s) of files without a time column: sample k is at k*dt.",
         show_default="none: the files' time column")] = None,
@@ -261,8 +282,8 @@ def fit(
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value,
-               "max_iter": max_iter, "gating": gating and gating.value, "goal_tol_deg": goal_tol_deg,
-               "field": field and field.value}
+               "max_iter": max_iter, "gating": gating and gating.value, "speed_floor": speed_floor,
+               "goal_tol_deg": goal_tol_deg, "field": field and field.value}
     given = {k: v for k, v in options.items() if v is not None}
     check_options(family, given)
     data = prepare(family, data, smooth, trim_rest is Switch.on, align_ends)
