@@ -13,7 +13,8 @@ from scipy.linalg import expm
 from cli_support import assert_one_error_line, run
 
 import sosdyn as sd
-from sosdyn.cli.fit import iteration_cap, progress_line
+from sosdyn.cli.fit import progress_line
+from sosdyn.lfd.fit.learner import capped
 from sosdyn.lfd.fit.warp import AUTO_WARPS
 
 DT = 0.02
@@ -151,10 +152,13 @@ def test_goal_tol_refuses_with_a_hint_and_accepts_when_raised(capsys, tmp_path, 
     paths = write_xy(tmp_path / "d", [(8, 2), (-6, 7)])
     shifted = np.loadtxt(paths[1], delimiter=",", skiprows=1) + [1.0, 0.0]   # 1 apart: each about 0.5 off the mean
     np.savetxt(paths[1], shifted, delimiter=",", header="x,y", comments="")
-    code, _, err = run(capsys, "fit", *paths, "--dt", 0.1, "--goal-tol", 0.4, "--out", tmp_path / "m.json")
+    argv = ["fit", *paths, "--dt", 0.1, "--out", tmp_path / "m.json"]
+    code, _, err = run(capsys, *argv, "--goal-tol", 0.4, "--align-ends", "off")
     assert_one_error_line(code, err, "ends 0.49", "goal_tol = 0.4", "--goal-tol", need_try=True)
-    code, _, err = run(capsys, "fit", *paths, "--dt", 0.1, "--goal-tol", 0.6, "--out", tmp_path / "m.json")
+    code, _, err = run(capsys, *argv, "--goal-tol", 0.6, "--align-ends", "off")
     assert code == 0, err and len(captured["demos"]) == 2
+    code, _, err = run(capsys, *argv, "--goal-tol", 0.4)       # the rule applies after preprocessing: aligned ends pass
+    assert code == 0, err
 
 
 def test_goal_tol_is_honoured_by_the_fit_itself(capsys, tmp_path):
@@ -245,7 +249,7 @@ def test_fit_a_shipped_set_prints_preprocessing_crossings_and_the_reproduction_t
     assert "sample k is placed at k * 0.01 s (assumed)" in text
     assert "smoothing: Savitzky-Golay, 13 samples" in text and "ends aligned to the mean end" in text
     assert "max 0.0215 m (inferred) (demo 7)" in text                # hammer's README: max end spread 0.0211
-    rows = re.findall(r"^\s+(\d+)\s+([\d.e+-]+)\s+([\d.e+-]+)\s+([\d.e+inf-]+)\s+([\d.]+)\s+(yes|NO)$", out,
+    rows = re.findall(r"^\s+(\d+)\s+([\d.e+-]+)\s+([\d.e+-]+)\s+([\d.e+-]+|never)\s+([\d.]+)\s+(yes|NO)$", out,
                       flags=re.MULTILINE)
     assert [int(r[0]) for r in rows] == list(range(10))
     assert all(float(r[1]) <= float(r[2]) for r in rows)
@@ -272,11 +276,22 @@ def test_iteration_cap_is_reported_only_when_hit(linear_demos_2d):
     rows = [{"step": "dynamics (M = I)", "cost": 10.0}]
     for old, new in ((10.0, 8.0), (8.0, 7.0)):
         rows += [{"step": "ica", "cost": old}, {"step": "dynamics", "cost": new}]
-    assert iteration_cap(rows, 2, 1e-4) == "stopped at max_iter=2 with relative change 1.25e-01 > tol=0.0001"
-    assert iteration_cap(rows, 3, 1e-4) is None                        # the cap was not reached
-    assert iteration_cap(rows, 2, 0.2) is None                         # the last change met the tolerance
-    capped = sd.CDSP(n_components=2, warp="none", max_iter=1, tol=1e-12).fit(linear_demos_2d)
-    assert iteration_cap(capped.history_, 1, 1e-12).startswith("stopped at max_iter=1 with relative change")
+    assert capped(rows, 2, 1e-4) == "stopped at max_iter=2 with relative change 1.25e-01 > tol=0.0001"
+    assert capped(rows, 3, 1e-4) is None                        # the cap was not reached
+    assert capped(rows, 2, 0.2) is None                         # the last change met the tolerance
+    model = sd.CDSP(n_components=2, warp="none", max_iter=1, tol=1e-12).fit(linear_demos_2d)
+    assert model.iteration_cap(model.history_).startswith("stopped at max_iter=1 with relative change")
+    assert sd.PoseCDSP(max_iter=2).iteration_cap(rows) == capped(rows, 2, 1e-4)     # the chart model's rule
+
+
+def test_second_order_iteration_cap_reads_its_own_rows():
+    """A "start" row, then one row per iteration (cost after it); the loop's test is relative to the new cost."""
+    rows = [{"step": "start", "cost": 10.0}, {"step": "ica", "cost": 8.0}, {"step": "ica", "cost": 7.0}]
+    model = sd.SecondOrderCDSP(field="mixture", max_iter=2)
+    assert model.iteration_cap(rows) == "stopped at max_iter=2 with relative change 1.43e-01 > tol=0.0001"
+    assert sd.SecondOrderCDSP(field="mixture", max_iter=3).iteration_cap(rows) is None      # stopped before the cap
+    assert sd.SecondOrderCDSP(field="mixture", max_iter=2, tol=0.2).iteration_cap(rows) is None
+    assert sd.SecondOrderCDSP().iteration_cap([]) is None                                 # tracking: no iterations
 
 
 def test_fit_says_which_warp_was_kept_and_why(capsys, tmp_path):

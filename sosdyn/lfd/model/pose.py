@@ -22,7 +22,8 @@ angular velocity omega = R J_r(r) rdot (:func:`body_velocity`, the right Jacobia
 R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r)).
 
 Speed limits (``max_speed`` on |v|, data units / s; ``max_angular_speed`` on |omega|, rad / s): the
-chart velocity is scaled by lambda = min(1, v_max / |v|, w_max / |omega|) (:func:`pose_speed_factor`);
+chart velocity is scaled by one factor lambda, the speed limit's of the joint ratio of |v| / v_max and
+|omega| / w_max (:func:`pose_speed_factor`; |v| < v_max, |omega| < w_max);
 omega is linear in rdot, so both are scaled by lambda, and one positive factor on the 6-D field
 keeps its paths and its goal (the limited system is a time change of the certified one).
 """
@@ -368,3 +369,7 @@ class PoseCDSP(MotionModel):
             lines.append(f"end orientations aligned onto their chordal mean by {moved} deg (refused beyond "
                          f"goal_tol_deg {self.goal_tol_deg:g})")
         return lines
+
+    def iteration_cap(self, rows: list[dict]) -> str | None:
+        """As the 6-D chart model's (:meth:`CDSP.iteration_cap`): its rows are this fit's."""
+        return CDSP(**self.cdsp_params).iteration_cap(rows)

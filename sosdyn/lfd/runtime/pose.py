@@ -8,7 +8,8 @@ s = (x - x_g' + x_g, c r) for the goal pose (x_g', R_g'), and (v, omega) = (sdot
 R J_r(r) sdot_r / c) with :func:`body_velocity` (its source copied verbatim). It needs numpy
 and scipy, never sosdyn. States within CHART_MARGIN of the cut locus raise ValueError. Speed limits
 (``max_speed`` on |v|, ``max_angular_speed`` on |omega|, written into the code): (v, omega) scaled by
-lambda = min(1, v_max / |v|, w_max / |omega|), as :meth:`~sosdyn.lfd.model.pose.PoseCDSP.predictor`.
+one factor, the speed limit's (:mod:`.states`) of the joint ratio of |v| / v_max and |omega| / w_max,
+as :meth:`~sosdyn.lfd.model.pose.PoseCDSP.predictor`.
 
 The C++ header is the chart model's :func:`~sosdyn.lfd.runtime.export_cpp.to_cpp` (namespace NS) and a
 namespace NS_pose with the same chart in plain arithmetic (<cmath> only): quaternion product and
@@ -26,7 +27,7 @@ from ..data.pose import CHART_MARGIN
 from .codegen import _flat, _literal
 from .export_cpp import to_cpp
 from .export_python import to_python
-from .states import speed_factor
+from .states import joint_ratio, saturation_factor, speed_ratio
 
 SMALL_ANGLE = 1e-4               # below this |r| the right Jacobian's series is used
 
@@ -46,11 +47,15 @@ def body_velocity(r, rdot) -> np.ndarray:
 
 
 def pose_speed_factor(S, Sdot, rot_factor: float, max_speed, max_angular_speed) -> np.ndarray:
-    """lambda = min(1, v_max / |v|, w_max / |omega|) of each chart state S (m, 6) (goal at r = 0) and
-    velocity Sdot: v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| with r = s_r / c, rdot = sdot_r / c.
-    One positive factor on the whole 6-D velocity keeps the chart paths and the goal (docs/theory.md)."""
+    """lambda (m, 1) of each chart state S (m, 6) (goal at r = 0) and velocity Sdot: the speed limit's
+    factor (:mod:`.states`) of the joint ratio of |v| / v_max and |omega| / w_max
+    (:func:`~.states.joint_ratio`), v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| with r = s_r / c,
+    rdot = sdot_r / c. One positive factor on the whole 6-D velocity keeps the chart paths and the goal
+    (docs/theory.md); |v| <= v_max and |omega| <= w_max."""
     w = body_velocity(S[:, 3:] / rot_factor, Sdot[:, 3:] / rot_factor)
-    return np.minimum(speed_factor(Sdot[:, :3], max_speed), speed_factor(w, max_angular_speed))
+    rho = joint_ratio([None if max_speed is None else speed_ratio(Sdot[:, :3], max_speed),
+                       None if max_angular_speed is None else speed_ratio(w, max_angular_speed)])
+    return np.broadcast_to(saturation_factor(rho), (len(S),))[:, None]
 
 
 
@@ -87,18 +92,15 @@ def predict_pose(x, quat, goal=None):
         raise ValueError("the orientation is too near a half turn from the goal (the chart's cut locus)")
     sdot = predict(np.concatenate([x - goal[:3] + GOAL[:3], ROT_FACTOR * r]))
     v, omega = sdot[:3], (Rg * Rotation.from_rotvec(r)).apply(body_velocity(r, sdot[3:] / ROT_FACTOR)[0])
-    with np.errstate(divide="ignore"):
-        scale = min([1.0, *(limit / np.linalg.norm(u) for limit, u in
-                            ((POSE_MAX_SPEED, v), (POSE_MAX_ANGULAR_SPEED, omega)) if limit is not None)])
+    scale = float(saturation_factor(joint_ratio([None if limit is None else speed_ratio(u, limit)
+                                                 for limit, u in ((POSE_MAX_SPEED, v), (POSE_MAX_ANGULAR_SPEED, omega))])))
     return scale * v, scale * omega
 '''
 
 
-def _cpp_limit(name: str, limit: float | None, vector: str) -> str:
-    """C++ lines lowering ``scale`` to limit / |vector| when that is smaller (nothing without a limit)."""
-    return "" if limit is None else (
-        f"  const double {name}2 = {vector}[0] * {vector}[0] + {vector}[1] * {vector}[1] + {vector}[2] * {vector}[2];\n"
-        f"  if ({name}2 * scale * scale > {limit!r} * {limit!r}) scale = {limit!r} / std::sqrt({name}2);\n")
+def _cpp_ratio(limit: float | None, vector: str) -> str:
+    """A C++ expression: |vector| / limit (the speed limit's :func:`~.states.speed_ratio`), 0 without a limit."""
+    return "0.0" if limit is None else f"{{NS}}::speed_ratio({vector}.data(), 3, {limit!r}, top, norm)"
 
 
 def pose_to_cpp(model, namespace: str = "pose_model", max_speed: float | None = None,
@@ -106,7 +108,11 @@ def pose_to_cpp(model, namespace: str = "pose_model", max_speed: float | None = 
     """Source of the header-only C++17 pose evaluator (module docstring)."""
     model._check_fitted()
     max_speed, max_angular_speed = model._limits(max_speed, max_angular_speed)
-    limits = _cpp_limit("speed", max_speed, "sdot") + _cpp_limit("turn", max_angular_speed, "w_out")
+    limits = (("  double top, norm;   // scratch of speed_ratio\n" if (max_speed, max_angular_speed) != (None, None) else "")
+              + f"  const double speed = {_cpp_ratio(max_speed, 'sdot')};\n"
+              f"  const double turn = {_cpp_ratio(max_angular_speed, 'w_out')};\n"
+              f"  const double scale = {{NS}}::joint_factor(speed, turn);   // |v| <= max_speed, |omega| <= max_angular_speed\n"
+              ).replace("{NS}", namespace)
     return to_cpp(model.cdsp_, namespace) + f"""
 namespace {namespace}_pose {{
 
@@ -161,7 +167,6 @@ inline bool predict_pose(const double* x, const double* quat, double* v, double*
   const std::array<double, 4> qw = qmul(q.data(), wb.data());
   const std::array<double, 4> w = qmul(qw.data(), qc.data());     // omega = R omega_b = q omega_b q*
   const std::array<double, 3> w_out = {{w[1], w[2], w[3]}};
-  double scale = 1.0;   // speed limits (|v| <= max_speed, |omega| <= max_angular_speed): one factor on both
 {limits}  bool finite = true;
   for (int i = 0; i < 3; ++i) {{
     v[i] = scale * sdot[i];
