@@ -15,7 +15,8 @@ from .cdsp import CDSP, DEFAULTS
 from ..fit.certificate import DEFAULT_SAMPLES
 from ..fit.learner import Settings
 from .fileformat import REFIT_HINT, model_format, read_model_file
-from .pose import GOAL_TOL_DEG, POSE_FORMAT, POSE_VERSION, PoseCDSP
+from .pose import POSE_FORMAT, PoseCDSP
+from .pose_file import load_pose_content, pose_from_content
 from .second_order import SECOND_ORDER_FORMAT, SecondOrderCDSP
 from .second_order_file import second_order_from_file
 from .state import check_param_names, need, validate_state
@@ -75,17 +76,11 @@ def checked_model(path: Path, model: CDSP | SecondOrderCDSP) -> CDSP | SecondOrd
 
 
 def load_pose_model(path, key=None) -> PoseCDSP:
-    """Read a file written by :meth:`PoseCDSP.save`: every CDSP field validated (as :func:`load_model`),
-    the goal orientation a unit quaternion, c > 0, and the 6-D certificate re-checked."""
+    """Read a file written by :meth:`PoseCDSP.save` (:mod:`.pose_file`): every field validated, each
+    block loaded as a CDSP file and its certificate re-checked."""
     path = Path(path)
-    content = read_model_file(path, key, POSE_FORMAT, POSE_VERSION)
-    q, c = np.asarray(content.get("goal_quat", []), dtype=float), content.get("rot_factor")
-    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-9 or not isinstance(c, (int, float)) or not c > 0:
-        raise ModelFileError(f"{path}: goal_quat must be a unit 4-vector and rot_factor > 0. {REFIT_HINT}")
-    model = PoseCDSP(content.get("goal_tol_deg", GOAL_TOL_DEG))
-    model.cdsp_ = checked_model(path, model_from_content_at(path, content))
-    model.goal_quat_, model.rot_factor_ = q, float(c)
-    return model
+    return pose_from_content(path, load_pose_content(path, key),
+                             lambda where, block: checked_model(where, model_from_content_at(where, block)))
 
 
 def model_from_content(content: dict) -> CDSP:

@@ -1,112 +1,96 @@
-"""PoseCDSP: a certified model of position and orientation (docs/theory.md, "Poses").
+"""PoseCDSP: a certified model of position and orientation as two certified blocks (docs/theory.md, "Poses").
 
-State s = (x, c r) in R^6: the position x and the rotation vector r = log(R_g^T R) of the
-orientation in the chart at the goal orientation R_g (:func:`~sosdyn.lfd.data.poses.chart`),
-r scaled by ``rot_factor_`` c = max |x - x_g|_inf / max |r|_inf over the training data (each block
-by its own data scale, so the two are commensurate). A :class:`~.cdsp.CDSP` is fitted on the 6-D
-demonstrations: positions and orientations coupled, its usual certificate (contraction at rate
-gamma in the metric, SOS + sampled check + the warp's numbers) on R^6 with goal (x_g, 0).
+The pose (x, R) is carried by the chart state s = (x, r), r = log(R_g^T R) the rotation vector of the
+orientation from the goal orientation R_g (:func:`~sosdyn.lfd.data.poses.chart`). The model is
 
-Carrying over to rotations: exp_{R_g}: r -> R_g exp(r) is a diffeomorphism of the open ball
-|r| < pi onto SO(3) minus the cut locus {angle(R_g^T R) = pi}; a chart trajectory that stays in
-the ball is a rotation trajectory, and r -> 0 is R -> R_g. The ball is kept: with a constant
-metric M (metric_degree 0) the certificate gives d/dt (u^T M u) <= -gamma u^T M u (u = z, or
-phi(z) with a warp), so the ellipsoid through the start is invariant and
-|r(t)| <= :func:`chart_bound` (z0) for all t; a rollout whose bound is not below
-pi - CHART_MARGIN is checked sample by sample and refused (InputError) if it would leave.
+    xdot = F_x(x)        the certified CDSP of the positions (``position_``, as a position model),
+    rdot = F_r(r)        a CDSP of r in the identity metric (``orientation_``, :mod:`~sosdyn.lfd.fit.pose`),
 
-Rollout: the chart state is integrated (the CDSP's integrator) and mapped by R = R_g exp(r):
-unit quaternions by construction, no drift off the sphere. Velocities: v = xdot, and the world
-angular velocity omega = R J_r(r) rdot (:func:`body_velocity`, the right Jacobian of SO(3):
-R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r)).
+so the position never depends on the orientation: an orientation-only start or a turn of the goal
+orientation moves the position by exactly 0. The orientation's certificate makes the geodesic angle
+|r| = angle(R, R_g) decrease, d|r|^2/dt <= -gamma |r|^2, along every trajectory, so a state that starts
+in the chart (|r| < pi, any orientation but the exact half turn, which has two logarithms and takes
+either) never leaves it: every start converges, with no refusal. A block that does not move in the
+demonstrations is fitted as a still block (:func:`~sosdyn.lfd.fit.pose.still_block`, ``still_``).
+
+Rollout: the chart state is integrated (the CDSP's integrator, absolute tolerance relative to each
+block's scale) and mapped by R = R_g exp(r): unit quaternions by construction. Velocities: v = xdot,
+and the world angular velocity omega = R J_r(r) rdot (:func:`~sosdyn.lfd.data.poses.body_velocity`).
+A goal pose (x_g', R_g') translates the position field and moves the chart: r' = log(R_g'^T R).
 
 Speed limits (``max_speed`` on |v|, data units / s; ``max_angular_speed`` on |omega|, rad / s): the
-chart velocity is scaled by lambda = min(1, v_max / |v|, w_max / |omega|) (:func:`pose_speed_factor`);
-omega is linear in rdot, so both are scaled by lambda, and one positive factor on the 6-D field
-keeps its paths and its goal (the limited system is a time change of the certified one).
+chart velocity is scaled by lambda = min(1, v_max / |v|, w_max / |omega|) (:func:`pose_speed_factor`, built
+on :func:`~sosdyn.lfd.runtime.states.speed_factor`); one positive factor on the whole velocity keeps the
+paths and the goal (a time change of the certified system).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import InputError, NotFittedError
-from ..data.poses import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart,
-                          chart_demonstrations, goal_orientation)
-from ..fit.pipeline import maps_of
-from ..fit.warp import apply as warp_apply, check_warp
-from ..rollout import rollout as integrate
+from ..data.poses import (GOAL_TOL_DEG, PoseDemonstrations, align_orientations, body_velocity, chart, from_chart,
+                          goal_orientation, split_demonstrations)
+from ..fit.pose import check_moves, isotropic_demonstrations, orientation_params, still_block
+from ..rollout import ATOL_REL, rollout as integrate
 from ..runtime.states import check_max_speed, speed_factor
 from .cdsp import CDSP, DEFAULTS
 from .fileformat import write_model_file
-from .reach import metric_matrix
+from .pose_export import pose_to_cpp, pose_to_python
+from .pose_score import pose_reproduction_table
+from .reach import reach_box
 from .state import STATE_FIELDS, state_record
 
-POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 1
-SMALL_ANGLE = 1e-4               # below this |r| the right Jacobian's series is used
+POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 2
+BLOCKS = ("position", "orientation")
 
 
-def body_velocity(r, rdot) -> np.ndarray:
-    """J_r(r) rdot row by row (m, 3): rdot - a r x rdot + b r x (r x rdot), t = |r|, a = (1 - cos t)/t^2,
-    b = (t - sin t)/t^3 (series below SMALL_ANGLE); J_r is the right Jacobian of SO(3), so
-    R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r): the body angular velocity."""
-    r, d = np.atleast_2d(np.asarray(r, dtype=float)), np.atleast_2d(np.asarray(rdot, dtype=float))
-    t = np.linalg.norm(r, axis=1, keepdims=True)
-    small = t < SMALL_ANGLE
-    ts = np.where(small, 1.0, t)
-    a = np.where(small, 0.5 - t * t / 24.0, (1.0 - np.cos(ts)) / ts**2)
-    b = np.where(small, 1.0 / 6.0 - t * t / 120.0, (ts - np.sin(ts)) / ts**3)
-    rxd = np.cross(r, d)
-    return d - a * rxd + b * np.cross(r, rxd)
-
-
-def pose_speed_factor(S, Sdot, rot_factor: float, max_speed, max_angular_speed) -> np.ndarray:
-    """lambda = min(1, v_max / |v|, w_max / |omega|) of each chart state S (m, 6) (goal at r = 0) and
-    velocity Sdot: v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| with r = s_r / c, rdot = sdot_r / c.
-    One positive factor on the whole 6-D velocity keeps the chart paths and the goal (docs/theory.md)."""
-    w = body_velocity(S[:, 3:] / rot_factor, Sdot[:, 3:] / rot_factor)
+def pose_speed_factor(R, Sdot, max_speed, max_angular_speed) -> np.ndarray:
+    """lambda = min(1, v_max / |v|, w_max / |omega|) (m, 1) at the rotation vectors R (m, 3) for the chart
+    velocities Sdot (m, 6): v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| (R orthogonal)."""
+    w = body_velocity(R, Sdot[:, 3:])
     return np.minimum(speed_factor(Sdot[:, :3], max_speed), speed_factor(w, max_angular_speed))
-
-
-def chart_bound(model: CDSP, z0, rot_factor: float) -> float:
-    """An upper bound on sup_t |r(t)| from the start z0 (z-units): with u = phi(z) and constant M,
-    u^T M u is non-increasing, so |r| = s |z_r| / c <= s / c * sqrt(u0^T M u0) * b with b =
-    sqrt(lambda_max(P M^-1 P^T)) (P picks the r block; no warp) or 1 / (sqrt(lambda_min M) prod(1 - l_j))
-    (warp: |z| <= |u| / prod(1 - l_j)). inf when M is not constant."""
-    M = metric_matrix(model)
-    if M is None:
-        return np.inf
-    z0 = np.asarray(z0, dtype=float)
-    if model.warp_ is None:
-        level, Minv = float(z0 @ M @ z0), np.linalg.inv(M)
-        b = np.sqrt(np.linalg.eigvalsh(Minv[3:, 3:]).max())
-    else:
-        u0 = warp_apply(z0[None], *maps_of(model.warp_), np.zeros(model.dim_))[0]
-        level = float(u0 @ M @ u0)
-        lower = check_warp(maps_of(model.warp_), 1, 0)["singular_bound"]
-        b = 1.0 / (np.sqrt(np.linalg.eigvalsh(M).min()) * lower) if lower > 0 else np.inf
-    return float(model.scale_ / rot_factor * np.sqrt(max(level, 0.0)) * b)
 
 
 @dataclass
 class PoseTrajectory:
-    """A pose rollout: ``t`` (T,), ``pos`` (T, 3), ``quat`` (T, 4 unit, w x y z), ``chart_bounds``:
-    the a-priori bound on the angle from the goal (radians) of each segment (between events)."""
+    """A pose rollout: ``t`` (T,), ``pos`` (T, 3), ``quat`` (T, 4 unit, w x y z), ``goal`` (T, 7): the goal
+    pose in effect at each sample."""
 
     t: np.ndarray
     pos: np.ndarray
     quat: np.ndarray
-    chart_bounds: list = field(default_factory=list)
+    goal: np.ndarray
+
+
+@dataclass(frozen=True)
+class PoseCertificateReport:
+    """The two blocks' certificate checks (:class:`~sosdyn.lfd.fit.certificate.CertificateReport` each)."""
+
+    position: object
+    orientation: object
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.position.passed and self.orientation.passed)
+
+    def __str__(self) -> str:
+        return f"position: {self.position}\norientation (identity metric: the angle never increases): {self.orientation}"
 
 
 class PoseCDSP:
     """Learn a certified pose motion (position and orientation) from :class:`PoseDemonstrations`.
 
-    ``goal_tol_deg``: end orientations further than this from their chordal mean are refused
-    (they are aligned to it otherwise, ``orientation_moved_deg_``); every other keyword is a
-    :class:`CDSP` parameter of the 6-D chart model ``cdsp_``.
+    ``goal_tol_deg``: end orientations further than this from their chordal mean are refused (nearer
+    ones are aligned to it, ``orientation_moved_deg_``); every other keyword is a :class:`CDSP`
+    parameter of the position block ``position_``, and of the orientation block ``orientation_`` with
+    the identity metric and no warp (:func:`~sosdyn.lfd.fit.pose.orientation_params`).
+
+    Learned: ``goal_quat_`` (w x y z), ``position_`` and ``orientation_`` (CDSPs; the orientation's goal
+    is r = 0), ``still_`` ({"position": a or None, "orientation": a or None}: the rate of a block that did
+    not move in the demonstrations), ``orientation_moved_deg_`` (set by ``fit``).
     """
 
     name = "PoseCDSP"
@@ -124,75 +108,129 @@ class PoseCDSP:
         self.cdsp_params = cdsp_params
         CDSP(**cdsp_params).check_params()
 
+    def get_params(self) -> dict:
+        return {"goal_tol_deg": self.goal_tol_deg, **self.cdsp_params}
+
+    def __repr__(self) -> str:
+        """``PoseCDSP(goal_tol_deg=20.0, ...)``; fitted, also the goal pose, each block's components and
+        whether the certificates passed."""
+        args = [f"{k}={v!r}" for k, v in self.get_params().items()]
+        if hasattr(self, "position_"):
+            blocks = ", ".join(f"{b}: " + (f"still (rate {self.still_[b]:.3g}/s)" if self.still_[b] else
+                                          f"K={getattr(self, b + '_').C_.shape[0]}") for b in BLOCKS)
+            args.append(f"fitted: goal=({np.array2string(self.goal_pos_, precision=4, separator=', ')}, "
+                        f"{np.array2string(self.goal_quat_, precision=4, separator=', ')}), {blocks}, "
+                        f"certified={self.certified_}")
+        return f"PoseCDSP({', '.join(args)})"
+
     def fit(self, demos: PoseDemonstrations) -> PoseCDSP:
-        """Goal orientation, aligned ends, the chart, the scale c, then the certified 6-D CDSP."""
+        """Goal orientation, aligned end orientations, then the two certified blocks (module docstring)."""
         if not isinstance(demos, PoseDemonstrations):
             raise InputError(f"PoseCDSP.fit takes PoseDemonstrations (sosdyn.lfd.data.poses.load_pose_demos), "
                              f"got {type(demos).__name__}.")
         goal_quat = goal_orientation(demos)
         aligned, self.orientation_moved_deg_ = align_orientations(demos, goal_quat, self.goal_tol_deg)
-        X = np.vstack([d.pos for d in aligned])
-        R = np.vstack([chart(d.quat, goal_quat) for d in aligned])
-        pos_scale, rot_scale = np.abs(X - aligned.goal_pos).max(), np.abs(R).max()
-        self.rot_factor_ = float(pos_scale / rot_scale) if rot_scale > 0 and pos_scale > 0 else 1.0
-        self.goal_quat_ = goal_quat
-        self.cdsp_ = CDSP(**self.cdsp_params, progress=self.progress).fit(chart_demonstrations(aligned, goal_quat, self.rot_factor_))
+        pos, rot = split_demonstrations(aligned, goal_quat)
+        still = {"position": still_block(pos, "position"), "orientation": still_block(rot, "orientation")}
+        check_moves(still["position"], still["orientation"], demos.name)
+        params = {"position": self.cdsp_params, "orientation": orientation_params(self.cdsp_params)}
+        goals = {"position": pos.goal, "orientation": np.zeros(3)}
+        for block, data in (("position", pos), ("orientation", rot)):
+            rate = still[block]
+            if rate is not None:
+                data = isotropic_demonstrations(3, rate, goals[block], data.units, data.name)
+            model = CDSP(**{**params[block], **({"n_components": 1} if rate else {})},
+                         progress=self.progress).fit(data)
+            setattr(self, f"{block}_", model)
+        self.orientation_.goal_ = np.zeros(3)     # the chart's origin exactly (the ends were aligned to it)
+        self.goal_quat_, self.still_ = goal_quat, still
         return self
 
     # ------------------------------------------------------------------ state and chart
     def _check_fitted(self):
-        if not hasattr(self, "cdsp_"):
+        if not hasattr(self, "position_"):
             raise NotFittedError("this PoseCDSP is not fitted yet; call fit(pose_demos) first")
 
     @property
+    def cdsp_(self) -> CDSP:
+        """The position block (``position_``)."""
+        return self.position_
+
+    @property
     def goal_pos_(self) -> np.ndarray:
-        return self.cdsp_.goal_[:3]
+        return self.position_.goal_
+
+    @property
+    def units_(self) -> str:
+        return self.position_.units_
+
+    @property
+    def dt_(self) -> float:
+        return self.position_.dt_
 
     @property
     def certified_(self) -> bool:
-        return bool(self.cdsp_.certified_)
+        return bool(self.position_.certified_ and self.orientation_.certified_)
 
-    def _pose(self, p, what: str) -> tuple[np.ndarray, np.ndarray]:
-        p = np.asarray(p, dtype=float)
+    @property
+    def verification_(self) -> PoseCertificateReport:
+        return PoseCertificateReport(self.position_.verification_, self.orientation_.verification_)
+
+    @staticmethod
+    def _pose(p, what: str) -> tuple[np.ndarray, np.ndarray]:
+        """(x, unit q) of a pose p = (x, y, z, qw, qx, qy, qz); InputError if not 7 finite numbers with a
+        quaternion of norm in (0.5, 1.5) (renormalised)."""
+        try:
+            p = np.asarray(p, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{what} must be 7 numbers (x, y, z, qw, qx, qy, qz), got {p!r:.60}.") from None
         if p.shape != (7,) or not np.isfinite(p).all():
-            raise InputError(f"{what} must be a finite 7-vector (x, y, z, qw, qx, qy, qz), got shape {p.shape}.")
-        if not 0.5 < np.linalg.norm(p[3:]) < 1.5:
-            raise InputError(f"{what}: the quaternion {p[3:]} is not unit (norm {np.linalg.norm(p[3:]):.3g}).")
-        return p[:3], p[3:] / np.linalg.norm(p[3:])
+            raise InputError(f"{what} must be 7 finite numbers (x, y, z, qw, qx, qy, qz), got shape {p.shape}"
+                             f"{'' if p.shape != (7,) else ' with NaN or inf'}.")
+        return p[:3], PoseCDSP._quat(p[3:], what)
+
+    @staticmethod
+    def _quat(q, what: str) -> np.ndarray:
+        """q / |q| for a finite 4-vector with |q| in (0.5, 1.5); InputError otherwise (zero, NaN, inf, norm 100)."""
+        try:
+            q = np.asarray(q, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{what}: the quaternion must be 4 numbers (w, x, y, z), got {q!r:.60}.") from None
+        norm = float(np.linalg.norm(q)) if q.shape == (4,) and np.isfinite(q).all() else np.nan
+        if not 0.5 < norm < 1.5:
+            raise InputError(f"{what}: the quaternion {q} is not a finite unit 4-vector (w, x, y, z)"
+                             f"{f' (norm {norm:.3g})' if np.isfinite(norm) else ''}. Try: a unit quaternion, "
+                             "e.g. 1,0,0,0 for the identity.")
+        return q / norm
 
     def _goal(self, goal) -> tuple[np.ndarray, np.ndarray]:
         return (self.goal_pos_, self.goal_quat_) if goal is None else self._pose(goal, "goal")
 
-    def state(self, x, quat, goal_quat) -> np.ndarray:
-        """s = (x, c r), r = log(R_g^T R) (refused near the cut locus)."""
-        return np.concatenate([x, self.rot_factor_ * chart(quat, goal_quat, "the start orientation")[0]])
-
-    def orientation(self, S, goal_quat) -> np.ndarray:
-        """Unit quaternions (w x y z) R_g exp(r) of the chart states S (m, 6)."""
-        Rg = Rotation.from_quat(goal_quat, scalar_first=True)
-        return (Rg * Rotation.from_rotvec(S[:, 3:] / self.rot_factor_)).as_quat(scalar_first=True)
+    def field(self, S, goal_pos) -> np.ndarray:
+        """The chart velocity (m, 6) at the chart states S = (x, r) (m, 6) for the goal position ``goal_pos``
+        (the orientation's goal is r = 0 in the chart at the goal orientation)."""
+        return np.hstack([self.position_.field(S[:, :3], goal_pos), self.orientation_.field(S[:, 3:], np.zeros(3))])
 
     # ------------------------------------------------------------------ motion
     def predictor(self, goal=None, max_speed=None, max_angular_speed=None):
         """``step(x, quat, goal=None) -> (v, omega)``: linear velocity (3,) and world angular velocity
         (3,) at the position x and orientation quat (w x y z), for the goal pose (7-vector; default
-        the model's, fixed here or per call); both scaled by :func:`pose_speed_factor` so that
-        |v| <= max_speed and |omega| <= max_angular_speed (rad/s) when given."""
+        the model's, fixed here or per call); both scaled by one factor so that |v| <= max_speed and
+        |omega| <= max_angular_speed (rad/s) when given. Every input is checked (InputError)."""
         self._check_fitted()
         fixed = self._goal(goal)
         limits = self._limits(max_speed, max_angular_speed)
-        step6 = self.cdsp_.predictor()
-        g6 = self.cdsp_.goal_
+        step_x, step_r = self.position_.predictor(), self.orientation_.predictor()
+        origin = np.zeros(3)
 
         def step(x, quat, goal=None):
             gx, gq = fixed if goal is None else self._pose(goal, "goal")
-            x = np.asarray(x, dtype=float)
-            s = self.state(x, np.asarray(quat, dtype=float), gq)
-            sdot = step6(s - np.concatenate([gx, np.zeros(3)]) + g6)
-            sdot = sdot * pose_speed_factor(s[None], sdot[None], self.rot_factor_, *limits)[0]
-            r, rdot = s[3:] / self.rot_factor_, sdot[3:] / self.rot_factor_
-            R = Rotation.from_quat(gq, scalar_first=True) * Rotation.from_rotvec(r)
-            return sdot[:3], R.apply(body_velocity(r, rdot)[0])
+            q = self._quat(quat, "quat")
+            r = chart(q, gq)[0]
+            v, rdot = step_x(x, gx), step_r(r, origin)
+            w = body_velocity(r, rdot)[0]
+            lam = min(float(speed_factor(v, limits[0])[0]), float(speed_factor(w, limits[1])[0]))
+            return lam * v, lam * Rotation.from_quat(q, scalar_first=True).apply(w)
         return step
 
     @staticmethod
@@ -204,65 +242,94 @@ class PoseCDSP:
         """Integrate from the pose p0 = (x, y, z, qw, qx, qy, qz) for ``duration`` s; ``pushes``
         [(t, (dx, dy, dz, wx, wy, wz))]: x += dx and R <- exp(w) R (world rotation vector);
         ``goal_changes`` [(t, goal pose)]. Between events the chart state at the goal in effect is
-        integrated and mapped back (module docstring); a segment whose a-priori bound is not below
-        pi - CHART_MARGIN and whose samples leave it is refused. ``max_speed`` / ``max_angular_speed``:
-        as :meth:`predictor` (the same paths, traversed more slowly)."""
+        integrated and mapped back (module docstring). ``max_speed`` / ``max_angular_speed``: as
+        :meth:`predictor` (the same paths, traversed more slowly)."""
         self._check_fitted()
         limits = self._limits(max_speed, max_angular_speed)
         x, q = self._pose(p0, "p0")
         gx, gq = self._goal(goal)
-        events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in pushes] +
-                        [(float(t), 1, np.asarray(g, dtype=float)) for t, g in goal_changes], key=lambda e: e[:2])
-        if any(not 0 <= e[0] < duration for e in events) or any(k == 0 and d.shape != (6,) for _, k, d in events):
-            raise InputError(f"events must lie in [0, duration = {duration}) and pushes be 6-vectors (dx, w).")
-        ts, P, Q, bounds, t0 = [], [], [], [], 0.0
+        try:
+            events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in pushes] +
+                            [(float(t), 1, np.concatenate(self._pose(g, "goal change"))) for t, g in goal_changes],
+                            key=lambda e: e[:2])
+        except (TypeError, ValueError):
+            raise InputError("pushes and goal_changes must be lists of pairs (time, vector).") from None
+        if any(not 0 <= e[0] < duration for e in events) or \
+                any(k == 0 and (d.shape != (6,) or not np.isfinite(d).all()) for _, k, d in events):
+            raise InputError(f"events must lie in [0, duration = {duration}) and pushes be 6 finite numbers "
+                             "(dx, dy, dz, wx, wy, wz).")
+        ts, P, Q, G, t0 = [], [], [], [], 0.0
         for t_end, kind, data in events + [(float(duration), -1, None)]:
             if t_end > t0:
-                traj = self._segment(x, q, gx, gq, t_end - t0, dt, bounds, limits)
+                traj = self._segment(x, q, gx, gq, t_end - t0, dt, limits)
                 keep = slice(1 if ts else 0, None)
                 ts.append(t0 + traj.t[keep])
                 P.append(traj.pos[keep, :3])
-                Q.append(self.orientation(traj.pos, gq)[keep])
-                x, q, t0 = traj.pos[-1, :3], Q[-1][-1] if len(Q[-1]) else q, t_end
+                Q.append(from_chart(traj.pos[:, 3:], gq)[keep])
+                G.append(np.tile(np.concatenate([gx, gq]), (len(ts[-1]), 1)))
+                x, q, t0 = traj.pos[-1, :3], from_chart(traj.pos[-1:, 3:], gq)[0], t_end
             if kind == 0:
                 x = x + data[:3]
                 q = (Rotation.from_rotvec(data[3:]) * Rotation.from_quat(q, scalar_first=True)).as_quat(
                     scalar_first=True)
             elif kind == 1:
-                gx, gq = self._pose(data, "goal change")
-        return PoseTrajectory(np.concatenate(ts), np.vstack(P), np.vstack(Q), bounds)
+                gx, gq = data[:3], data[3:]
+        return PoseTrajectory(np.concatenate(ts), np.vstack(P), np.vstack(Q), np.vstack(G))
 
-    def _segment(self, x, q, gx, gq, duration, dt, bounds, limits):
-        s0 = self.state(x, q, gq)
-        g6 = np.concatenate([gx, np.zeros(3)])
-        bound = chart_bound(self.cdsp_, (s0 - g6) / self.cdsp_.scale_, self.rot_factor_)
-        bounds.append(bound)
-        model, c = self.cdsp_, self.rot_factor_
+    def _segment(self, x, q, gx, gq, duration, dt, limits):
+        """One segment of the chart state from (x, q) towards (gx, gq) (the blocks' integrator)."""
+        def field(S, g):
+            Sdot = self.field(S, g[:3])
+            return Sdot * pose_speed_factor(S[:, 3:], Sdot, *limits)
+        atol = ATOL_REL * min(self.position_.scale_, self.orientation_.scale_)
+        return integrate(field, np.concatenate([x, chart(q, gq)[0]]), duration=duration,
+                         dt=self.dt_ if dt is None else dt, goal=np.concatenate([gx, np.zeros(3)]), atol=atol)
 
-        def field(S, g):            # g = g6: the chart goal, r = 0
-            Sdot = model.field(S, g)
-            return Sdot * pose_speed_factor(S, Sdot, c, *limits)
-        traj = integrate(field, s0, duration=duration, dt=model.dt_ if dt is None else dt, goal=g6,
-                         scale=model.scale_)
-        angle = np.linalg.norm(traj.pos[:, 3:], axis=1) / self.rot_factor_
-        if bound >= np.pi - CHART_MARGIN and angle.max() >= np.pi - CHART_MARGIN:
-            raise InputError(f"the rollout turns {np.rad2deg(angle.max()):.0f} deg from the goal orientation, "
-                             "out of the chart (cut locus at 180 deg). Try: a start nearer the demonstrations.")
-        return traj
+    def excursion_bound(self, p0, goal=None) -> float | None:
+        """The certified bound on max_t |x(t) - x_g| (data units) from the pose p0: the farthest point of
+        the position block's reach box (:func:`~sosdyn.lfd.model.reach.reach_box`; None without a certified
+        constant metric). The angle from the goal orientation is bounded by its start value (module
+        docstring)."""
+        self._check_fitted()
+        x, _ = self._pose(p0, "p0")
+        gx, _ = self._goal(goal)
+        box = reach_box(self.position_, (x - gx + self.goal_pos_)[None]) if self.position_.certified_ else None
+        if box is None:
+            return None
+        lo, hi = box[0][0] - self.goal_pos_, box[1][0] - self.goal_pos_
+        return float(np.linalg.norm(np.maximum(np.abs(lo), np.abs(hi))))
+
+    def score(self, demos: PoseDemonstrations) -> list[dict]:
+        """Per demonstration, its reproduction from its first pose (step ``dt_``): position deviation
+        (mean / max, data units) and orientation deviation (mean / max, deg), arrival time, final
+        position and angle errors, at goal (:func:`~.pose_score.pose_reproduction_table`)."""
+        self._check_fitted()
+        if not isinstance(demos, PoseDemonstrations):
+            raise InputError(f"PoseCDSP.score takes PoseDemonstrations, got {type(demos).__name__}.")
+        return pose_reproduction_table(self, demos)
 
     # ------------------------------------------------------------------ evidence and files
-    def verify(self, n_samples=None, seed=None):
-        """The 6-D model's certificate check (:meth:`CDSP.verify`)."""
+    def verify(self, n_samples=None, seed=None) -> PoseCertificateReport:
+        """Each block's certificate check (:meth:`CDSP.verify`)."""
         self._check_fitted()
-        return self.cdsp_.verify(n_samples, seed)
+        return PoseCertificateReport(self.position_.verify(n_samples, seed), self.orientation_.verify(n_samples, seed))
 
     def save(self, path, key=None):
-        """The pose model file: the 6-D CDSP's params and state, the goal orientation and c."""
+        """The pose model file: the goal orientation, the still rates, and each block's params and state."""
         self._check_fitted()
-        from_state = self.cdsp_
+        blocks = {b: {"params": dict(m.get_params(), random_state=m.seed_),
+                      "state": state_record({k: getattr(m, k) for k in STATE_FIELDS})}
+                  for b, m in (("position", self.position_), ("orientation", self.orientation_))}
         content = {"format": POSE_FORMAT, "version": POSE_VERSION, "goal_tol_deg": self.goal_tol_deg,
-                   "goal_quat": self.goal_quat_, "rot_factor": self.rot_factor_,
-                   "params": dict(from_state.get_params(), random_state=from_state.seed_),
-                   "state": state_record({k: getattr(from_state, k) for k in STATE_FIELDS})}
+                   "goal_quat": self.goal_quat_, "still": self.still_, **blocks}
         return write_model_file(content, path, key)
 
+    def export(self, target: str = "python", max_speed=None, max_angular_speed=None, namespace="pose_model") -> str:
+        """The standalone source for ``target``: "python" (:func:`~.pose_export.pose_to_python`) or "cpp"
+        (:func:`~.pose_export.pose_to_cpp`, in ``namespace``)."""
+        self._check_fitted()
+        if target == "python":
+            return pose_to_python(self, max_speed, max_angular_speed)
+        if target == "cpp":
+            return pose_to_cpp(self, namespace, max_speed, max_angular_speed)
+        raise InputError(f"unknown export target {target!r:.40}. Try: python or cpp.")

@@ -1,62 +1,90 @@
 """A fitted :class:`~.pose.PoseCDSP` as standalone code: Python ``predict_pose(x, quat, goal=None)``
 (:func:`pose_to_python`) or C++17 ``predict_pose(x, quat, v, omega, goal = nullptr)`` (:func:`pose_to_cpp`).
 
-The module is the 6-D chart model's own export (:func:`~sosdyn.lfd.runtime.export.to_python`:
-``predict(S)`` on s = (x, c r)) followed by the chart: r = log(R_g^T R) (scipy's ``Rotation``),
-s = (x - x_g' + x_g, c r) for the goal pose (x_g', R_g'), and (v, omega) = (sdot_x,
-R J_r(r) sdot_r / c) with :func:`~.pose.body_velocity` (its source copied verbatim). It needs numpy
-and scipy, never sosdyn. States within CHART_MARGIN of the cut locus raise ValueError. Speed limits
-(``max_speed`` on |v|, ``max_angular_speed`` on |omega|, written into the code): (v, omega) scaled by
-lambda = min(1, v_max / |v|, w_max / |omega|), as :meth:`~.pose.PoseCDSP.predictor`.
+Each block is its CDSP's own export (:func:`~sosdyn.lfd.runtime.export.to_python` /
+:func:`~sosdyn.lfd.runtime.export.to_cpp`): the position block's ``predict(x, goal)`` and the orientation
+block's ``predict(r, 0)``, then the chart: r = log(R_g^T R) for the goal orientation R_g (|r| <= pi; the
+half turn takes either logarithm), v = xdot, omega = R J_r(r) rdot (:func:`~sosdyn.lfd.data.poses.body_velocity`,
+its source copied verbatim into the Python). Speed limits (``max_speed`` on |v|, ``max_angular_speed``
+on |omega|, written into the code): (v, omega) scaled by lambda = min(1, v_max / |v|, w_max / |omega|),
+as :meth:`~.pose.PoseCDSP.predictor`. Every orientation has a velocity: no state is refused but one that
+is not finite or a quaternion whose norm is not in (0.5, 1.5) (Python: ValueError; C++: false).
 
-The C++ header is the chart model's :func:`~sosdyn.lfd.runtime.export.to_cpp` (namespace NS) and a
-namespace NS_pose with the same chart in plain arithmetic (<cmath> only): quaternion product and
-conjugate, log (r = 2 atan2(|v|, w) v / |v|, w >= 0) and the right Jacobian; it returns false for a
-state that is not finite, a velocity that is not finite, or an orientation within CHART_MARGIN of the
-cut locus.
+The Python module needs numpy and scipy, never sosdyn; each block's module is embedded as a string
+literal (``repr``: no text of the model reaches the file unescaped) and run into its own namespace. The
+C++ header holds the blocks' namespaces NS_position and NS_orientation and NS_pose with ``predict_pose``
+in plain arithmetic (<cmath> only): quaternion product and conjugate, log (r = 2 atan2(|u|, w) u / |u|,
+w >= 0) and the right Jacobian.
 """
 from __future__ import annotations
 
 import inspect
 
-from ..data.poses import CHART_MARGIN
+from ..data.poses import SMALL_ANGLE, body_velocity
 from ..runtime.codegen import _flat, _literal
 from ..runtime.export import to_cpp, to_python
-from .pose import SMALL_ANGLE, PoseCDSP, body_velocity
+from ..runtime.states import check_max_speed
+
+UNIT_RANGE = (0.5, 1.5)     # accepted quaternion norms (renormalised), as PoseCDSP's inputs
 
 
-def pose_to_python(model: PoseCDSP, max_speed: float | None = None, max_angular_speed: float | None = None) -> str:
+def _limits(max_speed, max_angular_speed) -> tuple:
+    return check_max_speed(max_speed), check_max_speed(max_angular_speed, "max_angular_speed", "rad/s")
+
+
+def pose_to_python(model, max_speed: float | None = None, max_angular_speed: float | None = None) -> str:
     """Source of the standalone pose module (module docstring)."""
-    model._check_fitted()
-    max_speed, max_angular_speed = model._limits(max_speed, max_angular_speed)
-    return to_python(model.cdsp_) + f'''
+    max_speed, max_angular_speed = _limits(max_speed, max_angular_speed)
+    return f'''# Standalone evaluator of a sosdyn PoseCDSP (position block + orientation block); numpy and scipy only.
+# v = xdot (position block), omega = R J_r(r) rdot (orientation block), r = log(R_g^T R).
+"""Standalone evaluator of a PoseCDSP: predict_pose(x, quat, goal=None) -> (v, omega)."""
+import types
 
-# ---------------------------------------------------------------- the pose chart (PoseCDSP)
-from scipy.spatial.transform import Rotation  # noqa: E402
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+def _block(name, source):
+    """The block's own standalone evaluator (sosdyn's CDSP export), run into its own namespace."""
+    module = types.ModuleType(name)
+    exec(compile(source, "<" + name + " block>", "exec"), module.__dict__)  # noqa: S102 -- the literal below
+    return module
+
+
+position = _block("position", {to_python(model.position_)!r})
+orientation = _block("orientation", {to_python(model.orientation_)!r})
 
 GOAL_QUAT = np.array({_literal(model.goal_quat_)})   # w x y z
-ROT_FACTOR = {float(model.rot_factor_)!r}            # s = (x, ROT_FACTOR * r)
-CHART_LIMIT = {float(3.141592653589793 - CHART_MARGIN)!r}   # |r| below this (rad): away from the cut locus
+GOAL = np.concatenate([position.GOAL, GOAL_QUAT])    # the model's goal pose
 SMALL_ANGLE = {SMALL_ANGLE!r}
 POSE_MAX_SPEED = {max_speed!r}                  # None, or the largest |v| (units/s)
 POSE_MAX_ANGULAR_SPEED = {max_angular_speed!r}  # None, or the largest |omega| (rad/s): (v, omega) scaled by one factor
+UNIT_RANGE = {UNIT_RANGE!r}                     # accepted quaternion norms (renormalised)
+_ORIGIN = np.zeros(3)
 
 
 {inspect.getsource(body_velocity)}
 
+def _unit(q, what):
+    q = np.asarray(q, dtype=float)
+    if q.shape != (4,) or not np.isfinite(q).all() or not UNIT_RANGE[0] < np.linalg.norm(q) < UNIT_RANGE[1]:
+        raise ValueError(what + " must be a finite unit quaternion (w, x, y, z)")
+    return q / np.linalg.norm(q)
+
+
 def predict_pose(x, quat, goal=None):
     """(v, omega): linear velocity (3,) and world angular velocity (3,) at the position x (3,) and the
     orientation quat (4,, w x y z), for the goal pose (x, y, z, qw, qx, qy, qz) or the model's."""
-    x, quat = np.asarray(x, dtype=float), np.asarray(quat, dtype=float)
-    if x.shape != (3,) or quat.shape != (4,) or not (np.isfinite(x).all() and np.isfinite(quat).all()):
-        raise ValueError("x must be a finite 3-vector and quat a finite 4-vector (w x y z)")
-    goal = np.concatenate([GOAL[:3], GOAL_QUAT]) if goal is None else np.asarray(goal, dtype=float)
-    Rg = Rotation.from_quat(goal[3:], scalar_first=True)
-    r = (Rg.inv() * Rotation.from_quat(quat, scalar_first=True)).as_rotvec()
-    if np.linalg.norm(r) >= CHART_LIMIT:
-        raise ValueError("the orientation is too near a half turn from the goal (the chart's cut locus)")
-    sdot = predict(np.concatenate([x - goal[:3] + GOAL[:3], ROT_FACTOR * r]))
-    v, omega = sdot[:3], (Rg * Rotation.from_rotvec(r)).apply(body_velocity(r, sdot[3:] / ROT_FACTOR)[0])
+    x = np.asarray(x, dtype=float)
+    if x.shape != (3,) or not np.isfinite(x).all():
+        raise ValueError("x must be 3 finite numbers")
+    goal = GOAL if goal is None else np.asarray(goal, dtype=float)
+    if goal.shape != (7,) or not np.isfinite(goal).all():
+        raise ValueError("goal must be 7 finite numbers (x, y, z, qw, qx, qy, qz)")
+    R = Rotation.from_quat(_unit(quat, "quat"), scalar_first=True)
+    r = (Rotation.from_quat(_unit(goal[3:], "the goal's quaternion"), scalar_first=True).inv() * R).as_rotvec()
+    v = position.predict(x, goal[:3])
+    omega = R.apply(body_velocity(r, orientation.predict(r, _ORIGIN))[0])
     with np.errstate(divide="ignore"):
         scale = min([1.0, *(limit / np.linalg.norm(u) for limit, u in
                             ((POSE_MAX_SPEED, v), (POSE_MAX_ANGULAR_SPEED, omega)) if limit is not None)])
@@ -71,18 +99,19 @@ def _cpp_limit(name: str, limit: float | None, vector: str) -> str:
         f"  if ({name}2 * scale * scale > {limit!r} * {limit!r}) scale = {limit!r} / std::sqrt({name}2);\n")
 
 
-def pose_to_cpp(model: PoseCDSP, namespace: str = "pose_model", max_speed: float | None = None,
+def pose_to_cpp(model, namespace: str = "pose_model", max_speed: float | None = None,
                 max_angular_speed: float | None = None) -> str:
-    """Source of the header-only C++17 pose evaluator (module docstring)."""
-    model._check_fitted()
-    max_speed, max_angular_speed = model._limits(max_speed, max_angular_speed)
-    limits = _cpp_limit("speed", max_speed, "sdot") + _cpp_limit("turn", max_angular_speed, "w_out")
-    return to_cpp(model.cdsp_, namespace) + f"""
+    """Source of the header-only C++17 pose evaluator (module docstring): namespaces ``namespace``
+    + _position, _orientation and _pose (``predict_pose``)."""
+    max_speed, max_angular_speed = _limits(max_speed, max_angular_speed)
+    pos_ns, ori_ns = f"{namespace}_position", f"{namespace}_orientation"
+    blocks = to_cpp(model.position_, pos_ns) + to_cpp(model.orientation_, ori_ns)
+    limits = _cpp_limit("speed", max_speed, "v") + _cpp_limit("turn", max_angular_speed, "w_out")
+    lo, hi = UNIT_RANGE
+    return blocks + f"""
 namespace {namespace}_pose {{
 
 constexpr std::array<double, 4> goal_quat = {{{_flat(model.goal_quat_)}}};   // w x y z
-constexpr double rot_factor = {float(model.rot_factor_)!r};
-constexpr double chart_limit = {float(3.141592653589793 - CHART_MARGIN)!r};
 constexpr double small_angle = {SMALL_ANGLE!r};
 
 inline std::array<double, 4> qmul(const double* a, const double* b) {{
@@ -99,29 +128,25 @@ inline std::array<double, 3> qlog(std::array<double, 4> q) {{
 }}
 
 // (v, omega) at the position x[3] and orientation quat[4] (w x y z) for the goal pose goal[7] (or the
-// model's): v = sdot_x, omega = R J_r(r) sdot_r / c, r = log(R_g^T R); false if not finite or near the cut locus.
+// model's): v = xdot, omega = R J_r(r) rdot, r = log(R_g^T R); false if an input or the result is not
+// finite or a quaternion's norm is outside ({lo}, {hi}). Every orientation has a velocity.
 inline bool predict_pose(const double* x, const double* quat, double* v, double* omega, const double* goal = nullptr) {{
-  const double* gx = goal ? goal : {namespace}::goal.data();
+  const double* gx = goal ? goal : {pos_ns}::goal.data();
   const double* gq = goal ? goal + 3 : goal_quat.data();
   double qn = 0.0, gn = 0.0;
   for (int i = 0; i < 4; ++i) {{ qn += quat[i] * quat[i]; gn += gq[i] * gq[i]; }}
   qn = std::sqrt(qn);
   gn = std::sqrt(gn);
-  if (!(qn > 0.5 && qn < 1.5 && gn > 0.5 && gn < 1.5)) return false;
+  if (!(qn > {lo} && qn < {hi} && gn > {lo} && gn < {hi})) return false;
   const std::array<double, 4> q = {{quat[0] / qn, quat[1] / qn, quat[2] / qn, quat[3] / qn}};
   const std::array<double, 4> gc = {{gq[0] / gn, -gq[1] / gn, -gq[2] / gn, -gq[3] / gn}};
   const std::array<double, 3> r = qlog(qmul(gc.data(), q.data()));
+  const double origin[3] = {{0.0, 0.0, 0.0}};
+  std::array<double, 3> d{{}};
+  if (!{pos_ns}::predict(x, v, gx) || !{ori_ns}::predict(r.data(), d.data(), origin)) return false;
   const double t = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-  if (!(t < chart_limit)) return false;
-  std::array<double, 6> s{{}}, sdot{{}};
-  for (int i = 0; i < 3; ++i) {{
-    s[i] = x[i] - gx[i] + {namespace}::goal[i];
-    s[3 + i] = rot_factor * r[i];
-  }}
-  if (!{namespace}::predict(s.data(), sdot.data())) return false;
   const double a = t < small_angle ? 0.5 - t * t / 24.0 : (1.0 - std::cos(t)) / (t * t);
   const double b = t < small_angle ? 1.0 / 6.0 - t * t / 120.0 : (t - std::sin(t)) / (t * t * t);
-  const std::array<double, 3> d = {{sdot[3] / rot_factor, sdot[4] / rot_factor, sdot[5] / rot_factor}};
   const std::array<double, 3> rxd = {{r[1] * d[2] - r[2] * d[1], r[2] * d[0] - r[0] * d[2], r[0] * d[1] - r[1] * d[0]}};
   const std::array<double, 3> rxrxd = {{r[1] * rxd[2] - r[2] * rxd[1], r[2] * rxd[0] - r[0] * rxd[2],
                                        r[0] * rxd[1] - r[1] * rxd[0]}};
@@ -134,7 +159,7 @@ inline bool predict_pose(const double* x, const double* quat, double* v, double*
   double scale = 1.0;   // speed limits (|v| <= max_speed, |omega| <= max_angular_speed): one factor on both
 {limits}  bool finite = true;
   for (int i = 0; i < 3; ++i) {{
-    v[i] = scale * sdot[i];
+    v[i] *= scale;
     omega[i] = scale * w_out[i];
     finite = finite && std::isfinite(v[i]) && std::isfinite(omega[i]);
   }}
