@@ -40,11 +40,19 @@ def test_ambiguous_header_is_one_error_line(tmp_path, capsys):
 def test_position_only_options_refused_for_pose_files(tmp_path, capsys):
     demos = write_pose_csvs(tmp_path / "demos", n=2)
     code, _, err = run(capsys, "fit", demos, "--smooth", "off", "--goal-tol", "0.1", "--out", tmp_path / "m.json")
-    assert_one_error_line(code, err, "--goal-tol, --smooth apply to position files", "--columns x,y,z",
-                          need_try=True)
+    assert_one_error_line(code, err, "--goal-tol applies to position files", "--columns x,y,z", need_try=True)
     code, _, err = run(capsys, "fit", "lasa:Leaf_1", "--goal-tol-deg", "5", "--out", tmp_path / "m.json")
     assert_one_error_line(code, err, "--goal-tol-deg applies to pose files", need_try=True)
     assert not (tmp_path / "m.json").exists()
+
+
+@pytest.mark.parametrize("value", ["0", "180", "-1", "200"])
+def test_goal_tol_deg_range_is_open_and_said(tmp_path, capsys, value):
+    demos = write_pose_csvs(tmp_path / "demos", n=2)
+    code, _, err = run(capsys, "fit", demos, "--goal-tol-deg", value, "--out", tmp_path / "m.json")
+    assert code != 0 and "(0, 180), both ends excluded" in " ".join(err.replace("│", " ").split())
+    code, out, _ = run(capsys, "fit", "--help")
+    assert "0<=x<=180" not in out
 
 
 @pytest.mark.slow
@@ -53,8 +61,11 @@ def test_fit_export_and_plot_pose(tmp_path, capsys):
     code, out, err = run(capsys, "fit", demos, "--units", "m", "--out", tmp_path / "pose.json")
     assert code == 0, err
     assert "fitting PoseCDSP to 8 pose demonstrations" in out and "certificate: passed" in out
+    assert "orientation certificate (identity metric" in out and "preprocess: orientation noise" in out
+    table = out[out.index("reproduction of each demonstration"):].splitlines()[2:10]
+    assert len(table) == 8 and all(line.split()[-1] == "yes" for line in table)       # every demo reaches the goal
     model = load_model(tmp_path / "pose.json")
-    assert model.certified_ and model.cdsp_.units_ == "m"
+    assert model.certified_ and model.units_ == "m"
     for target, name in (("python", "pose_model.py"), ("cpp", "pose.hpp")):
         code, _, err = run(capsys, "export", tmp_path / "pose.json", "--to", target, "--out", tmp_path / name)
         assert code == 0, err
@@ -86,6 +97,9 @@ def test_fit_export_and_plot_pose(tmp_path, capsys):
     code, _, err = run(capsys, "rollout", tmp_path / "pose.json", "--start", "0,0,0")
     assert_one_error_line(code, err, "--start has 3 numbers but a pose model takes 7: x,y,z,qw,qx,qy,qz",
                           need_try=True)
+    example = err.split("e.g. ")[1].rstrip(".\n")                 # the hint is a valid start itself
+    code, _, err = run(capsys, "rollout", tmp_path / "pose.json", "--start", example, "--duration", "1")
+    assert code == 0, err
     turned = Rotation.from_rotvec([0.0, 0.0, 0.5]).as_quat(scalar_first=True)     # a rotated goal at t = 4
     goal = ",".join(f"{v:.17g}" for v in [0.2, -0.1, 0.1, *turned])
     code, out, err = run(capsys, "rollout", tmp_path / "pose.json", "--start", "0.5,0.3,-0.4,1,0,0,0",

@@ -31,13 +31,14 @@ from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.learner import COST_FLOOR, stalled
+from ..lfd.data.datasets import dataset_info
 from ..lfd.data.poses import GOAL_TOL_DEG, is_pose_file
 from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS, preset_params
 from ..lfd.model.pose import PoseCDSP
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
 from .paths import check_folder, check_output, demo_inputs
-from .poses import check_pose_options, pose_fit_summary, pose_notes
+from .poses import check_pose_options, open_degrees, pose_fit_summary, pose_notes, prepare_poses
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
 
@@ -204,9 +205,9 @@ def fit(
              "when the ends spread more than 1% of the data's diagonal; on; off; or a number = on, accepting "
              "shifts up to it (data units; default limit 25% of the diagonal).")] = "auto",
     goal_tol_deg: Annotated[float | None, typer.Option(
-        "--goal-tol-deg", min=0.0, max=180.0, help="Pose files: refuse end orientations farther than this (deg) "
-                                                   "from their chordal mean; nearer ones are aligned to it.",
-        show_default=f"{GOAL_TOL_DEG:g}")] = None,
+        "--goal-tol-deg", callback=open_degrees, help="Pose files: refuse end orientations farther than this (deg, "
+                                                      "strictly between 0 and 180) from their chordal mean; nearer "
+                                                      "ones are aligned to it.", show_default=f"{GOAL_TOL_DEG:g}")] = None,
     time_units: TimeUnitsOption = None,
     columns: ColumnsOption = None,
 ) -> None:
@@ -230,11 +231,9 @@ def fit(
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
-    pose = columns is None and any(map(is_pose_file, paths))
-    goal_tol_deg = check_pose_options(pose, goal_tol_deg, {
-        "--goal-tol": goal_tol, "--smooth": None if smooth == "auto" else smooth,
-        "--trim-rest": None if trim_rest is Switch.on else "off",
-        "--align-ends": None if align_ends == "auto" else align_ends})
+    pose = dataset_info(demos[0].removeprefix(DATASET_PREFIX)).pose if shipped else \
+        columns is None and any(map(is_pose_file, paths))
+    goal_tol_deg = check_pose_options(pose, goal_tol_deg, goal_tol)
     raw_tol = goal_tol if goal_tol is not None or align_ends is False or pose else np.inf
     read = {"units": units, "goal_tol": raw_tol, "name": Path(demos[0]).resolve().name if folder else None}
     if shipped:
@@ -245,6 +244,7 @@ def fit(
             **read_options(dt, time_units, columns))
     if pose:
         pose_notes(data)
+        data = prepare_poses(data, smooth, trim_rest is Switch.on, align_ends, goal_tol_deg)
     else:
         data = sd.check_demonstrations(prepare(data, smooth, trim_rest is Switch.on, align_ends))
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
@@ -261,7 +261,7 @@ def fit(
         model.fit(data)
     model.progress = None
     model.save(out_path)
-    chart = model.cdsp_ if pose else model          # the certified model (of the 6-D chart state for poses)
+    chart = model.position_ if pose else model          # the certified model (the position block for poses)
     report = chart.verification_
     info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} {'pose ' * pose}demonstrations, "
          f"fit in {time.perf_counter() - progress.start:.1f} s, {len(chart.history_)} convex steps)")
@@ -276,6 +276,6 @@ def fit(
     for line in progress.caps(chart.max_iter, chart.tol):
         info(f"[yellow]iteration cap[/]: {escape(line)}")
     if pose:
-        pose_fit_summary(model)
+        pose_fit_summary(model, data)
     else:
         print_score(model, data)

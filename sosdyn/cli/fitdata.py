@@ -1,7 +1,7 @@
 """What ``sosdyn fit`` does around the fit: shipped data sets, preprocessing, crossings, and the
 table of how the fitted model reproduces each demonstration.
 
-``dataset:NAME`` reads :func:`sosdyn.load_dataset` (positions only; the loader's notes, e.g.
+``dataset:NAME`` reads :func:`sosdyn.load_dataset` (a pose set with its orientations: a pose fit; the loader's notes, e.g.
 hammer's declared time step, are printed). ``--smooth``, ``--trim-rest`` and ``--align-ends``
 are :func:`sosdyn.preprocess`'s options; the fit then warns about crossing demonstrations
 (:mod:`sosdyn.lfd.data.crossing`) and prints :meth:`CDSP.score`, warning when a reproduction
@@ -16,7 +16,7 @@ import typer
 from rich.markup import escape
 
 from ..lfd.data.crossing import crossing_warning, find_crossings
-from ..lfd.data.datasets import dataset_info, load_dataset
+from ..lfd.data.datasets import load_dataset
 from ..lfd.data.preprocess import preprocess
 from .base import State, info, out
 
@@ -51,15 +51,13 @@ def parse_align(value: str) -> bool | str | float:
 
 
 def load_dataset_input(spec: str, dt: float | None):
-    """The shipped set ``dataset:NAME``, positions only; the loader's notes printed."""
+    """The shipped set ``dataset:NAME`` (a pose set with its orientations); the loader's notes printed."""
     name = spec.removeprefix(DATASET_PREFIX)
     with warnings.catch_warnings(record=True) as notes:
         warnings.simplefilter("always")
-        data = load_dataset(name, positions_only=True, dt=dt)
+        data = load_dataset(name, dt=dt)
     for note in notes:
         info(f"note: {escape(str(note.message))}")
-    if dataset_info(name).pose:
-        info(f"note: {name}: positions only (x, y, z); its orientations are not learned yet.")
     return data
 
 

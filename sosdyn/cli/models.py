@@ -33,12 +33,14 @@ def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[fl
     return events
 
 
-def _dimension(point: np.ndarray, dim: int, option: str, layout: str | None = None) -> np.ndarray:
-    """``point`` if it has ``dim`` numbers; else InputError (``layout``: what they are, for a pose model)."""
+def _dimension(point: np.ndarray, dim: int, option: str, layout: str | None = None,
+               example: str | None = None) -> np.ndarray:
+    """``point`` if it has ``dim`` numbers; else InputError (``layout`` and ``example``: what they are
+    and a valid value, for a pose model)."""
     if point.shape != (dim,):
         what = f"the model is {dim}-D" if layout is None else f"a pose model takes {dim}: {layout}"
         raise InputError(f"{option} has {point.size} numbers but {what}. Try: {dim} "
-                         f"comma-separated numbers, e.g. {','.join(['0'] * dim)}.")
+                         f"comma-separated numbers, e.g. {example or ','.join(['0'] * dim)}.")
     return point
 
 
@@ -78,11 +80,11 @@ def rollout(
     model = sd.load_model(model_path)
     pose = isinstance(model, PoseCDSP)
     check_angular(pose, max_angular_speed)
-    sizes = POSE_SIZES if pose else {option: (model.dim_, None) for option in POSE_SIZES}
-    x0 = _dimension(x0, sizes["--start"][0], "--start", sizes["--start"][1])
+    sizes = POSE_SIZES if pose else {option: (model.dim_, None, None) for option in POSE_SIZES}
+    x0 = _dimension(x0, sizes["--start"][0], "--start", *sizes["--start"][1:])
     for option, events in (("--push", pushes), ("--goal-change", goals)):
         for when, vector in events:
-            _dimension(vector, sizes[option][0], option, sizes[option][1])
+            _dimension(vector, sizes[option][0], option, *sizes[option][1:])
             if not 0 <= when <= duration:
                 raise InputError(f"{option} time {when:g} is outside [0, --duration {duration:g}]. Try: a "
                                  "time within the rollout, or a longer --duration.")

@@ -81,11 +81,16 @@ def _parts(demos, goal_quat) -> tuple[list, list]:
 
 def rest_range(demo: PoseDemonstration, goal_quat, sigma: float, sigma_r: float) -> tuple[int, int]:
     """(first, last) kept sample of ``demo`` after trimming its rest (module docstring, step 2): the union
-    of the position's and the rotation vector's :func:`~.preprocess.rest_bounds` for the noise levels
-    ``sigma`` (data units) and ``sigma_r`` (rad)."""
-    a0, b0 = rest_bounds(demo.pos, REST_NOISE * sigma)
-    a1, b1 = rest_bounds(demo_chart(demo.quat, goal_quat, f"pose demo {demo.source!r}"), REST_NOISE * sigma_r)
-    return min(a0, a1), max(b0, b1)
+    of :func:`~.preprocess.rest_bounds` of the parts that move (the position beyond REST_NOISE ``sigma``
+    data units, the rotation vector beyond REST_NOISE ``sigma_r`` rad); everything if neither moves."""
+    bounds = []
+    for part, tol in ((demo.pos, REST_NOISE * sigma),
+                      (demo_chart(demo.quat, goal_quat, f"pose demo {demo.source!r}"), REST_NOISE * sigma_r)):
+        if np.any(np.linalg.norm(part - part[0], axis=1) > tol):
+            bounds.append(rest_bounds(part, tol))
+    if not bounds:
+        return 0, len(demo.t) - 1
+    return min(a for a, _ in bounds), max(b for _, b in bounds)
 
 
 def _check_length(demo, label: str) -> None:

@@ -141,8 +141,9 @@ class PoseCDSP:
                 data = isotropic_demonstrations(3, rate, goals[block], data.units, data.name)
             model = CDSP(**{**params[block], **({"n_components": 1} if rate else {})},
                          progress=self.progress).fit(data)
+            if rate is not None or block == "orientation":
+                model.goal_ = goals[block]    # exactly (aligned ends, or symmetric synthetic ones: at round-off)
             setattr(self, f"{block}_", model)
-        self.orientation_.goal_ = np.zeros(3)     # the chart's origin exactly (the ends were aligned to it)
         self.goal_quat_, self.still_ = goal_quat, still
         return self
 

@@ -55,7 +55,7 @@ def pose_from_content(path: Path, content: dict, load_block) -> PoseCDSP:
     model.position_, model.orientation_ = blocks["position"], blocks["orientation"]
     ori = model.orientation_
     M = metric_matrix(ori)
-    if ori.warp_ is not None or ori.dim_ != 3 or model.position_.dim_ != 3 or M is None or \
+    if ori.metric != "identity" or ori.warp_ is not None or ori.dim_ != 3 or model.position_.dim_ != 3 or M is None or \
             not np.array_equal(M, M[0, 0] * np.eye(3)) or np.any(ori.goal_ != 0.0):
         _fail(path, "the orientation block must be a 3-D CDSP with the identity metric, no warp and goal 0 "
                     "(the angle to the goal orientation then never increases), and the position block 3-D")

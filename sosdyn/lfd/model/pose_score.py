@@ -8,7 +8,8 @@ its duration, then per demonstration
   (:func:`~sosdyn.lfd.rollout.quality.deviation`, data units);
 * ``mean_dev_deg`` / ``max_dev_deg``: geodesic angle from each demo orientation to the nearest
   reproduction orientation (:func:`~sosdyn.lfd.data.poses.angle_matrix`, degrees);
-* ``arrival_s``: the first time within GOAL_FRACTION of the positions' diagonal of the goal position and
+* ``arrival_s``: the first time within GOAL_FRACTION of the positions' diagonal (STILL_RELATIVE of their
+  magnitude for positions that do not move) of the goal position and
   within ANGLE_TOL_DEG of the goal orientation (inf: not within the horizon);
 * ``final_error`` (data units), ``final_angle_deg`` and ``at_goal`` (both within those radii).
 """
@@ -18,6 +19,7 @@ import numpy as np
 
 from ..data.poses import angle_matrix, chart, from_chart
 from ..rollout import euler_until_rest
+from ..fit.pose import STILL_RELATIVE
 from ..rollout.quality import GOAL_FRACTION, HORIZON, deviation
 
 ANGLE_TOL_DEG = 1.0          # "at the goal orientation": within 1 deg
@@ -33,7 +35,8 @@ def nearest_angles(quat, path_quat) -> np.ndarray:
 def pose_reproduction_table(model, demos) -> list[dict]:
     """Rows of the module docstring for the fitted pose ``model`` and the pose ``demos``."""
     X = np.vstack([d.pos for d in demos])
-    radius = GOAL_FRACTION * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+    radius = max(GOAL_FRACTION * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))),
+                 STILL_RELATIVE * float(np.abs(X).max()))           # positions that do not move: round-off
     dt = model.dt_
     starts = np.array([np.concatenate([d.pos[0], chart(d.quat[0], model.goal_quat_)[0]]) for d in demos])
     steps = max(int(np.ceil(HORIZON * max(d.t[-1] - d.t[0] for d in demos) / dt)) + 2, 3)
