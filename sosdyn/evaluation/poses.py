@@ -22,7 +22,9 @@ Held-out protocol (:func:`evaluate_pose_set`), the steps of :mod:`.realdata` on 
    :func:`~.realdata.stop_rule`'s horizon; then **read at the test demo's own sampling period** (linear
    interpolation of x and r), so both curves of a DTW are sampled alike;
 4. scores per test demo: position DTWD and orientation DTW to the whole kept test demo; copy = the
-   smallest over the recorded training demos; the final distance to the goal position / diag and the
+   smallest over the recorded training demos; the orientation floor = the DTW of the test demo itself
+   with its end turned onto the model's goal orientation (:func:`ended_at`: a perfect reproduction must
+   end there, the test demos end elsewhere); the final distance to the goal position / diag and the
    final angle to the goal orientation; arrival (within 1 % of diag and 1 deg) over the demo's
    remaining duration; the certified excursion bound of the position block
    (:func:`~.realdata.excursion_bounds`).
@@ -43,8 +45,8 @@ from scipy.spatial.transform import Rotation
 from sosdyn.limits import check_bytes
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.data.pose_preprocess import preprocess_poses, rest_range
-from sosdyn.lfd.data.poses import (PoseDemonstration, PoseDemonstrations, angle_matrix, chart, from_chart,
-                                   goal_orientation)
+from sosdyn.lfd.data.poses import (PoseDemonstration, PoseDemonstrations, align_orientations, angle_matrix, chart,
+                                   from_chart, goal_orientation)
 from sosdyn.lfd.rollout import euler_until_rest
 from . import dsopt, realdata
 from .metrics import DTWDistance, dtwd, warping_path_length
@@ -140,11 +142,18 @@ def reproduce_poses(model, recorded: PoseDemonstrations, test: PoseDemonstration
     return out
 
 
+def ended_at(demo: PoseDemonstration, goal_quat) -> PoseDemonstration:
+    """``demo`` with its end orientation turned onto ``goal_quat`` (:func:`~sosdyn.lfd.data.poses.align_orientations`,
+    no tolerance): what a model that reproduced it exactly would do, since it ends at its own goal."""
+    return align_orientations(PoseDemonstrations([demo]), goal_quat, 180.0)[0][0]
+
+
 def evaluate_pose_set(fit_fn, demos: PoseDemonstrations) -> dict:
     """The whole protocol (module docstring) on one set: ``fit_fn(train)`` returns a fitted PoseCDSP.
     Returns the per-test rows (``tests``), the mean ratios ``pos_ratio`` / ``ori_ratio`` (model over
     copy, means over the test demos), the worst final errors and arrival, the largest certified
-    excursion bound, ``fit_s``, ``certified``, the preprocessing lines, the model and the reproductions."""
+    excursion bound, ``ori_floor_ratio`` (the floor over copy), ``fit_s``, ``certified``, the preprocessing
+    lines, the model and the reproductions."""
     train, recorded, test, report = prepare_poses(demos)
     t0 = time.perf_counter()
     model = fit_fn(train)
@@ -160,18 +169,19 @@ def evaluate_pose_set(fit_fn, demos: PoseDemonstrations) -> dict:
         rows.append({"pos_dtwd": dtwd(S[:, :3], d.pos).total, "ori_dtw": orientation_dtw(quat, d.quat).total,
                      "copy_pos": min(dtwd(tr.pos, d.pos).total for tr in recorded),
                      "copy_ori": min(orientation_dtw(tr.quat, d.quat).total for tr in recorded),
+                     "floor_ori": orientation_dtw(ended_at(d, model.goal_quat_).quat, d.quat).total,
                      "final_pos_frac": float(np.linalg.norm(S[-1, :3] - model.goal_pos_) / diag),
                      "final_ang_deg": float(np.rad2deg(np.linalg.norm(S[-1, 3:]))),
                      "arrival_ratio": None if arrive is None else float(t[arrive] / remaining),
                      "start_angle_deg": float(np.rad2deg(np.linalg.norm(S[0, 3:]))),
                      "max_angle_deg": float(np.rad2deg(np.linalg.norm(S[:, 3:], axis=1).max())),
                      "excursion_bound": bound, "n_points": len(t)})
-    mean = {k: float(np.mean([r[k] for r in rows])) for k in ("pos_dtwd", "ori_dtw", "copy_pos", "copy_ori")}
+    mean = {k: float(np.mean([r[k] for r in rows])) for k in ("pos_dtwd", "ori_dtw", "copy_pos", "copy_ori", "floor_ori")}
     arrivals = [r["arrival_ratio"] for r in rows]
     return {"name": demos.name, "n_train": len(train), "n_test": len(test), "fit_s": fit_s,
             "certified": model.certified_, "preprocess": report.lines(demos.units), "diag": diag,
             "tests": rows, **mean, "pos_ratio": mean["pos_dtwd"] / mean["copy_pos"],
-            "ori_ratio": mean["ori_dtw"] / mean["copy_ori"],
+            "ori_ratio": mean["ori_dtw"] / mean["copy_ori"], "ori_floor_ratio": mean["floor_ori"] / mean["copy_ori"],
             "final_pos_frac": max(r["final_pos_frac"] for r in rows), "final_ang_deg": max(r["final_ang_deg"] for r in rows),
             "arrival_ratio": None if None in arrivals else max(arrivals),
             "excursion_bound": None if None in bounds else max(bounds),
@@ -186,11 +196,11 @@ def turned(quat, angle_deg: float, axis) -> np.ndarray:
         scalar_first=True)
 
 
-def _track(traj, goal_pos, goal_quat, start_pos) -> dict:
-    """Time series of a pose trajectory: ``angle`` to ``goal_quat`` (deg), ``distance`` to ``goal_pos`` and the
-    position's ``displacement`` from ``start_pos`` (data units)."""
-    return {"t": traj.t, "angle": angles_deg(traj.quat, goal_quat),
-            "distance": np.linalg.norm(traj.pos - goal_pos, axis=1),
+def _track(traj, start_pos) -> dict:
+    """Time series of a pose trajectory: ``angle`` (deg) and ``distance`` (data units) to the goal pose in
+    effect, and the position's ``displacement`` from ``start_pos``."""
+    return {"t": traj.t, "angle": angles_deg(traj.quat, traj.goal[:, 3:]),
+            "distance": np.linalg.norm(traj.pos - traj.goal[:, :3], axis=1),
             "displacement": np.linalg.norm(traj.pos - start_pos, axis=1)}
 
 
@@ -204,11 +214,11 @@ def detour_tests(model, duration: float, axes, diag: float) -> dict:
         for angle in DETOUR_ANGLES:
             traj = model.rollout(np.concatenate([g, turned(q, angle, axis)]), duration)
             cases.append({"kind": "orientation-only start", "angle_deg": angle, "axis": list(map(float, axis)),
-                          **_track(traj, g, q, g)})
+                          **_track(traj, g)})
         new_goal = np.concatenate([g, turned(q, GOAL_TURN_DEG, axis)])
         traj = model.rollout(np.concatenate([g, q]), duration, goal_changes=[(duration / 4, new_goal)])
         cases.append({"kind": "goal turn", "angle_deg": GOAL_TURN_DEG, "axis": list(map(float, axis)),
-                      **_track(traj, g, new_goal[3:], g)})
+                      **_track(traj, g)})
     for c in cases:
         c["max_displacement_frac"] = float(c["displacement"].max() / diag)
         c["final_angle_deg"] = float(c["angle"][-1])
