@@ -13,6 +13,8 @@ in the chart (|r| < pi, any orientation but the exact half turn, which has two l
 either) never leaves it: every start converges, with no refusal. A block that does not move in the
 demonstrations is fitted as a still block (:func:`~sosdyn.lfd.fit.pose.still_block`, ``still_``).
 
+The predictor evaluates one pose in plain floats (:mod:`~sosdyn.lfd.runtime.pose_step`, the same formulas).
+
 Rollout: the chart state is integrated (the CDSP's integrator, absolute tolerance relative to each
 block's scale) and mapped by R = R_g exp(r): unit quaternions by construction. Velocities: v = xdot,
 and the world angular velocity omega = R J_r(r) rdot (:func:`~sosdyn.lfd.data.poses.body_velocity`).
@@ -35,6 +37,7 @@ from ..data.poses import (GOAL_TOL_DEG, PoseDemonstrations, align_orientations, 
                           goal_orientation, split_demonstrations)
 from ..fit.pose import check_moves, isotropic_demonstrations, orientation_params, still_block
 from ..rollout import ATOL_REL, rollout as integrate
+from ..runtime.pose_step import body_velocity_one, chart_one, rotate_one
 from ..runtime.states import check_max_speed, speed_factor
 from .cdsp import CDSP, DEFAULTS
 from .fileformat import write_model_file
@@ -226,12 +229,12 @@ class PoseCDSP:
 
         def step(x, quat, goal=None):
             gx, gq = fixed if goal is None else self._pose(goal, "goal")
-            q = self._quat(quat, "quat")
-            r = chart(q, gq)[0]
-            v, rdot = step_x(x, gx), step_r(r, origin)
-            w = body_velocity(r, rdot)[0]
+            q = self._quat(quat, "quat").tolist()
+            r = chart_one(q, gq.tolist())
+            v, rdot = step_x(x, gx), step_r(np.array(r), origin)
+            w = np.array(rotate_one(q, body_velocity_one(r, rdot.tolist())))
             lam = min(float(speed_factor(v, limits[0])[0]), float(speed_factor(w, limits[1])[0]))
-            return lam * v, lam * Rotation.from_quat(q, scalar_first=True).apply(w)
+            return lam * v, lam * w
         return step
 
     @staticmethod
