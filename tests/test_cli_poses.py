@@ -181,3 +181,12 @@ def test_newcomer_csv_to_cpp_controller_from_170_degrees(tmp_path, capsys):
         assert np.abs(np.diff(path[:, 7])).max() < 0.05                         # smooth: no jump in |omega|
         if x0 is model.goal_pos_:
             assert np.linalg.norm(path[:, :3] - x0, axis=1).max() == 0.0        # no detour: not a micrometre
+
+
+@pytest.mark.slow
+def test_fit_shipped_pose_set_learns_orientations(tmp_path, capsys):
+    code, out, err = run(capsys, "fit", "dataset:robottasks/openbox", "--out", tmp_path / "openbox.json")
+    assert code == 0 and "fitting PoseCDSP to 9 pose demonstrations" in out, err
+    assert "orientation certificate" in out and "reproduction of each demonstration" in out
+    model = load_model(tmp_path / "openbox.json")
+    assert model.certified_ and model.still_ == {"position": None, "orientation": None}
