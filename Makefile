@@ -7,7 +7,7 @@ PYTEST  := $(BIN)/python -m pytest
 # Small-matrix workloads: a multi-threaded OpenBLAS spin-waits (10-100x slower on 2 cores).
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: venv run test test-slow wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes warp-figure demo3d demo7d sweep report learner-table poses robot docs clean
+.PHONY: venv run test test-slow wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes crossing-letters winding winding-shapes warp-figure demo3d demo7d sweep report learner-table poses robot docs clean
 
 venv: $(STAMP)
 $(STAMP): pyproject.toml
@@ -38,7 +38,7 @@ bench-sos: venv
 	$(BIN)/python -m pip install -q -e '.[bench]'
 	$(BIN)/python -m problems bench-sos
 
-fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes warp-figure demo3d demo7d sweep report learner-table poses: venv
+fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes crossing-letters winding winding-shapes warp-figure demo3d demo7d sweep report learner-table poses: venv
 	$(BIN)/python -m problems $@
 
 # CDSP and GMR drive a simulated Franka Panda (pybullet, the [robot] extra, in [all]): reports/robot/

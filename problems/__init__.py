@@ -18,7 +18,11 @@ EXPERIMENTS = {
     "lasa-all": "lasa_all",
     "lasa-dsopt": "lasa_dsopt",        # CDSP variants on the LPV-DS (ds-opt) LASA protocol
     "crossing-shapes": "crossing_shapes",   # writes the synthesised hand-drawn crossing set
+    "crossing-letters": "crossing_letters",  # writes the held-out crossing letters (another generator)
+    "winding-shapes": "winding_shapes",     # writes the synthesised hand-drawn winding set
+    "winding": "winding",              # held-out accuracy on the winding set (issue 36)
     "second-order": "second_order",    # first- against second-order CDSP: crossing shapes and LASA
+    "tank-figure": "tank_figure",      # the energy tank on crossing/at (docs/theory.md's figure)
     "real-data": "real_data",          # held-out accuracy on the shipped real demonstration sets
     "real-data-configs": "real_data_configs",   # CDSP configurations on the real sets' training data
     "lasa-dsopt-report": "lasa_dsopt_report",   # its pages redrawn from results.json (no fits)

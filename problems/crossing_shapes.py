@@ -110,11 +110,11 @@ def log_samples(path: np.ndarray, t: np.ndarray, rng) -> tuple[np.ndarray, np.nd
     return ms, np.rint(xy).astype(int)
 
 
-def generate(seed: int = SEED) -> dict:
-    """{shape: [(time_ms, xy) per demo]}, families interleaved (A, B, A, B, ...)."""
+def generate(seed: int = SEED, shapes: dict = SHAPES) -> dict:
+    """{shape: [(time_ms, xy) per demo]} of ``shapes`` (as :data:`SHAPES`), families interleaved (A, B, A, B, ...)."""
     rng = np.random.default_rng(seed)
     out = {}
-    for name, (_, families, n) in SHAPES.items():
+    for name, (_, families, n) in shapes.items():
         demos = []
         for k in range(n):
             path = pen_path(families[k % len(families)], rng)
@@ -123,8 +123,10 @@ def generate(seed: int = SEED) -> dict:
     return out
 
 
-def write(data: dict, out_dir: Path) -> None:
-    """The CSVs and one manifest for all shapes (file, family, samples, duration, start, end)."""
+def write_set(data: dict, out_dir: Path, columns: list[str], row_of, lines=None) -> None:
+    """The CSVs of ``data`` ({shape: [(time_ms, xy)]}) and one manifest: file, then ``columns``,
+    their values ``row_of(shape, k, time_ms, xy)`` for demo k. A CSV's lines are ``lines(time_ms, xy)``
+    (default: the numbers as they are, integers for a mouse log)."""
     rows = []
     for name, demos in data.items():
         folder = Path(out_dir) / name
@@ -134,22 +136,36 @@ def write(data: dict, out_dir: Path) -> None:
             with open(folder / file, "w", newline="") as handle:
                 w = csv.writer(handle)
                 w.writerow(["time_ms", "x", "y"])
-                w.writerows(np.column_stack([ms, xy]).tolist())
-            family = "AB"[k % len(SHAPES[name][1])]
-            rows.append([f"{name}/{file}", family, len(ms), int(ms[-1]), *xy[0], *xy[-1]])
+                w.writerows(np.column_stack([ms, xy]).tolist() if lines is None else lines(ms, xy))
+            rows.append([f"{name}/{file}", *row_of(name, k, ms, xy)])
     with open(Path(out_dir) / "manifest.csv", "w", newline="") as handle:
         w = csv.writer(handle)
-        w.writerow(["file", "family", "samples", "duration_ms", "start_x", "start_y", "end_x", "end_y"])
+        w.writerow(["file", *columns])
         w.writerows(rows)
 
 
-def overview(data: dict, png: Path) -> Path:
-    """All shapes, one panel each, demos as logged (px)."""
+#: The manifest's columns after file and family: samples, duration, start and end point.
+LOG_COLUMNS = ["samples", "duration_ms", "start_x", "start_y", "end_x", "end_y"]
+
+
+def log_row(ms: np.ndarray, xy: np.ndarray) -> list:
+    """The values of :data:`LOG_COLUMNS` of one logged demo."""
+    return [len(ms), int(ms[-1]), *xy[0], *xy[-1]]
+
+
+def write(data: dict, out_dir: Path) -> None:
+    """The CSVs and one manifest for all shapes (file, family, samples, duration, start, end)."""
+    write_set(data, out_dir, ["family", *LOG_COLUMNS],
+              lambda name, k, ms, xy: ["AB"[k % len(SHAPES[name][1])], *log_row(ms, xy)])
+
+
+def overview(data: dict, png: Path, shapes: dict = SHAPES) -> Path:
+    """All shapes, one panel each, demos as logged (px), coloured by family."""
     fig = new_figure(16, 8)
     for i, (name, demos) in enumerate(data.items()):
         ax = fig.add_subplot(2, (len(data) + 1) // 2, i + 1)
         for k, (_, xy) in enumerate(demos):
-            ax.plot(xy[:, 0], xy[:, 1], lw=0.8, color=("#0072B2", "#D55E00")[k % len(SHAPES[name][1])])
+            ax.plot(xy[:, 0], xy[:, 1], lw=0.8, color=("#0072B2", "#D55E00")[k % len(shapes[name][1])])
             ax.plot(*xy[0], "o", ms=3, color="0.3")
         ax.plot(0, 0, "*", ms=10, color="black")
         ax.set_title(name)
@@ -158,15 +174,23 @@ def overview(data: dict, png: Path) -> Path:
     return png
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(prog="python -m problems crossing-shapes", description=__doc__.split("\n")[0])
-    p.add_argument("--out", type=Path, default=OUT, help="output folder (default: the shipped set)")
-    p.add_argument("--seed", type=int, default=SEED)
+def generator_main(argv, name: str, description: str, out: Path, seed: int, shapes: dict, write_set,
+                   make=None) -> int:
+    """The command line of a set generator ``python -m problems NAME [--out DIR] [--seed S] [--figure PNG]``:
+    ``make(seed, shapes)`` (default :func:`generate`), ``write_set(data, out)`` and (``--figure``)
+    :func:`overview` (the families of ``shapes``)."""
+    p = argparse.ArgumentParser(prog=f"python -m problems {name}", description=description)
+    p.add_argument("--out", type=Path, default=out, help="output folder (default: the shipped set)")
+    p.add_argument("--seed", type=int, default=seed)
     p.add_argument("--figure", type=Path, default=None, help="also write an overview PNG here")
     args = p.parse_args(list(argv or []))
-    data = generate(args.seed)
-    write(data, args.out)
+    data = (make or generate)(args.seed, shapes)
+    write_set(data, args.out)
     if args.figure:
-        overview(data, args.figure)
-    print(f"crossing-shapes: {len(data)} shapes, {sum(map(len, data.values()))} demos -> {args.out}")
+        overview(data, args.figure, shapes)
+    print(f"{name}: {len(data)} shapes, {sum(map(len, data.values()))} demos -> {args.out}")
     return 0
+
+
+def main(argv=None):
+    return generator_main(argv, "crossing-shapes", __doc__.split("\n")[0], OUT, SEED, SHAPES, write)

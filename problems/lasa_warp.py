@@ -21,7 +21,7 @@ from sosdyn.lfd.fit.params import PLAIN
 from sosdyn.lfd.fit.warp import AUTO_WARPS, WARP_DEFAULTS
 
 WARP_KEY_VERSION = 2            # 2: the warp inside CDSP, in its normalised coordinates z
-D075, D1 = AUTO_WARPS.values()
+D075, D1 = AUTO_WARPS["60 maps, decay 0.75"], AUTO_WARPS["60 maps, decay 1"]
 
 VARIANTS = {
     "CDSP warped": {"warp": dict(WARP_DEFAULTS), "corrective_rounds": 3},

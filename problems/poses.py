@@ -23,7 +23,7 @@ import numpy as np
 import sosdyn as sd
 from sosdyn.evaluation.dsopt import START_INDEX
 from sosdyn.evaluation.poses import ANG_TOL, POS_TOL, detour_tests, evaluate_pose_set, far_starts
-from sosdyn.lfd.data.poses import from_chart
+from sosdyn.lfd.data.pose import from_chart
 from sosdyn.lfd.model.pose import PoseCDSP, PoseTrajectory
 from sosdyn.report.figures.poses import detour_figure, orientation_error, pose_paths
 

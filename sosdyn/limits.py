@@ -31,6 +31,10 @@ class Limits:
     max_rollout_seconds: int = 120        # wall-clock seconds of one adaptive rollout
     max_file_bytes: int = 64 * 2**20      # a model or results file read from disk
     max_json_depth: int = 64              # nesting depth accepted in a JSON file
+    max_model_dim: int = 32               # state dimension n of a model file (a second-order state is 2n)
+    max_model_components: int = 32       # mixture components K of a model file
+    max_exact_work: int = 500_000         # rational multiply-adds of a file's exact certificate check, (K+1)(2n)^3
+    max_sampled_work: int = 3 * 10**9     # multiply-adds of a file's sampled certificate check, S K n^2 (m + p)
 
 
 _current = Limits()

@@ -9,7 +9,6 @@ import pytest
 import sosdyn as sd
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.fit.warp import LIP_FACTOR, check_maps
-from sosdyn.lfd.runtime.export import export
 from sosdyn.poly import PolyMatrix
 from sosdyn.sos.moments import Moments
 
@@ -150,7 +149,7 @@ CATALOGUE = [
     # issue 23: exports, warps, corrective refits
     ("units that could carry code into an export", lambda: Demonstrations([], units="coding:unicode_escape\\nprint(1)#"),
      sd.InputError, "each a letter, a digit or one of"),
-    ("export to an unknown target", lambda: export(_fitted_once(), "rust"), sd.InputError, "unknown export target"),
+    ("export to an unknown target", lambda: _fitted_once().export("rust"), sd.InputError, "unknown export target"),
     ("a near-singular warp", lambda: check_maps(*_bump(1 - 1e-13), np.zeros(2)), sd.InputError, "near singular"),
     ("a warp of more than 10,000 bumps", lambda: check_maps(*(np.repeat(a, 10_001, axis=0) for a in _bump(1e-6)),
                                                              np.zeros(2)), sd.InputError, "more than 10000"),

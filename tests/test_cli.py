@@ -133,33 +133,36 @@ def test_experiment_missing_dependency_is_not_hidden(repo):
 def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
     made = {}
 
-    class FakeCDSP:
+    class FakeCDSP(sd.CDSP):
         def __init__(self, **kwargs):
             made["kwargs"] = kwargs
+            super().__init__(**kwargs)
 
         history_ = [{"step": "dynamics", "cost": 1.0}]
-        max_iter, tol = 20, 1e-4
-        warp_ = None
-        verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3,
-                                            "max_sampled_eig": -1e-3, "n_samples": 10})()
+        certified_ = True
 
         def fit(self, demos):
             made["demos"] = demos
             return self
 
-        def save(self, path):
+        def save(self, path, key=None):
             path.write_text("{}")
 
         def score(self, demos):
             return []
 
+        def summary(self):
+            return ["stand-in"]
+
     demo_file = tmp_path / "d1.csv"
     demo_file.write_text("t,x1,x2\n" + "".join(f"{k},{1 - k / 11},{1 - k / 11}\n" for k in range(12)))
-    monkeypatch.setattr(sd, "CDSP", FakeCDSP, raising=False)
+    monkeypatch.setattr("sosdyn.cli.fit.family_for", lambda data, order=1: FakeCDSP)
     code, out, err = run(capsys, "fit", str(demo_file), "--out", str(tmp_path / "m.json"),
-                         "--components", "3", "--solver-method", "ica", "--seed", "7")
+                         "--components", "3", "--solver-method", "ica", "--seed", "7", "--max-iter", "9",
+                         "--gating", "tempered")
     assert code == 0, err
-    assert made["kwargs"] == {"n_components": 3, "solver_method": "ica", "random_state": 7}
+    assert made["kwargs"] == {"n_components": 3, "solver_method": "ica", "random_state": 7, "max_iter": 9,
+                              "gating": "tempered"}
     assert [d.source for d in made["demos"]] == [demo_file.name]
     assert (tmp_path / "m.json").exists() and "saved" in out
 
@@ -173,12 +176,14 @@ def test_rollout_writes_csv(capsys, monkeypatch, tmp_path):
     calls = {}
 
     class FakeModel:
-        dim_ = 2
+        def layout(self):
+            return sd.lfd.model.Layout(("x1", "x2"), (("x1", "x2"),), ("x1", "x2"), ("x1", "x2"))
 
-        def rollout(self, x0, duration, dt=0.01, **events):
-            calls.update(x0=x0, duration=duration, dt=dt, **events)
+        def rollout(self, x0, duration, dt=0.01, perturbations=(), goal_changes=(), max_speed=None):
+            calls.update(x0=x0, duration=duration, dt=dt, perturbations=perturbations, goal_changes=goal_changes,
+                         max_speed=max_speed)
             t = np.arange(0.0, duration + dt / 2, dt)
-            return SimpleNamespace(t=t, pos=np.outer(np.exp(-t), x0), goal_history=np.zeros((len(t), 2)))
+            return SimpleNamespace(t=t, states=np.outer(np.exp(-t), x0), goal_history=np.zeros((len(t), 2)))
 
     model_file = tmp_path / "m.json"
     model_file.write_text("{}")

@@ -82,7 +82,7 @@ def test_export_unknown_target_is_a_usage_error(capsys, saved, tmp_path):
 def test_export_angular_speed_is_for_pose_models(capsys, saved, tmp_path):
     code, _, err = run(capsys, "export", str(saved[2][0]), "--to", "python", "--max-angular-speed", "1",
                        "--out", str(tmp_path / "x.py"))
-    assert code == 1 and "--max-angular-speed applies to pose models" in err and "Try:" in err
+    assert code == 1 and "--max-angular-speed does not apply to a CDSP model (PoseCDSP takes it)" in err and "Try:" in err
     assert not (tmp_path / "x.py").exists()
 
 
@@ -167,8 +167,8 @@ def test_rollout_with_pushes_goal_changes_and_a_speed_limit(capsys, saved, tmp_p
 
 
 @pytest.mark.parametrize("argv, fragments", [
-    (["--start", "1,2,3"], ["--start has 3 numbers but the model is 2-D", "Try: 2 comma-separated"]),
-    (["--start", "1,2", "--push", "1:5"], ["--push has 1 numbers but the model is 2-D"]),
+    (["--start", "1,2,3"], ["--start has 3 numbers but the model takes 2: x1,x2", "Try: 2 comma-separated"]),
+    (["--start", "1,2", "--push", "1:5"], ["--push has 1 numbers but the model takes 2"]),
     (["--start", "1,2", "--push", "x:5,0"], ["--push expects TIME:VECTOR like 2:5,0"]),
     (["--start", "1,2", "--goal-change", "20:1,1"], ["--goal-change time 20 is outside [0, --duration 10]"]),
 ])

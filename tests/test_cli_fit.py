@@ -40,20 +40,18 @@ def write_xy(folder, starts, header="x,y", T=120):
     return paths
 
 
-class Captured:
-    """A stand-in CDSP that records its parameters and the data it is given (no optimisation)."""
+class Captured(sd.CDSP):
+    """A stand-in first-order family that records its parameters and the data it is given (no
+    optimisation); the CLI is given it for the family the data call for."""
 
     made: typing.ClassVar[dict] = {}
+    history_: typing.ClassVar[list] = [{"step": "dynamics", "cost": 1.0}]
+    certified_ = True
 
     def __init__(self, **kwargs):
         Captured.made.clear()
         Captured.made["kwargs"] = kwargs
-
-    history_: typing.ClassVar[list] = [{"step": "dynamics", "cost": 1.0}]
-    max_iter, tol = 20, 1e-4
-    warp_ = None
-    verification_ = type("Report", (), {"passed": True, "min_gram_eig": 1e-3, "max_sampled_eig": -1e-3,
-                                        "n_samples": 10})()
+        super().__init__(**{k: v for k, v in kwargs.items() if k != "preset"})
 
     @classmethod
     def preset(cls, name, **kwargs):
@@ -63,11 +61,14 @@ class Captured:
         Captured.made["demos"] = demos
         return self
 
-    def save(self, path):
+    def save(self, path, key=None):
         path.write_text("{}")
 
     def score(self, demos):
         return []
+
+    def summary(self):
+        return ["stand-in"]
 
 
 @pytest.fixture(scope="module")
@@ -85,7 +86,7 @@ def linear_demos_2d():
 
 @pytest.fixture
 def captured(monkeypatch):
-    monkeypatch.setattr(sd, "CDSP", Captured)
+    monkeypatch.setattr("sosdyn.cli.fit.family_for", lambda data, order=1: Captured)
     Captured.made.clear()
     return Captured.made
 

@@ -70,6 +70,29 @@ def is_pose_command(argv) -> bool:
     return any(a.startswith(("poses/", "pose.json")) for a in argv)
 
 
+def is_second_order_command(argv) -> bool:
+    """The walk-through's second-order paragraph: commands on o2.json (run by their own test)."""
+    return any(a.startswith("o2.json") for a in argv)
+
+
+@pytest.mark.slow
+def test_walkthrough_second_order_commands(capsys, tmp_path, monkeypatch):
+    """The second-order paragraph as written, on the shipped crossing set."""
+    monkeypatch.chdir(tmp_path)
+    commands = [c for c in readme_commands(WALK) if is_second_order_command(c)]
+    assert [c[0] for c in commands] == ["fit", "plot", "rollout", "export"]
+    for argv in commands:
+        code, _, err = run(capsys, *argv)
+        assert code == 0, (argv, err)
+    model = sd.load_model("o2.json")
+    assert isinstance(model, sd.SecondOrderCDSP) and model.certified_
+    assert "inline bool acceleration(const double* x, const double* v, double* a" in (tmp_path / "o2.hpp").read_text()
+    assert (tmp_path / "o2.png").read_bytes()[:4] == b"\x89PNG"
+    rows = np.loadtxt("run_o2.csv", delimiter=",", skiprows=1)
+    speed = np.linalg.norm(np.diff(rows[:, 1:], axis=0), axis=1) / np.diff(rows[:, 0])
+    assert speed.max() <= 300 * 1.01                                                  # --max-speed 300
+
+
 @pytest.mark.slow
 def test_walkthrough_pose_commands(capsys, tmp_path, monkeypatch):
     """The pose paragraph as written, on pose CSVs of a known rotation system (tests/test_cli_poses.py)."""
@@ -102,7 +125,7 @@ def test_walkthrough_runs_on_the_shipped_data(capsys, tmp_path, monkeypatch):
     data.mkdir(parents=True)
     shutil.copytree(ROOT / "examples/data/reach", data / "reach")
     monkeypatch.chdir(tmp_path)
-    commands = [c for c in readme_commands(WALK) if not is_pose_command(c)]
+    commands = [c for c in readme_commands(WALK) if not is_pose_command(c) and not is_second_order_command(c)]
     assert [c[0] for c in commands] == ["fit", "fit", "plot", "rollout", "export", "export"]
     for argv in commands:
         code, _, err = run(capsys, *argv)

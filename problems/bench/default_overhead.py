@@ -5,9 +5,9 @@ one-off costs, imports and first calls, that neither side should carry), then pe
 fit and the default fit, alternately. Reports each time (process CPU time, which other processes
 on a shared machine disturb less than the wall clock; the wall times too), the sum over shapes and
 the ratio default / core in CPU time (target: <= 2), and the default's split from ``model.timings_``: ``candidates_s``
-(its three warp candidates: two greedy warp fits and three core fits, one of them the plain core
-itself) and ``choice_s`` (the training rollouts that score them); the floor of the ratio is the
-candidates' core fits, about 3 x the core. ``python -m problems bench --skip ...`` runs it as the
+(its warp candidates: a greedy warp fit per warp and a core fit per candidate, one of them the plain
+core itself) and ``choice_s`` (the training rollouts that score them); the floor of the ratio is the
+candidates' core fits, about (1 + len(AUTO_WARPS)) x the core. ``python -m problems bench --skip ...`` runs it as the
 part ``overhead`` (``overhead.json``); alone: ``python -m problems.bench.default_overhead``.
 """
 from __future__ import annotations

@@ -4,7 +4,7 @@
   K = 6/7/6/6) and four variants: linear + ICA, the paper formulation (metric degree 2,
   alternating), cubic fields + degree-2 metric -- each the learner's core fit
   (one plain fit: ``sosdyn.lfd.fit.params.PLAIN``, no warp, no corrective refits) -- and the default's
-  full fit, linear + ICA with its choice of warp (three fits);
+  full fit, linear + ICA with its choice of warp (a fit per candidate);
 * scaling sweeps (log-log plots): K, metric degree, field degree, number of demonstration
   samples; the default fit against the dimension n = 2..7 with the issue-14 goals (:mod:`.scaling_n`);
 * the learner's dynamics step on the re-solve path, "direct" vs "cvxpy" back end;
@@ -54,7 +54,7 @@ VARIANTS = {
     "linear+ICA": dict(CORE, solver_method="ica"),
     "paper (metric deg 2, alternating)": dict(CORE, metric_degree=2, solver_method="alternating"),
     "cubic + metric deg 2": {k: v for k, v in PRESETS["cubic"].items() if k != "n_components"},
-    "default (linear+ICA, choice of warp: 3 fits)": dict(solver_method="ica"),
+    "default (linear+ICA, choice of warp: a fit per candidate)": dict(solver_method="ica"),
 }
 SWEEP_BASE = dict(CORE, solver_method="ica")   # the sweeps vary one setting of the default's core fit
 TARGETS = {"linear_fit_s": 0.5, "paper_fit_s": 10.0, "cubic_fit_s": 3.0, "resolve_overhead_s": 2e-3}   # issue 14

@@ -1,5 +1,5 @@
 """Single-state prediction for control loops: ``model.predict(x[None])`` against ``model.predictor()(x)``
-and the Python export's ``predict(x)`` (:func:`sosdyn.lfd.runtime.export.to_python`).
+and the Python export's ``predict(x)`` (:func:`sosdyn.lfd.runtime.export_python.to_python`).
 
 Fits one LASA shape (K = 8, 2-D, linear fields: one plain fit and the default's warped model;
 ``--cubic`` adds a plain degree-3 model), then times
@@ -26,7 +26,7 @@ from sosdyn.lfd.fit.params import PLAIN
 from sosdyn.lfd.fit.warp import LIP_FACTOR, MAX_MAPS
 from sosdyn.lfd.model.fileformat import _digest
 from sosdyn.lfd.model.files import load_model
-from sosdyn.lfd.runtime.export import to_python
+from sosdyn.lfd.runtime.export_python import to_python
 
 from ..settings import BENCH
 from .timing import environment, median, write_json

@@ -3,7 +3,7 @@
 Synthetic demonstrations (:mod:`.synthetic`, 7 demos x 1000 samples), ``CDSP()`` with K = 6:
 the learner's core fit (one plain fit, ``PLAIN``: no warp, no corrective refits; the goals are
 measured on it; the fastest of ``FIT_REPS`` fits) and, for the defaults, also the full default fit
-with its choice of warp (``full``: total time of one fit, three fits).
+with its choice of warp (``full``: total time of one fit, a fit per warp candidate).
 Each core fit's time is split from public timing data (``model.timings_``, ``model.history_``):
 
 * EM      -- the Gaussian mixture;
@@ -224,7 +224,7 @@ def markdown(res, png: str) -> str:
         f"### state dimension n ({config}, issue 14)", "",
         f"Synthetic stable nonlinear n-D system (7 demos x 1000 samples), K = {K}; the learner's core fit "
         f"(one plain fit: no warp, no corrective refits; the fastest of {FIT_REPS}; CPU = the fit's process CPU time, less "
-        "disturbed than wall time when the machine is shared)" + ("; full default = the default fit with its choice of warp, three fits (total)" if full
+        "disturbed than wall time when the machine is shared)" + ("; full default = the default fit with its choice of warp, a fit per candidate (total)" if full
                                      else "") + ". build = learning minus the "
         "solver (polynomial construction, SOS build + canonicalise, each solve's independent check); sos build = "
         "its SOS-layer part; verify = final certificate + sampled check; solver iterations = the interior-point "

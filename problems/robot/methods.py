@@ -18,7 +18,8 @@ from scipy.spatial.transform import Rotation
 
 import sosdyn as sd
 from sosdyn.evaluation.baselines import GMR
-from sosdyn.lfd.data.poses import align_orientations, body_velocity, chart, goal_orientation, split_demonstrations
+from sosdyn.lfd.data.pose import align_orientations, chart, goal_orientation, split_demonstrations
+from sosdyn.lfd.runtime.pose import body_velocity
 from sosdyn.lfd.runtime.states import limit_speed, speed_factor
 
 from ..settings import SEED

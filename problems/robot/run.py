@@ -23,7 +23,7 @@ import numpy as np
 import sosdyn as sd
 from sosdyn.errors import InputError
 from sosdyn.lfd.data.pose_preprocess import preprocess_poses
-from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations, goal_orientation
+from sosdyn.lfd.data.pose import PoseDemonstration, PoseDemonstrations, goal_orientation
 
 from ..jsonio import write_json
 from ..settings import REPORTS, SEED

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 import sosdyn as sd
-from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
+from sosdyn.lfd.data.pose import PoseDemonstration, PoseDemonstrations
 
 from .arm import DOWN, xyzw
 from .control import rotation_error

@@ -12,7 +12,11 @@
     sosdyn experiment fig1 [--repo DIR] [--quick ...]   # python -m problems fig1, in DIR
     sosdyn report [--results reports/results.json --out reports]   # render a results file
     sosdyn lasa list
-    sosdyn fit poses/ --out pose.json     # t,x,y,z,qw,qx,qy,qz CSVs: a pose model; export / plot take it (.poses)
+    sosdyn fit poses/ --out pose.json     # t,x,y,z,qw,qx,qy,qz CSVs: a pose model
+    sosdyn fit crossing/ --order 2 --out o2.json  # a second-order model (follows crossing demonstrations)
+
+Every command on a model (rollout, export, plot) takes any family's file: it goes through the model
+interface (:class:`~sosdyn.lfd.model.base.MotionModel`) and never asks which family it holds.
 
 Global options ``--quiet`` (no progress or summaries) and ``--debug`` (full
 tracebacks, debug logging; also ``SOSDYN_DEBUG=1``) go before the command;

@@ -1,20 +1,25 @@
-"""``sosdyn fit``: demonstrations in, a certified model file out.
+"""``sosdyn fit``: demonstrations in, a certified model file out, of the family that fits them
+(:func:`~sosdyn.lfd.model.base.family_for`: pose CSVs give the pose model, ``--order 2`` the
+second-order model, else the first-order CDSP); everything after the choice goes through the model
+interface (:class:`~sosdyn.lfd.model.base.MotionModel`), never asking which family it holds.
 
 Inputs: files, folders (their ``*.csv`` / ``*.npy``), quoted patterns (``'demos/*.csv'``),
 ``lasa:NAME`` or ``dataset:NAME`` (a shipped real set, :func:`sosdyn.load_dataset`); read by
 :func:`sosdyn.load_demos` (headers ``t,x,y[,z]``, ``t,x1..xn``, optional velocities, or no header
-with time in column 0; pose CSVs ``t,x,y,z,qw,qx,qy,qz`` or ``...,qx,qy,qz,qw`` give a pose model,
-:mod:`.poses`; ``--dt`` for files without time, ``--time-units ms`` or a ``t_ms`` column
+with time in column 0; pose CSVs ``t,x,y,z,qw,qx,qy,qz`` or ``...,qx,qy,qz,qw`` give a pose model;
+``--dt`` for files without time, ``--time-units ms`` or a ``t_ms`` column
 for millisecond stamps, ``--columns`` to name the position columns, e.g. joint names; a column
 with no role is refused, never dropped).
 ``--units`` is recorded, not applied: it names the units of the positions in the model file
 (``state.units_``), on plot axes and in exported code; the numbers are used as they are.
-Before the fit the demonstrations are preprocessed (``--smooth``, ``--trim-rest``,
-``--align-ends``; :mod:`.fitdata`) and crossings are reported. Progress: one plain line per
+Before the fit the demonstrations are prepared by the family (``--smooth``, ``--trim-rest``,
+``--align-ends``: the model's ``prepare``; pose demonstrations take none) and crossings are
+reported when the family cannot follow them. An option the family has no parameter for is refused,
+naming the family that takes it. Progress: one plain line per
 convex step on stdout (step, cost, seconds of the step and since the start) when stdout is not a
 terminal, a live status line when it is; nothing with ``--quiet``. After the fit: the
-certificate, which warp candidate was kept and each one's training deviation, a line for every
-fit that stopped at the iteration cap, and a table of how the model reproduces each demonstration.
+certificate and the model's summary (e.g. which warp candidate was kept), a line for every fit that
+stopped at the iteration cap, and a table of how the model reproduces each demonstration.
 """
 from __future__ import annotations
 
@@ -31,14 +36,13 @@ from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.learner import COST_FLOOR, stalled
-from ..lfd.data.datasets import dataset_info
-from ..lfd.data.poses import GOAL_TOL_DEG, is_pose_file
-from ..lfd.fit.params import MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS, preset_params
-from ..lfd.model.pose import PoseCDSP
+from ..lfd.data.pose import GOAL_TOL_DEG, is_pose_file
+from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
+from ..lfd.model.base import FAMILIES, family_for
+from ..lfd.model.second_order import FIELDS as SECOND_ORDER_FIELDS
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
 from .paths import check_folder, check_output, demo_inputs
-from .poses import check_pose_options, open_degrees, pose_fit_summary, pose_notes, prepare_poses
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
 
@@ -49,6 +53,14 @@ class SolverMethod(str, enum.Enum):
 
 
 Warp = enum.Enum("Warp", {name: name for name in WARPS}, type=str)
+Gating = enum.Enum("Gating", {name: name for name in GATINGS}, type=str)
+SecondOrderField = enum.Enum("SecondOrderField", {name: name for name in SECOND_ORDER_FIELDS}, type=str)
+
+#: The model parameter each fit option sets (an option whose parameter the family lacks is refused).
+OPTIONS = {"n_components": "--components", "metric_degree": "--metric-degree", "field_degree": "--field-degree",
+           "gamma": "--gamma", "solver": "--solver", "solver_method": "--solver-method", "random_state": "--seed",
+           "corrective_rounds": "--corrective-rounds", "warp": "--warp", "max_iter": "--max-iter",
+           "gating": "--gating", "goal_tol_deg": "--goal-tol-deg", "field": "--field"}
 
 
 class Switch(str, enum.Enum):
@@ -122,20 +134,21 @@ class FitProgress:
             cap = iteration_cap(rows, max_iter, tol)
             if cap:
                 who = " ".join(filter(None, (warp and f"warp {warp}", round_ and f"corrective round {round_}")))
-                lines.append(f"{who or 'the fit'}: {cap} (more iterations: a larger max_iter in Python)")
+                lines.append(f"{who or 'the fit'}: {cap} (more iterations: --max-iter)")
         return lines
 
 
-def warp_line(scores: dict) -> str | None:
-    """Which warp="auto" candidate was kept and why: each candidate's training deviation (the
-    rollouts from the training demonstrations' starts against them, data units; inf: not
-    certified); the lowest is kept (ties: the first, as :func:`~sosdyn.lfd.fit.rounds.warp_choice`)."""
-    if len(scores) < 2:
-        return None
-    kept = min(scores, key=scores.get)
-    listed = "; ".join(f"{name} {score:.4g}" for name, score in scores.items())
-    return (f"warp candidates, training deviation (lower is better): {listed} -> kept [bold]{escape(kept)}[/] "
-            "(the lowest)")
+def check_options(family, given: dict) -> None:
+    """InputError naming the options (:data:`OPTIONS`) whose parameter ``family`` does not have, and
+    the families that have it."""
+    params = set(family().get_params())
+    bad = [name for name in given if name not in params]
+    if bad:
+        owners = sorted({cls.__name__ for cls in FAMILIES.values() for name in bad if name in cls().get_params()})
+        listed = ", ".join(OPTIONS[name] for name in bad)
+        raise InputError(f"{listed} {'does' if len(bad) == 1 else 'do'} not apply to a {family.__name__} model"
+                         f"{' (' + ' and '.join(owners) + ' take' + ('s' if len(owners) == 1 else '') + ' it)' if owners else ''}"
+                         f". Try: drop {'it' if len(bad) == 1 else 'them'}.")
 
 
 def _units(value: str | None) -> str | None:
@@ -143,6 +156,13 @@ def _units(value: str | None) -> str | None:
     problem = None if value is None else units_problem(value)
     if problem:
         raise typer.BadParameter(f"{problem}, e.g. m or mm.")
+    return value
+
+
+def open_degrees(value: float | None) -> float | None:
+    """``--goal-tol-deg`` callback: a number strictly between 0 and 180 (or not given)."""
+    if value is not None and not 0 < value < 180:
+        raise typer.BadParameter(f"must be a number of degrees in (0, 180), both ends excluded; got {value}.")
     return value
 
 
@@ -156,6 +176,10 @@ def fit(
         help="Demonstration files (CSV/NPY, one demonstration each, or several with a demo column), "
              "folders of them, quoted patterns like 'demos/*.csv', or lasa:NAME.", show_default=False)],
     out_path: Annotated[Path, typer.Option("--out", "-o", help="Where to save the model (JSON).")] = Path("model.json"),
+    order: Annotated[int, typer.Option(
+        "--order", min=1, max=2, help="1: a first-order model xdot = f(x) (CDSP; PoseCDSP for pose files); 2: a "
+                                      "second-order model xddot = a(x, xdot) (SecondOrderCDSP), which can follow "
+                                      "demonstrations that cross.")] = 1,
     preset: Annotated[Preset | None, typer.Option(
         help="Named parameter set (see CDSP.preset); options given here override it.",
         show_default="none: CDSP()'s defaults")] = None,
@@ -181,6 +205,12 @@ def fit(
         show_default=_default("warp"))] = None,
     seed: Annotated[int | None, typer.Option(min=0, max=2**32 - 1, help="Random seed (EM initialisation).",
                                              show_default=str(DEFAULTS["random_state"]))] = None,
+    max_iter: Annotated[int | None, typer.Option(
+        "--max-iter", min=0, help="Iteration cap of the alternation (each fit, candidate or round).",
+        show_default=f"{DEFAULTS['max_iter']}, or the preset's (second order: 50)")] = None,
+    gating: Annotated[Gating | None, typer.Option(
+        help="The mixture weights h_k: posterior, or tempered (the posterior at the data, turning smoothly off "
+             "it: smoother motions away from the demonstrations).", show_default=_default("gating"))] = None,
     dt: Annotated[float | None, typer.Option(
         callback=positive, help="Sampling step (s) of files without a time column: sample k is at k*dt.",
         show_default="none: the files' time column")] = None,
@@ -208,14 +238,18 @@ def fit(
         "--goal-tol-deg", callback=open_degrees, help="Pose files: refuse end orientations farther than this (deg, "
                                                       "strictly between 0 and 180) from their chordal mean; nearer "
                                                       "ones are aligned to it.", show_default=f"{GOAL_TOL_DEG:g}")] = None,
+    field: Annotated[SecondOrderField | None, typer.Option(
+        "--field", help="Second order: tracking = the demonstrations tracked in (x, v), certified by an energy "
+                        "tank; mixture = a mixture of linear fields under one quadratic certificate.",
+        show_default="tracking")] = None,
     time_units: TimeUnitsOption = None,
     columns: ColumnsOption = None,
 ) -> None:
-    """Learn a certified CDSP model from demonstrations and save it.
+    """Learn a certified model from demonstrations and save it.
 
     Pose CSVs (a header t,x,y,z,qw,qx,qy,qz or t,x,y,z,qx,qy,qz,qw) give a pose model (PoseCDSP:
-    position and orientation), unless --columns selects positions. Options left out use CDSP()'s
-    defaults (shown), or the preset's.
+    position and orientation), unless --columns selects positions; --order 2 gives a second-order
+    model (SecondOrderCDSP). Options left out use the model's defaults (shown: CDSP()'s), or the preset's.
     """
     import sosdyn as sd
 
@@ -231,10 +265,8 @@ def fit(
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
-    pose = dataset_info(demos[0].removeprefix(DATASET_PREFIX)).pose if shipped else \
-        columns is None and any(map(is_pose_file, paths))
-    goal_tol_deg = check_pose_options(pose, goal_tol_deg, goal_tol)
-    raw_tol = goal_tol if goal_tol is not None or align_ends is False or pose else np.inf
+    pose_files = columns is None and any(map(is_pose_file, paths))    # read as poses: no end tolerance here
+    raw_tol = goal_tol if goal_tol is not None or align_ends is False or pose_files else np.inf
     read = {"units": units, "goal_tol": raw_tol, "name": Path(demos[0]).resolve().name if folder else None}
     if shipped:
         data = load_dataset_input(demos[0], dt)
@@ -242,40 +274,28 @@ def fit(
         data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
             paths, **{k: v for k, v in read.items() if v is not None},   # aligning: --align-ends refuses
             **read_options(dt, time_units, columns))
-    if pose:
-        pose_notes(data)
-        data = prepare_poses(data, smooth, trim_rest is Switch.on, align_ends, goal_tol_deg)
-    else:
-        data = sd.check_demonstrations(prepare(data, smooth, trim_rest is Switch.on, align_ends))
+    family = family_for(data, order)
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
-               "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value}
+               "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value,
+               "max_iter": max_iter, "gating": gating and gating.value, "goal_tol_deg": goal_tol_deg,
+               "field": field and field.value}
     given = {k: v for k, v in options.items() if v is not None}
-    if pose:
-        model = PoseCDSP(goal_tol_deg, **{**(preset_params(preset.value) if preset else {}), **given})
-    else:
-        model = sd.CDSP.preset(preset.value, **given) if preset else sd.CDSP(**given)
-    with FitProgress(f"fitting {'PoseCDSP' if pose else 'CDSP'} to {len(data)} {'pose ' * pose}demonstrations of "
-                     f"{data.name}") as progress:
+    check_options(family, given)
+    data = prepare(family, data, smooth, trim_rest is Switch.on, align_ends)
+    model = family.preset(preset.value, **given) if preset else family(**given)
+    with FitProgress(f"fitting {family.__name__} to {len(data)} demonstrations of {data.name}") as progress:
         model.progress = progress.row
         model.fit(data)
     model.progress = None
     model.save(out_path)
-    chart = model.position_ if pose else model          # the certified model (the position block for poses)
-    report = chart.verification_
-    info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} {'pose ' * pose}demonstrations, "
-         f"fit in {time.perf_counter() - progress.start:.1f} s, {len(chart.history_)} convex steps)")
-    info(f"certificate: {'[green]passed[/]' if report.passed else '[red]FAILED[/]'} — min Gram eigenvalue "
-         f"{report.min_gram_eig:.2e}, max sampled generalised eigenvalue {report.max_sampled_eig:.2e} "
-         f"over {report.n_samples} states")
-    if chart.warp_ is not None:
-        info(f"warp: {report.warp['n_maps']} maps, max Lipschitz number {report.warp['max_lipschitz']:.3f} (< 1)")
-    chosen = warp_line(getattr(chart, "warp_scores_", {}))
-    if chosen:
-        info(chosen)
-    for line in progress.caps(chart.max_iter, chart.tol):
+    info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} demonstrations, fit in "
+         f"{time.perf_counter() - progress.start:.1f} s, {len(model.history_)} convex steps)")
+    lines = model.summary()
+    info(f"certificate: {'[green]passed[/]' if model.certified_ else '[red]FAILED[/]'} — {escape(lines[0])}")
+    for line in lines[1:]:
+        info(escape(line))
+    params = model.get_params()
+    for line in progress.caps(params["max_iter"], params["tol"]):
         info(f"[yellow]iteration cap[/]: {escape(line)}")
-    if pose:
-        pose_fit_summary(model, data)
-    else:
-        print_score(model, data)
+    print_score(model, data)

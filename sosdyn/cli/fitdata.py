@@ -1,11 +1,12 @@
 """What ``sosdyn fit`` does around the fit: shipped data sets, preprocessing, crossings, and the
 table of how the fitted model reproduces each demonstration.
 
-``dataset:NAME`` reads :func:`sosdyn.load_dataset` (a pose set with its orientations: a pose fit; the loader's notes, e.g.
+``dataset:NAME`` reads :func:`sosdyn.load_dataset` (a pose set with its orientations: a pose model; the loader's notes, e.g.
 hammer's declared time step, are printed). ``--smooth``, ``--trim-rest`` and ``--align-ends``
-are :func:`sosdyn.preprocess`'s options; the fit then warns about crossing demonstrations
-(:mod:`sosdyn.lfd.data.crossing`) and prints :meth:`CDSP.score`, warning when a reproduction
-deviates by more than :data:`DEVIATION_WARN` of the data's extent (bounding-box diagonal).
+are the options of the family's ``prepare`` (:func:`sosdyn.preprocess`'s), which also warns about
+crossing demonstrations when the family cannot follow them (:mod:`sosdyn.lfd.data.crossing`); after
+the fit the model's ``score`` is printed, with a warning when a reproduction deviates by more than
+:data:`DEVIATION_WARN` of the data's extent (bounding-box diagonal).
 """
 from __future__ import annotations
 
@@ -15,9 +16,7 @@ import numpy as np
 import typer
 from rich.markup import escape
 
-from ..lfd.data.crossing import crossing_warning, find_crossings
 from ..lfd.data.datasets import load_dataset
-from ..lfd.data.preprocess import preprocess
 from .base import State, info, out
 
 DATASET_PREFIX = "dataset:"
@@ -51,7 +50,7 @@ def parse_align(value: str) -> bool | str | float:
 
 
 def load_dataset_input(spec: str, dt: float | None):
-    """The shipped set ``dataset:NAME`` (a pose set with its orientations); the loader's notes printed."""
+    """The shipped set ``dataset:NAME`` (a pose set with its orientations: a pose model); the loader's notes printed."""
     name = spec.removeprefix(DATASET_PREFIX)
     with warnings.catch_warnings(record=True) as notes:
         warnings.simplefilter("always")
@@ -61,21 +60,22 @@ def load_dataset_input(spec: str, dt: float | None):
     return data
 
 
-def prepare(data, smooth: str | int, trim_rest: bool, align):
-    """``data`` preprocessed (:func:`sosdyn.preprocess`), what was done and any crossing printed."""
+def prepare(family, data, smooth: str | int, trim_rest: bool, align):
+    """``data`` prepared by ``family`` (:meth:`~sosdyn.lfd.model.base.MotionModel.prepare`), what was
+    done and its cautions (crossings) printed."""
     max_shift = align if isinstance(align, float) else None
-    result, report = preprocess(data, smooth_window=smooth, trim_rest=trim_rest,
-                                align=True if max_shift is not None else align, max_shift=max_shift)
-    for line in report.lines(data.units):
-        info(f"preprocess: {escape(line)}")
-    message = crossing_warning(find_crossings(result), data.units)
-    if message and not State.quiet:
-        out.print(f"[yellow]warning:[/] {escape(message)}", soft_wrap=True)
+    result, notes, cautions = family.prepare(data, smooth_window=smooth, trim_rest=trim_rest,
+                                             align=True if max_shift is not None else align, max_shift=max_shift)
+    for line in notes:
+        info(escape(line))
+    for message in cautions:
+        if not State.quiet:
+            out.print(f"[yellow]warning:[/] {escape(message)}", soft_wrap=True)
     return result
 
 
 def print_score(model, data) -> None:
-    """The table of :meth:`CDSP.score` and a warning for reproductions far from their demo."""
+    """The table of the model's ``score`` and a warning for reproductions far from their demo."""
     if State.quiet:
         return
     rows = model.score(data)
@@ -84,11 +84,15 @@ def print_score(model, data) -> None:
     u = data.units or "units"
     out.print(f"reproduction of each demonstration from its start ({u}; at goal = within 1% of the extent "
               f"{extent:.4g}):", highlight=False, soft_wrap=True)
-    out.print(f"{'demo':>4}  {'mean dev':>10}  {'max dev':>10}  {'arrival s':>9}  {'demo s':>7}  at goal",
-              highlight=False)
+    angles = any("max_dev_deg" in r for r in rows)       # a pose model's rows also score the orientation (deg)
+    if angles:
+        out.print("orientations: deviation in deg; at goal also within 1 deg of the goal orientation.", highlight=False)
+    out.print(f"{'demo':>4}  {'mean dev':>10}  {'max dev':>10}  " + (f"{'mean deg':>8}  {'max deg':>8}  " if angles else "")
+              + f"{'arrival s':>9}  {'demo s':>7}  at goal", highlight=False)
     for r in rows:
-        out.print(f"{r['demo']:>4}  {r['mean_dev']:>10.4g}  {r['max_dev']:>10.4g}  {r['arrival_s']:>9.3g}  "
-                  f"{r['duration_s']:>7.3g}  {'yes' if r['at_goal'] else 'NO'}", highlight=False)
+        out.print(f"{r['demo']:>4}  {r['mean_dev']:>10.4g}  {r['max_dev']:>10.4g}  "
+                  + (f"{r['mean_dev_deg']:>8.3g}  {r['max_dev_deg']:>8.3g}  " if angles else "")
+                  + f"{r['arrival_s']:>9.3g}  {r['duration_s']:>7.3g}  {'yes' if r['at_goal'] else 'NO'}", highlight=False)
     far = [r for r in rows if r["max_dev"] > DEVIATION_WARN * extent]
     if far:
         worst = max(far, key=lambda r: r["max_dev"])

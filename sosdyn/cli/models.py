@@ -1,8 +1,12 @@
-"""The commands on a saved model: ``sosdyn rollout``, ``sosdyn export`` and ``sosdyn plot``; a pose
-model file (``sosdyn-pose``) is exported and drawn by :mod:`.poses`."""
+"""The commands on a saved model of any family: ``sosdyn rollout``, ``sosdyn export`` and ``sosdyn plot``,
+each through the model interface (:class:`~sosdyn.lfd.model.base.MotionModel`: its ``layout``,
+``rollout``, ``export`` and ``reproductions``), never asking which family the file holds. An option
+only some families take (``--start-velocity``: second order; ``--max-angular-speed``: poses) is
+refused for the others, naming who takes it."""
 from __future__ import annotations
 
 import enum
+import inspect
 from pathlib import Path
 from typing import Annotated
 
@@ -11,10 +15,10 @@ import typer
 from rich.markup import escape
 
 from ..errors import InputError
-from ..lfd.model.pose import PoseCDSP
+from ..lfd.model.base import FAMILIES
 from .base import ColumnsOption, TimeUnitsOption, app, info, out, parse_point, positive, read_options, status
+from .fitdata import DATASET_PREFIX, load_dataset_input
 from .paths import check_folder, check_output, demo_inputs, existing
-from .poses import POSE_HEADER, POSE_SIZES, MaxAngularSpeedOption, check_angular, export_pose, plot_pose
 
 
 def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[float, np.ndarray]]:
@@ -33,15 +37,31 @@ def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[fl
     return events
 
 
-def _dimension(point: np.ndarray, dim: int, option: str, layout: str | None = None,
-               example: str | None = None) -> np.ndarray:
-    """``point`` if it has ``dim`` numbers; else InputError (``layout`` and ``example``: what they are
-    and a valid value, for a pose model)."""
-    if point.shape != (dim,):
-        what = f"the model is {dim}-D" if layout is None else f"a pose model takes {dim}: {layout}"
-        raise InputError(f"{option} has {point.size} numbers but {what}. Try: {dim} "
-                         f"comma-separated numbers, e.g. {example or ','.join(['0'] * dim)}.")
+def _dimension(point: np.ndarray, names: tuple[str, ...], option: str) -> np.ndarray:
+    """``point`` if it has one number per name; else InputError naming them."""
+    if point.shape != (len(names),):
+        example = ",".join("1" if name == "qw" else "0" for name in names)     # a quaternion's w: a valid pose
+        raise InputError(f"{option} has {point.size} numbers but the model takes {len(names)}: {','.join(names)}. "
+                         f"Try: {len(names)} comma-separated numbers, e.g. {example}.")
     return point
+
+
+def family_keywords(model, method: str, given: dict) -> dict:
+    """The keywords ``{name: (option, value)}`` given on the command line that ``model.method`` takes
+    (value not None), as ``{name: value}``; InputError naming an option it does not take and the
+    families whose ``method`` does."""
+    takes = inspect.signature(getattr(model, method)).parameters
+    for name, (option, value) in given.items():
+        if value is not None and name not in takes:
+            owners = [cls.__name__ for cls in FAMILIES.values() if name in inspect.signature(getattr(cls, method)).parameters]
+            raise InputError(f"{option} does not apply to a {type(model).__name__} model ({' and '.join(owners)} "
+                             "takes it). Try: drop it.")
+    return {name: value for name, (_, value) in given.items() if value is not None}
+
+
+MaxAngularSpeedOption = Annotated[float | None, typer.Option(
+    "--max-angular-speed", callback=positive, help="Pose models: largest angular speed |omega| (rad/s); v and omega "
+                                                   "are scaled by one factor (same path and goal).", show_default="none")]
 
 
 @app.command()
@@ -61,51 +81,49 @@ def rollout(
         "--max-speed", callback=positive, help="Largest speed (units/s): the velocity is scaled down, same "
                                                "direction and path.", show_default="none")] = None,
     max_angular_speed: MaxAngularSpeedOption = None,
-    out_path: Annotated[Path | None, typer.Option("--out", "-o", help="Write t and positions as CSV.")] = None,
+    start_velocity: Annotated[str | None, typer.Option(
+        "--start-velocity", help="Second-order models: the start velocity, comma-separated (units/s).",
+        show_default="0: at rest")] = None,
+    out_path: Annotated[Path | None, typer.Option("--out", "-o", help="Write t and the states as CSV.")] = None,
 ) -> None:
     """Integrate a saved model from a start state and print the end point.
 
     Pushes and goal changes happen at the given times; with --out also write the trajectory
-    as CSV (columns t,x1..xn: loadable again as a demonstration). A pose model starts from
-    x,y,z,qw,qx,qy,qz, is pushed by dx,dy,dz,wx,wy,wz (a world rotation vector), takes goal poses,
-    and writes t,x,y,z,qw,qx,qy,qz."""
+    as CSV (columns t and the model's columns: loadable again as a demonstration). A pose model starts
+    from x,y,z,qw,qx,qy,qz, is pushed by dx,dy,dz,wx,wy,wz (a world rotation vector), takes goal poses,
+    and writes t,x,y,z,qw,qx,qy,qz. A second-order model starts at rest unless --start-velocity, and
+    a push may also change the velocity (DX..,DV..)."""
     import sosdyn as sd
 
     x0 = parse_point(start, "--start")
+    v0 = None if start_velocity is None else parse_point(start_velocity, "--start-velocity")
     pushes, goals = _events(push, "--push", "2:5,0"), _events(goal_change, "--goal-change", "3:10,5")
     existing(model_path, "model file")
     if out_path is not None:
         check_output(out_path, [model_path], "model file")
         check_folder(out_path.parent)
     model = sd.load_model(model_path)
-    pose = isinstance(model, PoseCDSP)
-    check_angular(pose, max_angular_speed)
-    sizes = POSE_SIZES if pose else {option: (model.dim_, None, None) for option in POSE_SIZES}
-    x0 = _dimension(x0, sizes["--start"][0], "--start", *sizes["--start"][1:])
-    for option, events in (("--push", pushes), ("--goal-change", goals)):
+    extra = family_keywords(model, "rollout", {"max_angular_speed": ("--max-angular-speed", max_angular_speed),
+                                               "v0": ("--start-velocity", v0)})
+    layout = model.layout()
+    x0 = _dimension(x0, layout.start, "--start")
+    for option, events, accepted in (("--push", pushes, layout.pushes), ("--goal-change", goals, (layout.goal,))):
         for when, vector in events:
-            _dimension(vector, sizes[option][0], option, *sizes[option][1:])
+            if not any(vector.shape == (len(names),) for names in accepted):
+                _dimension(vector, accepted[0] if len(accepted) == 1 else accepted[-1], option)
             if not 0 <= when <= duration:
                 raise InputError(f"{option} time {when:g} is outside [0, --duration {duration:g}]. Try: a "
                                  "time within the rollout, or a longer --duration.")
     step = {} if dt is None else {"dt": dt}
-    if pose:
-        traj = model.rollout(x0, duration, pushes=pushes, goal_changes=goals, max_speed=max_speed,
-                             max_angular_speed=max_angular_speed, **step)
-        pos, names = np.hstack([traj.pos, traj.quat]), POSE_HEADER
-        goal_end = max(goals, key=lambda e: e[0])[1] if goals else np.concatenate([model.goal_pos_, model.goal_quat_])
-    else:
-        traj = model.rollout(x0, duration, perturbations=pushes, goal_changes=goals, max_speed=max_speed, **step)
-        pos, goal_end = np.asarray(traj.pos), traj.goal_history[-1]
-        names = ["t", *(f"x{i + 1}" for i in range(pos.shape[1]))]
-    t = np.asarray(traj.t)
+    traj = model.rollout(x0, duration, perturbations=pushes, goal_changes=goals, max_speed=max_speed, **extra, **step)
+    t, states = np.asarray(traj.t), np.asarray(traj.states)
     if out_path is not None:                     # the layout load_demos reads
-        np.savetxt(out_path, np.column_stack([t, pos]), delimiter=",", comments="", header=",".join(names))
+        np.savetxt(out_path, np.column_stack([t, states]), delimiter=",", comments="",
+                   header=",".join(["t", *layout.columns]))
         info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
-    end = ", ".join(f"{v:.4g}" for v in pos[-1])
-    goal = ", ".join(f"{v:.4g}" for v in goal_end)
+    end = ", ".join(f"{v:.4g}" for v in states[-1])
+    goal = ", ".join(f"{v:.4g}" for v in traj.goal_history[-1])
     out.print(f"t = {t[-1]:.3g} s: x = ({end}), goal ({goal})")
-
 
 
 class ExportTarget(str, enum.Enum):
@@ -130,19 +148,20 @@ def export_model(
     No sosdyn is needed to run it: Python `predict(X, goal=None) -> Xdot` with numpy only, or
     C++17 `bool predict(const double* x, double* xdot, const double* goal = nullptr)`; the goal
     can move at run time. A pose model adds `predict_pose(x, quat, goal=None) -> (v, omega)`
-    (Python: numpy + scipy) or `pose_model_pose::predict_pose(x, quat, v, omega, goal)` (C++)."""
+    (Python: numpy + scipy) or `pose_model_pose::predict_pose(x, quat, v, omega, goal)` (C++); a
+    second-order model gives `acceleration(X, V, goal=None)` or
+    `second_order_model::acceleration(x, v, a, goal)` (C++)."""
     import sosdyn as sd
 
-    from ..lfd.runtime.export import export as generate
     from ..lfd.model.fileformat import replace_atomically
 
     existing(model_path, "model file")
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
     model = sd.load_model(model_path)
-    check_angular(isinstance(model, PoseCDSP), max_angular_speed)
-    source = export_pose(model, target.value, max_speed, max_angular_speed) if isinstance(model, PoseCDSP) \
-        else generate(model, target.value, max_speed)
+    method = "to_python" if target.value == "python" else "to_cpp"
+    extra = family_keywords(model, method, {"max_angular_speed": ("--max-angular-speed", max_angular_speed)})
+    source = model.export(target.value, max_speed=max_speed, **extra)
     replace_atomically(out_path, source.encode("utf-8"))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
 
@@ -171,65 +190,54 @@ def plot(
     out_path: Annotated[Path, typer.Option("--out", "-o", help="The figure (.png or .svg).", show_default=False)],
     demos: Annotated[list[str] | None, typer.Option(
         "--demos", help="Demonstrations to draw: CSV/NPY files (--demos a.csv b.csv), folders, quoted patterns "
-                        "('demos/*.csv'), or lasa:NAME, as `sosdyn fit` takes them. Reproductions start from "
+                        "('demos/*.csv'), lasa:NAME or dataset:NAME, as `sosdyn fit` takes them. Reproductions start from "
                         "their first states.", show_default=False)] = None,
     duration: Annotated[float | None, typer.Option(callback=positive, help="Seconds per reproduction; "
-                                                   "default: the demonstrations' longest (10 s without).")] = None,
+                                                   "default: twice its demonstration's duration (10 s without).")] = None,
     dt: Annotated[float | None, typer.Option(
         callback=positive, help="Sampling step (s) of demonstration files without a time column.",
         show_default="none: the files' time column")] = None,
     time_units: TimeUnitsOption = None,
     columns: ColumnsOption = None,
 ) -> None:
-    """Plot a saved model: streamlines, 3-D trajectories or time series.
+    """Plot a saved model of any family: streamlines, 3-D trajectories, time series or pose paths.
 
-    Streamlines for n = 2, 3-D trajectories with their projections on the box's walls for
-    n = 3, each dimension of the reproductions over time for n > 3. Without --demos the
-    reproductions start at the mixture's means. A pose model needs --demos (pose CSVs): 3-D
-    paths with orientation frames, each rollout 3x its demo's duration unless --duration."""
+    Streamlines of a first-order field for n = 2 (a second-order model: its paths), 3-D trajectories
+    with their projections on the box's walls for n = 3, each dimension of the reproductions over
+    time for n > 3; axes named by the model's columns and units. The demonstrations are read with the
+    model's columns unless --columns. Without --demos the reproductions start at the mixture's means.
+    A pose model needs --demos (pose CSVs): 3-D paths with orientation frames."""
     import matplotlib as mpl
 
     import sosdyn as sd
 
-    from ..report.figures import STYLE, streamlines, time_series, trajectories_3d
+    from ..report.figures import STYLE, model_figure
 
     model_path, demos = _model_and_demos(inputs, demos)
     if out_path.suffix.lower() not in PLOT_FORMATS:
         raise InputError(f"--out {out_path} must end in .png or .svg. Try: --out {out_path.with_suffix('.png')}.")
     lasa = len(demos) == 1 and demos[0].startswith("lasa:")
-    paths = [] if lasa else demo_inputs(demos)
+    shipped = len(demos) == 1 and demos[0].startswith(DATASET_PREFIX)
+    paths = [] if lasa or shipped else demo_inputs(demos)
     existing(model_path, "model file")
     check_output(out_path, [model_path, *paths], "input")
     check_folder(out_path.parent)
     model = sd.load_model(model_path)
-    data = (sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa
-            else sd.load_demos(paths, **read_options(dt, time_units, columns))) if demos else None
-    if isinstance(model, PoseCDSP):
-        with status(f"rolling out {len(data or ())} reproductions ..."), mpl.rc_context(STYLE):
-            plot_pose(model, data, duration, model_path.stem).savefig(
-                out_path, format=out_path.suffix.lower()[1:], dpi=150, metadata=_no_date(out_path))
-        info(f"[green]wrote[/] {escape(str(out_path))}  (pose model, {len(data)} demonstrations and rollouts)")
-        return
-    if data is not None and data.dim != model.dim_:
-        raise InputError(f"the demonstrations are {data.dim}-D but the model is {model.dim_}-D. "
+    if columns is None and model.columns_ is not None:      # the position columns the model was fitted to
+        columns = ",".join(model.columns_)
+    data = None if not demos else sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else \
+        load_dataset_input(demos[0], dt) if shipped else sd.load_demos(paths, **read_options(dt, time_units, columns))
+    dim = len(model.names())
+    if data is not None and data[0].pos.shape[1] != dim:
+        raise InputError(f"the demonstrations are {data[0].pos.shape[1]}-D but the model is {dim}-D. "
                          "Try: the demonstrations the model was fitted to.")
-    demo_pos = [d.pos for d in data] if data is not None else []
-    starts = [p[0] for p in demo_pos] or list(model.goal_ + model.scale_ * model.mixture_.means)
-    horizon = duration or (max(float(d.t[-1] - d.t[0]) for d in data) if data is not None else 10.0)
-    with status(f"rolling out {len(starts)} reproductions ..."):
-        runs = [model.rollout(x0, horizon) for x0 in starts]
-    title = model_path.stem
-    if model.dim_ == 2:
-        fig = streamlines(None, model.predict, demo_pos, [r.pos for r in runs], model.goal_, title=title,
-                          units=model.units_)
-    elif model.dim_ == 3:
-        fig = trajectories_3d(demo_pos, [r.pos for r in runs], model.goal_, title=title, units=model.units_)
-    else:
-        fig = time_series([(r.t, r.pos) for r in runs], model.goal_, model.units_, title,
-                          demos=[(d.t, d.pos) for d in data] if data is not None else ())
+    with status("rolling out reproductions ..."):
+        view = model.reproductions(data, duration)
     with mpl.rc_context(STYLE):
-        fig.savefig(out_path, format=out_path.suffix.lower()[1:], dpi=150, metadata=_no_date(out_path))
-    info(f"[green]wrote[/] {escape(str(out_path))}  ({model.dim_}-D model, {len(runs)} reproductions)")
+        model_figure(view, model_path.stem).savefig(out_path, format=out_path.suffix.lower()[1:], dpi=150,
+                                                    metadata=_no_date(out_path))
+    info(f"[green]wrote[/] {escape(str(out_path))}  ({dim}-D {type(model).__name__} model, {len(view.runs)} "
+         f"reproductions{' of ' + str(len(view.demos)) + ' demonstrations' if view.demos else ''})")
 
 
 def _no_date(path: Path) -> dict:

@@ -45,7 +45,7 @@ from scipy.spatial.transform import Rotation
 from sosdyn.limits import check_bytes
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.data.pose_preprocess import preprocess_poses, rest_range
-from sosdyn.lfd.data.poses import (PoseDemonstration, PoseDemonstrations, align_orientations, angle_matrix, chart,
+from sosdyn.lfd.data.pose import (PoseDemonstration, PoseDemonstrations, align_orientations, angle_matrix, chart,
                                    from_chart, goal_orientation)
 from sosdyn.lfd.rollout import euler_until_rest
 from . import dsopt, realdata
@@ -143,7 +143,7 @@ def reproduce_poses(model, recorded: PoseDemonstrations, test: PoseDemonstration
 
 
 def ended_at(demo: PoseDemonstration, goal_quat) -> PoseDemonstration:
-    """``demo`` with its end orientation turned onto ``goal_quat`` (:func:`~sosdyn.lfd.data.poses.align_orientations`,
+    """``demo`` with its end orientation turned onto ``goal_quat`` (:func:`~sosdyn.lfd.data.pose.align_orientations`,
     no tolerance): what a model that reproduced it exactly would do, since it ends at its own goal."""
     return align_orientations(PoseDemonstrations([demo]), goal_quat, 180.0)[0][0]
 
@@ -199,8 +199,8 @@ def turned(quat, angle_deg: float, axis) -> np.ndarray:
 def _track(traj, start_pos) -> dict:
     """Time series of a pose trajectory: ``angle`` (deg) and ``distance`` (data units) to the goal pose in
     effect, and the position's ``displacement`` from ``start_pos``."""
-    return {"t": traj.t, "angle": angles_deg(traj.quat, traj.goal[:, 3:]),
-            "distance": np.linalg.norm(traj.pos - traj.goal[:, :3], axis=1),
+    return {"t": traj.t, "angle": angles_deg(traj.quat, traj.goal_history[:, 3:]),
+            "distance": np.linalg.norm(traj.pos - traj.goal_history[:, :3], axis=1),
             "displacement": np.linalg.norm(traj.pos - start_pos, axis=1)}
 
 

@@ -2,8 +2,10 @@
 
 A method is a fitted model seen through one callable: a velocity field ``f(X) -> Xdot`` (first
 order, ``xdot = f(x)``) or an acceleration field ``a(X, V) -> Vdot`` (second order,
-``xddot = a(x, xdot)``); nothing else of the model is used (its goal ``goal_`` and its
-certificate flag, :func:`certified`, are read when present).
+``xddot = a(x, xdot)``); a second-order model with an energy tank (``initial_tank`` and
+``derivatives``, :class:`~sosdyn.lfd.model.second_order.SecondOrderCDSP`) is seen through
+``(X, V, B) -> (Vdot, Bdot)`` with its tank integrated alongside, full at the start. Nothing else of the
+model is used (its goal ``goal_`` and its certificate flag, :func:`certified`, are read when present).
 
 Two data paths, one reproduction and scoring:
 
@@ -44,19 +46,27 @@ DATA_PATHS = ("dsopt", "realdata")
 
 
 def semi_implicit_until_rest(accel: Callable, X0, V0, *, dt: float, max_steps: int, vel_tol: float,
-                        window: int) -> list[np.ndarray]:
+                        window: int, B0=None) -> list[np.ndarray]:
     """Positions (i, n) of the semi-implicit Euler rollouts (module docstring; the fixed-step
     version is :func:`sosdyn.lfd.rollout.euler.semi_implicit_euler`) from the rows of
     ``X0`` and ``V0`` (m, n), all at once: x_0..x_{i-1}, stopped by
-    :func:`sosdyn.lfd.rollout.euler_until_rest`'s rule on z = (x, v). InputError for mismatched
-    starts, SolverError when a rollout diverges."""
+    :func:`sosdyn.lfd.rollout.euler_until_rest`'s rule on z = (x, v). With ``B0`` (m,) the model
+    carries a tank: ``accel(X, V, B)`` returns (A, dB/dt) and B takes an explicit Euler step (kept
+    >= 0) with each step of (x, v), outside the stop rule (euler_until_rest calls the field once per
+    step with every row). InputError for mismatched starts, SolverError when a rollout diverges."""
     X0, V0 = np.array(X0, dtype=float, ndmin=2), np.array(V0, dtype=float, ndmin=2)
     if X0.shape != V0.shape:
         raise InputError(f"start positions {X0.shape} and velocities {V0.shape} must have the same shape (m, n).")
     n = X0.shape[1]
+    tank = None if B0 is None else np.array(B0, dtype=float).reshape(len(X0))
 
     def field(Z):
-        A = np.asarray(accel(Z[:, :n], Z[:, n:]), dtype=float)
+        if tank is None:
+            A = accel(Z[:, :n], Z[:, n:])
+        else:
+            A, rate = accel(Z[:, :n], Z[:, n:], tank)
+            tank[:] = np.maximum(0.0, tank + dt * np.asarray(rate, dtype=float))
+        A = np.asarray(A, dtype=float)
         if A.shape != (len(Z), n):
             raise InputError(f"The acceleration field returned shape {A.shape} for X of shape {(len(Z), n)}; "
                              "expected the same shape.")
@@ -91,8 +101,9 @@ def prepare(demos, data_path: str, split=None):
                      f"split {split!r}.")
 
 
-def reproduce(field: Callable, order: int, train, test, data_path: str, window: int | None = None):
-    """The reproductions of ``test`` (module docstring) by ``field`` of ``order`` 1 or 2."""
+def reproduce(field, order: int, train, test, data_path: str, window: int | None = None):
+    """The reproductions of ``test`` (module docstring) by ``field`` of ``order`` 1 or 2 (for 2 also a
+    model with a tank, :func:`second_order_field`)."""
     if order not in ORDERS:
         raise InputError(f"order must be 1 or 2, got {order!r}.")
     vel_tol, max_steps = ((dsopt.VEL_TOL, dsopt.MAX_STEPS) if data_path == "dsopt"
@@ -100,8 +111,19 @@ def reproduce(field: Callable, order: int, train, test, data_path: str, window: 
     if order == 1:
         return dsopt.euler_reproduce(field, dsopt.start_points(test), vel_tol=vel_tol, max_steps=max_steps)
     X0, V0 = start_states(test, window)
-    return semi_implicit_until_rest(field, X0, V0, dt=dsopt.DT, max_steps=max_steps, vel_tol=vel_tol,
-                               window=dsopt.WINDOW)
+    accel, B0 = second_order_field(field, X0, V0)
+    return semi_implicit_until_rest(accel, X0, V0, dt=dsopt.DT, max_steps=max_steps, vel_tol=vel_tol,
+                                    window=dsopt.WINDOW, B0=B0)
+
+
+def second_order_field(model, X0, V0):
+    """(the callable, the tanks at the starts or None) through which a second-order ``model`` is
+    integrated (module docstring): a model with ``initial_tank`` and ``derivatives`` with its tank,
+    else ``model.predict`` (or ``model`` itself when it is a callable a(X, V))."""
+    if hasattr(model, "initial_tank") and hasattr(model, "derivatives"):
+        goal = model.goal_
+        return (lambda X, V, B: model.derivatives(X, V, goal, B)), model.initial_tank(X0, V0)
+    return getattr(model, "predict", model), None
 
 
 def certified(model) -> bool | None:
@@ -141,7 +163,7 @@ def evaluate(fit_fn: Callable, demos, order: int, data_path: str, grid=None, spl
         out["grid_field"] = model.predict(G) if order == 1 else model.predict(G, np.zeros_like(G))
     t0 = time.perf_counter()
     try:
-        paths = reproduce(model.predict, order, recorded, test, data_path, window)
+        paths = reproduce(model.predict if order == 1 else model, order, recorded, test, data_path, window)
     except SolverError as exc:
         return dict(out, failure=str(exc))
     rows = realdata.test_scores(paths, recorded, test, goal)

@@ -66,13 +66,16 @@ def demos():
     return Demonstrations([_line_demo((10, 5)), _line_demo((8, -4)), _line_demo((-6, 9))], "lines", "mm")
 
 
-@pytest.fixture(scope="session", params=[1, 3, "warped"], ids=["linear", "cubic", "warped"])
+@pytest.fixture(scope="session", params=[1, 3, "warped", "twisted"], ids=["linear", "cubic", "warped", "twisted"])
 def field_model(request, linear_demos):
     """CDSP models of the linear demos whose fields the evaluator and export tests compare with
-    predict: linear and cubic sub-systems without a warp, and the linear one with a fixed warp."""
-    if request.param == "warped":       # a fixed warp: 20 bumps (the linear demos' spirals are not radial)
-        m = CDSP(n_components=3, warp={"n_maps": 20}).fit(linear_demos)
+    predict: linear and cubic sub-systems without a warp, and the linear one with a fixed warp,
+    without and with a twist about the goal after its bumps."""
+    if request.param in ("warped", "twisted"):  # 20 bumps (the linear demos' spirals are not radial)
+        m = CDSP(n_components=3, warp={"n_maps": 20, "twist": 3.0 if request.param == "twisted" else 0.0}
+                 ).fit(linear_demos)
         assert len(m.warp_["sigmas"]) >= 10      # measured 19 (the fit stops when no bump helps)
+        assert ("twist" in m.warp_) == (request.param == "twisted")
         return m
     return CDSP(n_components=3, field_degree=request.param, warp="none").fit(linear_demos)
 

@@ -16,9 +16,9 @@ def test_warp_variants_are_registered_cdsp_settings():
     assert model.warp == dict(WARP_DEFAULTS, n_maps=60, decay=1.0) == AUTO_WARPS["60 maps, decay 1"]
     assert (model.corrective_rounds, model.random_state) == (0, 3)
     assert sd.CDSP(**lasa_dsopt.settings("CDSP warped", 0, False)).corrective_rounds == 3
-    # the selection's warped candidates are exactly CDSP()'s warp="auto" candidates
+    # the selection's warped candidates are CDSP()'s radial warp="auto" candidates (the default before issue 36)
     chosen = [lasa_dsopt.VARIANTS[v].get("warp") for v in lasa_warp.SELECTIONS["CDSP warped selected"]]
-    assert chosen == ["none", *AUTO_WARPS.values()]
+    assert chosen == ["none", AUTO_WARPS["60 maps, decay 0.75"], AUTO_WARPS["60 maps, decay 1"]]
 
 
 def test_cache_keys():

@@ -1,5 +1,5 @@
-"""problems.second_order: the quick run (crossing/e, both orders), the reused first-order LASA numbers,
-the per-pattern Multi_Models splits."""
+"""problems.second_order: the quick run (crossing/e, every method), the reused first-order LASA numbers,
+the per-pattern Multi_Models splits, rollouts read at the demos' period."""
 from __future__ import annotations
 
 import json
@@ -19,11 +19,13 @@ def test_quick_run_writes_results_page_and_figure(tmp_path):
     e = res["sets"]["crossing/e"]
     assert e["n_demos"] == 7 and e["units"] == "px" and e["data_path"] == "realdata"
     methods = e["methods"]
-    assert set(methods) == {"CDSP", "SecondOrderCDSP"} and not res["meta"]["missing_methods"]
+    assert set(methods) == set(second_order.METHODS) and not res["meta"]["missing_methods"]
     for r in methods.values():
         assert not r["error"] and not r["failure"] and r["n_train"] == 4 and r["n_test"] == 3
         assert r["certified"] is True and math.isclose(r["ratio"], r["dtwd_mean"] / r["copy_mean"])
         assert all(t["dtwd"] > 0 and t["copy"] > 0 for t in r["tests"])
+        assert r["ratio_alike"] < r["ratio"]               # the kept period is 2x the rollout's step
+    assert res["crossing"]["shapes"]["crossing/e"]["ratios"]["SecondOrderCDSP"] == methods["SecondOrderCDSP"]["ratio_alike"]
     assert methods["CDSP"]["copy_mean"] == methods["SecondOrderCDSP"]["copy_mean"]
     assert methods["CDSP"]["ratio"] > 2                 # one velocity per position: the e's loop is lost
     page = paths["html"].read_text()
@@ -40,6 +42,16 @@ def test_first_order_lasa_numbers_are_read_from_the_dsopt_report():
         v = ref[s]["variants"]["CDSP default"]
         assert got[s]["dtwd_mean"] == v["dtwd_test_mean"] and got[s]["copy_mean"] == ref[s]["nearest_demo"]
         assert got[s]["ratio"] == pytest.approx(v["ratio_to_nearest"])
+
+
+def test_reading_a_rollout_at_a_period_keeps_its_curve():
+    t = np.arange(0.0, 2.0 + 1e-9, 0.01)
+    path = np.column_stack([np.cos(t), np.sin(2 * t)])
+    got = second_order.read_at(path, 0.02)
+    assert len(got) == 101 and np.array_equal(got, path[::2])
+    odd = second_order.read_at(path, 0.015)
+    q = np.arange(0.0, 2.0 + 1e-9, 0.015)
+    assert np.abs(odd - np.column_stack([np.cos(q), np.sin(2 * q)])).max() < 1e-3     # linear interpolation
 
 
 @pytest.mark.parametrize("name", second_order.MULTI)

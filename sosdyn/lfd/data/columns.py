@@ -20,7 +20,7 @@ TIME_NAMES = ("t", "time", "timestamp")
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 MAX_DEMO_SECONDS = 600.0
 #: Names of orientation columns (quaternions, Euler angles, rotation vectors). Files whose header
-#: names qw, qx, qy or qz are pose files (:func:`~.poses.is_pose_file`); any other orientation column
+#: names qw, qx, qy or qz are pose files (:func:`~.pose.is_pose_file`); any other orientation column
 #: is refused, naming the quaternion header a pose model reads and the option that selects the positions.
 ORIENTATION = re.compile(r"(q|quat|quaternion|orientation|rot|o)_?[wxyz]|roll|pitch|yaw|r[xyz]")
 TIME_UNITS_HINT = "--time-units (sosdyn fit / plot) or time_units= (load_demos)"

@@ -111,5 +111,6 @@ def crossing_warning(crossings: list[Crossing], units: str = "", shown: int = 5)
     more = f" (and {len(crossings) - shown} more)" if len(crossings) > shown else ""
     return (f"{len(crossings)} crossing(s) of the demonstrations: {where}{more}. A first-order model "
             "xdot = f(x) has one velocity per state and cannot follow paths that cross: expect the "
-            "reproductions to take one branch or cut the loop there. Try: demonstrations that do not cross, "
-            "or split the motion at the crossing.")
+            "reproductions to take one branch or cut the loop there. Try: the second-order model, which can "
+            "follow them (sosdyn fit --order 2, sosdyn.SecondOrderCDSP), demonstrations that do not cross, or "
+            "split the motion at the crossing.")

@@ -12,17 +12,24 @@ pouring                        3     63     m (inferred)            k * 0.01 s
 hammer                         3     10     m (inferred)            sample index: dt declared
 cleaning/cleaning_1, _2        6     1      rad (inferred, joints)  recorded, ~0.035 s
 crossing/<shape> (8, synth.)   2     7-8    px (y up, goal at 0)    logged ms, jittered
+crossing_letters/<l> (6, syn.) 2     7      px (0.1 px, goal at 0)  5 ms reports, some lost
+winding/<shape> (9, synth.)    2     7      px (y up, goal at 0)    logged ms, jittered
 =============================  ====  =====  ======================  ========================
 
 ``crossing/<shape>`` (``ell``, ``e``, ``phi``, ``alpha``, ``gamma``, ``at``, ``pretzel``,
 ``cross``) is **synthetic**: hand-drawing-like mouse strokes that cross themselves or each
 other, written by ``python -m problems crossing-shapes`` (seeded; its README says how and why).
-:attr:`DatasetInfo.synthetic` marks it, and experiments on real data ask for
+``winding/<shape>`` (``spiral180``, ``spiral270``, ``spiral360``, ``hook``, ``G``, ``snail``,
+``nearhook``, ``loop``, ``curl``) is synthetic the same way: strokes that wind around the goal, written by
+``python -m problems winding-shapes``. ``crossing_letters/<letter>`` (``b``, ``h``, ``f``, ``g``,
+``eight``, ``four``) is a second synthetic crossing set from another generator (sigma-lognormal
+strokes, a pen-tablet log; ``python -m problems crossing-letters``), held out: models are tuned
+on ``crossing`` only. :attr:`DatasetInfo.synthetic` marks them, and experiments on real data ask for
 ``dataset_names(synthetic=False)``.
 
 Pose sets (robottasks, pouring) also hold an orientation quaternion ``qw, qx, qy, qz``: the loader
-returns :class:`~sosdyn.lfd.data.poses.PoseDemonstrations` (positions and orientations, read as a pose
-CSV is: :func:`~sosdyn.lfd.data.poses.load_pose_demos`, for :class:`~sosdyn.PoseCDSP`), or with
+returns :class:`~sosdyn.lfd.data.pose.PoseDemonstrations` (positions and orientations, read as a pose
+CSV is: :func:`~sosdyn.lfd.data.pose.load_pose_demos`, for :class:`~sosdyn.PoseCDSP`), or with
 ``positions_only=True`` the positions x, y, z alone as :class:`Demonstrations`.
 ``hammer`` has no time stamps (sample index): its time step is declared by ``dt`` (default
 :data:`HAMMER_DT` = 0.01 s, an assumption announced by a warning unless ``dt`` is given).
@@ -40,11 +47,13 @@ import numpy as np
 
 from sosdyn.errors import InputError
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_demonstrations
-from sosdyn.lfd.data.poses import PoseDemonstrations, load_pose_demos
+from sosdyn.lfd.data.pose import PoseDemonstrations, load_pose_demos
 
 DATASETS_DIR = Path(__file__).resolve().parent / "datasets"
 HAMMER_DT = 0.01        # s per sample, declared (the source has none; its loader uses dt = 1)
 CROSSING_SHAPES = ("ell", "e", "phi", "alpha", "gamma", "at", "pretzel", "cross")
+CROSSING_LETTERS = ("b", "h", "f", "g", "eight", "four")
+WINDING_SHAPES = ("spiral180", "spiral270", "spiral360", "hook", "G", "snail", "nearhook", "loop", "curl")
 
 
 @dataclass(frozen=True)
@@ -78,6 +87,13 @@ DATASETS = {
     **{f"crossing/{shape}": DatasetInfo(f"crossing/{shape}", ("x", "y"), "px", time="time_ms", time_unit=1e-3,
                                         synthetic=True, note="synthesised mouse strokes that cross (issue 28)")
        for shape in CROSSING_SHAPES},
+    **{f"crossing_letters/{letter}": DatasetInfo(f"crossing_letters/{letter}", ("x", "y"), "px", time="time_ms",
+                                                 time_unit=1e-3, synthetic=True,
+                                                 note="held-out synthesised pen-tablet letters that cross (issue 36)")
+       for letter in CROSSING_LETTERS},
+    **{f"winding/{shape}": DatasetInfo(f"winding/{shape}", ("x", "y"), "px", time="time_ms", time_unit=1e-3,
+                                       synthetic=True, note="synthesised mouse strokes that wind around the goal (issue 36)")
+       for shape in WINDING_SHAPES},
 }
 
 
@@ -140,4 +156,4 @@ def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | N
         t, pos = _read_csv(path, info)
         demos.append(Demonstration.from_positions(t * step if info.index_time else t, pos,
                                                   f"{name}/{path.name}"))
-    return check_demonstrations(Demonstrations(demos, name, info.units), goal_tol=goal_tol)
+    return check_demonstrations(Demonstrations(demos, name, info.units, columns=info.columns), goal_tol=goal_tol)

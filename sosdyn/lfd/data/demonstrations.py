@@ -81,11 +81,14 @@ class Demonstrations(Sequence):
     """An immutable sequence of :class:`Demonstration` sharing a ``name`` and ``units``.
 
     ``goal_tol`` (None or a number >= 0) is the end-point tolerance the set was accepted with
-    (:func:`check_demonstrations`): a later check of the same set (``CDSP.fit``) uses it too."""
+    (:func:`check_demonstrations`): a later check of the same set (``CDSP.fit``) uses it too.
+    ``columns`` (None or n names, each as :func:`units_problem` allows): the names of the position
+    columns as read (a file's header); a fitted model keeps them (plot axes, rollout CSVs, exports)."""
 
-    __slots__ = ("_demos", "_name", "_units", "_goal_tol")
+    __slots__ = ("_demos", "_name", "_units", "_goal_tol", "_columns")
 
-    def __init__(self, demos, name: str = "", units: str = "", goal_tol: float | None = None):
+    def __init__(self, demos, name: str = "", units: str = "", goal_tol: float | None = None,
+                 columns=None):
         demos = tuple(demos)
         for i, demo in enumerate(demos):
             if not isinstance(demo, Demonstration):
@@ -99,18 +102,20 @@ class Demonstrations(Sequence):
             raise InputError(f"units {problem}. Try: a short name such as 'm' or 'mm'.")
         self._demos, self._name, self._units = demos, str(name), units
         self._goal_tol = _check_goal_tol(goal_tol)
+        self._columns = check_columns(columns, demos[0].pos.shape[-1] if demos and columns is not None else None)
 
     name = property(lambda self: self._name, doc="Name of the set, e.g. 'Leaf_1' or a file stem.")
     units = property(lambda self: self._units, doc="Position units, e.g. 'mm' for LASA.")
     goal_tol = property(lambda self: self._goal_tol,
                         doc="End-point tolerance the set was accepted with (None: the default).")
+    columns = property(lambda self: self._columns, doc="Names of the position columns (None: unnamed).")
 
     def __len__(self) -> int:
         return len(self._demos)
 
     def __getitem__(self, index):
         if isinstance(index, slice):
-            return Demonstrations(self._demos[index], self._name, self._units, self._goal_tol)
+            return Demonstrations(self._demos[index], self._name, self._units, self._goal_tol, self._columns)
         return self._demos[index]
 
     def __repr__(self) -> str:
@@ -148,7 +153,29 @@ class Demonstrations(Sequence):
             if idx[-1] != len(d.t) - 1:
                 idx = np.append(idx, len(d.t) - 1)
             out.append(Demonstration(d.t[idx], d.pos[idx], d.vel[idx], d.source))
-        return Demonstrations(out, self._name, self._units, self._goal_tol)
+        return Demonstrations(out, self._name, self._units, self._goal_tol, self._columns)
+
+
+def check_columns(columns, dim: int | None) -> tuple[str, ...] | None:
+    """``columns`` as a tuple of ``dim`` distinct names (None stays None); InputError otherwise. A name
+    reaches model files, plot labels and generated code, so it obeys the units' rule
+    (:func:`units_problem`) and is not empty."""
+    if columns is None:
+        return None
+    if isinstance(columns, (str, bytes)) or not hasattr(columns, "__iter__"):
+        raise InputError(f"columns must be a sequence of names, got {columns!r:.60}.")
+    names = tuple(columns)
+    problem = next((f"{name!r:.40} {units_problem(name)}" for name in names if units_problem(name)), None) or \
+        next((f"{name!r} is empty" for name in names if name == ""), None)
+    if problem or len(set(names)) != len(names) or (dim is not None and len(names) != dim):
+        raise InputError(f"columns must be {dim if dim is not None else 'n'} distinct names of the position "
+                         f"columns, got {names!r:.80}{': ' + problem if problem else ''}.")
+    return names
+
+
+def position_names(columns, dim: int) -> tuple[str, ...]:
+    """The names of the ``dim`` position coordinates: ``columns``, or x1..xn when they are unnamed."""
+    return tuple(columns) if columns is not None else tuple(f"x{i + 1}" for i in range(dim))
 
 
 def _check_goal_tol(goal_tol) -> float | None:
@@ -246,7 +273,7 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
         raise InputError(f"Expected a sequence of Demonstration, got {type(demos).__name__}.") from exc
     name = getattr(demos, "name", "")
     goal_tol = _check_goal_tol(getattr(demos, "goal_tol", None) if goal_tol is None else goal_tol)
-    demos = Demonstrations(items, name, getattr(demos, "units", ""), goal_tol)
+    demos = Demonstrations(items, name, getattr(demos, "units", ""), goal_tol, getattr(demos, "columns", None))
     if not items:
         raise DemonstrationError(f"No demonstrations in {name or 'the input'}; provide at least one.")
     for i, demo in enumerate(items):

@@ -15,8 +15,9 @@ import numpy as np
 from sosdyn.errors import DemonstrationError, InputError
 from sosdyn.lfd.data.columns import (COLUMNS_HINT, TIME_UNITS, check_duration, check_time_units, parse_columns,
                                     refuse_unclaimed, time_header_names, time_unit)
-from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_demonstrations, time_problem
-from sosdyn.lfd.data.poses import PoseDemonstrations, is_pose_file, load_pose_demos
+from sosdyn.lfd.data.demonstrations import (Demonstration, Demonstrations, check_demonstrations, time_problem,
+                                            units_problem)
+from sosdyn.lfd.data.pose import PoseDemonstrations, is_pose_file, load_pose_demos
 
 _AXES = ("x", "y", "z")
 _DEFAULT_DEMO_NAME = "demo"
@@ -254,7 +255,8 @@ def _as_float(table: _Table, columns: list[int]) -> np.ndarray:
         f"(read with {table.layout}). Try: fix or remove that line.")
 
 
-def _demos_from_file(path: Path, dim, time_column, demo_column, dt, time_units, columns) -> list[Demonstration]:
+def _demos_from_file(path: Path, dim, time_column, demo_column, dt, time_units, columns):
+    """(the file's demonstrations, the names of their position columns: the header's, or None)."""
     table = _read_table(path)
     ti, di, pos_idx, vel_idx = _roles(table, dim, time_column, demo_column, dt, columns)
     name = None if ti is None or table.header is None else table.header[ti]
@@ -290,7 +292,9 @@ def _demos_from_file(path: Path, dim, time_column, demo_column, dt, time_units, 
                 demos.append(Demonstration.from_positions(t, pos, source))
             except DemonstrationError as exc:
                 raise DemonstrationError(f"{source}: {exc}") from exc
-    return demos
+    names = None if table.header is None else tuple(table.header[i] for i in pos_idx)
+    # names a model file, a plot or generated code could not carry (units_problem's rule) stay unnamed
+    return demos, names if names and all(n and not units_problem(n) for n in names) else None
 
 
 def _check_dt(dt) -> float | None:
@@ -309,8 +313,8 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
     """Load demonstrations from CSV or NPY files and check them (:func:`check_demonstrations`).
 
     Pose files (a header naming quaternion columns qw, qx, qy, qz, e.g. ``t,x,y,z,qw,qx,qy,qz``
-    or ``t,x,y,z,qx,qy,qz,qw``) give :class:`~sosdyn.lfd.data.poses.PoseDemonstrations` (read by
-    :func:`~sosdyn.lfd.data.poses.load_pose_demos`, for :class:`~sosdyn.PoseCDSP`) unless
+    or ``t,x,y,z,qx,qy,qz,qw``) give :class:`~sosdyn.lfd.data.pose.PoseDemonstrations` (read by
+    :func:`~sosdyn.lfd.data.pose.load_pose_demos`, for :class:`~sosdyn.PoseCDSP`) unless
     ``columns`` selects positions; then only ``dt``, ``time_units``, ``units`` and ``name`` apply.
 
     ``paths`` is one path or a sequence of paths. Each file holds one demonstration, except a
@@ -343,7 +347,8 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
     is given and they number ``2 * dim``: then the second half are velocities. Files without
     velocities get them from :func:`estimate_velocity`. Blank lines and lines starting with
     ``#`` are skipped. ``name`` defaults to the first file's stem. Errors name the file, the
-    line and how it was read (delimiter, decimal mark).
+    line and how it was read (delimiter, decimal mark). The set's ``columns`` are the first file's
+    header names of the positions (None without a header, or for names a model file cannot hold).
     """
     paths = [paths] if isinstance(paths, (str, Path)) else list(paths)
     if not paths:
@@ -357,15 +362,17 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
                          "Try: drop one of them.")
     if columns is None and any(map(is_pose_file, paths)):
         return _pose_demos(paths, dim, time_column, demo_column, dt, name, units, goal_tol, time_units)
-    demos = []
+    demos, names = [], []
     for path in map(Path, paths):
         if path.suffix.lower() not in (".csv", ".npy"):
             raise InputError(f"{path}: unsupported file type {path.suffix!r}; use .csv or .npy.")
         if not path.is_file():
             raise InputError(f"{path}: no such file.")
-        demos.extend(_demos_from_file(path, dim, time_column, demo_column, dt, time_units, columns))
+        found, named = _demos_from_file(path, dim, time_column, demo_column, dt, time_units, columns)
+        demos.extend(found)
+        names.append(named)
     name = Path(paths[0]).stem if name is None else name
-    return check_demonstrations(Demonstrations(demos, name, units), goal_tol=goal_tol)
+    return check_demonstrations(Demonstrations(demos, name, units, columns=names[0]), goal_tol=goal_tol)
 
 
 def _pose_demos(paths, dim, time_column, demo_column, dt, name, units, goal_tol, time_units) -> PoseDemonstrations:

@@ -1,6 +1,6 @@
 """Preprocessing of pose demonstrations: the steps of :mod:`.preprocess`, on both parts of the pose.
 
-:func:`preprocess_poses` runs, on :class:`~.poses.PoseDemonstrations` (training demonstrations only,
+:func:`preprocess_poses` runs, on :class:`~.pose.PoseDemonstrations` (training demonstrations only,
 so no test data leaks in):
 
 1. **resample** irregular time stamps (:func:`~.preprocess.resample_uniform`'s rule and grid):
@@ -13,11 +13,12 @@ so no test data leaks in):
 3. **smooth** (cubic Savitzky-Golay, ``"auto"``: :func:`~.preprocess.smoothing_window` of each part,
    the larger window for both): positions as :func:`~.preprocess.smooth`; orientations on the sphere in
    the log chart at R_g, R(t) = R_g exp(SG[r](t)), smooth wherever the demonstration stays away from
-   the cut locus (it must stay within 170 deg of R_g: :func:`~.poses.demo_chart`).
+   the cut locus (it must stay within 170 deg of R_g: :func:`~.pose.demo_chart`).
 4. **align ends**: positions by :func:`~.preprocess.align_ends` (``"auto"``: when the ends spread more
    than ALIGN_MIN of the diagonal; ``max_shift`` refuses), orientations by
-   :func:`~.poses.align_orientations` onto R_g (``goal_tol_deg`` refuses), both with the same smoothstep
-   over the last half of each demonstration.
+   :func:`~.pose.align_orientations` onto R_g (``goal_tol_deg`` refuses; None leaves them to
+   :meth:`~sosdyn.lfd.model.pose.PoseCDSP.fit`, which aligns them within its own tolerance), both with the
+   same smoothstep over the last half of each demonstration.
 
 Every demonstration keeps at least :data:`~.preprocess.MIN_WINDOW` samples; one that would not (a rest,
 a jump, a rest) is refused with a hint (DemonstrationError). :class:`PosePreprocessReport` says what
@@ -32,7 +33,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from sosdyn.errors import DemonstrationError, InputError
 from .demonstrations import Demonstration, Demonstrations, end_distances
-from .poses import (GOAL_TOL_DEG, PoseDemonstration, PoseDemonstrations, align_orientations, demo_chart,
+from .pose import (GOAL_TOL_DEG, PoseDemonstration, PoseDemonstrations, align_orientations, demo_chart,
                     from_chart, goal_orientation)
 from .preprocess import (ALIGN_MIN, MIN_WINDOW, REST_NOISE, PreprocessReport, align_ends,
                          noise_level, resample_uniform, rest_bounds, savgol_derivatives, smoothing_window,
@@ -102,9 +103,10 @@ def _check_length(demo, label: str) -> None:
 
 def preprocess_poses(demos: PoseDemonstrations, *, smooth_window: int | str | None = "auto", trim_rest: bool = True,
                      align: bool | str = "auto", max_shift: float | None = None,
-                     goal_tol_deg: float = GOAL_TOL_DEG) -> tuple[PoseDemonstrations, PosePreprocessReport]:
+                     goal_tol_deg: float | None = GOAL_TOL_DEG) -> tuple[PoseDemonstrations, PosePreprocessReport]:
     """Steps 1-4 of the module docstring: (PoseDemonstrations, PosePreprocessReport). The options
-    are :func:`~.preprocess.preprocess`'s, and ``goal_tol_deg`` bounds the end orientations."""
+    are :func:`~.preprocess.preprocess`'s, and ``goal_tol_deg`` bounds the end orientations (None: they
+    are not aligned here)."""
     if not isinstance(demos, PoseDemonstrations):
         raise InputError(f"preprocess_poses takes PoseDemonstrations, got {type(demos).__name__}. "
                          "Try: sosdyn.preprocess for position demonstrations.")
@@ -148,7 +150,7 @@ def preprocess_poses(demos: PoseDemonstrations, *, smooth_window: int | str | No
         aligned, shifts = align_ends(positions, max_shift)
         out = PoseDemonstrations([PoseDemonstration(d.t, a.pos, d.quat, d.source) for d, a in zip(out, aligned)],
                                  out.name, out.units, out.notes)
-    if align is not False:
+    if align is not False and goal_tol_deg is not None:
         out, turned = align_orientations(out, goal_orientation(out), goal_tol_deg)
     report = PreprocessReport(sigma, step, window, changed, trimmed, goal, shifts)
     return out, PosePreprocessReport(report, sigma_r, step_r, tuple(float(a) for a in turned))

@@ -172,7 +172,7 @@ def align_ends(demos, max_shift: float | None = None, fraction: float = BLEND_FR
         dx, dv = blend_shift(d.t, goal - d.pos[-1], fraction)
         out.append(Demonstration(d.t, d.pos + dx, d.vel + dv, d.source))
     return Demonstrations(out, getattr(demos, "name", ""), getattr(demos, "units", ""),
-                          getattr(demos, "goal_tol", None)), shifts
+                          getattr(demos, "goal_tol", None), getattr(demos, "columns", None)), shifts
 
 
 def preprocess(demos, *, smooth_window: int | str | None = "auto", trim_rest: bool = True,
@@ -207,7 +207,8 @@ def preprocess(demos, *, smooth_window: int | str | None = "auto", trim_rest: bo
     window = smoothing_window(kept) if smooth_window == "auto" else (
         None if smooth_window in ("off", None) else int(smooth_window))
     out = Demonstrations([smooth(d, window) if window else d for d in kept], name, units,
-                         getattr(demos, "goal_tol", None))     # the tolerance the set was accepted with
+                         getattr(demos, "goal_tol", None),      # the tolerance the set was accepted with
+                         getattr(demos, "columns", None))
     goal, spread = end_distances(out)
     shifts = np.zeros(len(out))
     if align is True or (align == "auto" and spread.max() > ALIGN_MIN * _diagonal(out)):

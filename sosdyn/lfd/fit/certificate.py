@@ -58,7 +58,7 @@ class CertificateReport:
     n_samples: int
     passed: bool
     checks: list = field(default_factory=list)
-    warp: dict | None = None        # a warped model's map check (:func:`~sosdyn.lfd.fit.warp.check_warp`)
+    warp: dict | None = None        # a warped model's map check (:func:`~sosdyn.lfd.fit.composite.check`)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -69,8 +69,9 @@ class CertificateReport:
                 f"max coefficient residual {self.max_coeff_residual:.2e}; sampled ({self.n_samples} "
                 f"states): max generalised eigenvalue {self.max_sampled_eig:.3e}, min eig M "
                 f"{self.min_metric_eig:.3e}" + ("" if w is None else
-                f"; warp: {w['n_maps']} maps, max Lipschitz number {w['max_lipschitz']:.4f} (< 1), sampled "
-                f"min singular value of J_phi {w['min_singular']:.3e} >= bound {w['singular_bound']:.3e}") +
+                f"; warp: {w['n_maps']} maps, max Lipschitz number {w['max_lipschitz']:.4f} (< 1)" +
+                ("" if "twist_shear" not in w else f", twist of shear bound K = {w['twist_shear']:.4g}") +
+                f", sampled min singular value of J_phi {w['min_singular']:.3e} >= bound {w['singular_bound']:.3e}") +
                 f" -> {'PASSED' if self.passed else 'FAILED'}")
 
 

@@ -164,8 +164,8 @@ def corrective_demonstration(X: np.ndarray, Xdot: np.ndarray, goal: np.ndarray, 
 
 
 def augmented(demos: Demonstrations, extra: list[Demonstration]) -> Demonstrations:
-    """The demonstrations followed by the pseudo-demonstrations ``extra`` (same name and units)."""
-    return Demonstrations(list(demos) + list(extra), demos.name, demos.units)
+    """The demonstrations followed by the pseudo-demonstrations ``extra`` (same name, units and columns)."""
+    return Demonstrations(list(demos) + list(extra), demos.name, demos.units, columns=demos.columns)
 
 
 __all__ = ["DIVERGED", "MAX_PAIRS", "MIN_DIST", "MIN_PAIRS", "REST_FRACTION", "REST_WINDOW",

@@ -15,6 +15,7 @@ from sosdyn.errors import InputError
 from sosdyn.sos import SOLVERS
 from .certificate import check_sample_count
 from .corrective import MIN_DIST, TAU
+from .twist import MAX_SHEAR
 from .warp import MATCHES, MAX_MAPS, TARGETS, WARP_DEFAULTS
 
 METHODS = ("alternating", "ica")
@@ -150,6 +151,8 @@ def warp_settings(warp) -> dict | None:
         bad("beta", "a number in (0, 1]")
     if not (number("decay") and 0 <= s["decay"] <= 1):
         bad("decay", "a number in [0, 1]")
+    if not (number("twist") and 0 <= s["twist"] <= MAX_SHEAR):
+        bad("twist", f"a number in [0, {MAX_SHEAR:g}] (the twist's shear bound K; 0: no twist)")
     if s["match"] not in MATCHES:
         bad("match", f"one of {MATCHES}")
     if s["target"] not in TARGETS:

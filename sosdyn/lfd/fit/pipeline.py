@@ -5,7 +5,8 @@ learned attributes):
 
 1. **warp candidates** (:func:`fit`): the parameter ``warp`` names one candidate ("none", or one
    fixed warp) or, for "auto", no warp and each :data:`~.warp.AUTO_WARPS`; a warped candidate's
-   bumps are fitted to the demonstrations in the data's units (:func:`warp_maps`, :mod:`.warp`);
+   bumps (and a twist, :mod:`.composite`) are fitted to the demonstrations in the data's units
+   (:func:`warp_maps`, :mod:`.warp`, :mod:`.twist`);
 2. **core fits** (:func:`candidate_fits`, :func:`fit_core`): one per distinct warp, plain
    (:func:`fit_plain`) or with corrective rounds (:func:`~.rounds.corrective_fits`). A plain fit:
    the samples scaled, z = (x - x*)/s (:func:`scaled_data`), warped, u = phi(z), udot = J_phi(z) zdot
@@ -13,7 +14,9 @@ learned attributes):
    (:func:`~.learner.learn`); the certificate (:func:`~.certificate.certify`) and its independent
    check (:func:`check_fit`), which must pass;
 3. **choice** (:func:`~.rounds.warp_choice`): among the certified candidates, the one whose Euler
-   rollouts from the training demonstrations' starts deviate least from them; all candidates'
+   rollouts from the training demonstrations' starts deviate least from them (when even that one
+   deviates by more than :data:`~.warp.ESCALATE` times the data's diagonal, the
+   :data:`~.warp.ESCALATE_WARPS` are fitted too and the choice is made again among all); all candidates'
    rollouts in one Euler loop (:func:`block_field`: every candidate's bumps per row, its weights
    in one log-sum-exp; each candidate stops by its own rest test), the same numbers as one loop
    per candidate. ``timings_`` of an "auto" fit add ``candidates_s`` (warps and core fits) and
@@ -42,7 +45,8 @@ from .gmm import (MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, f
 from .learner import History, Settings, learn, subsample
 from .params import resolve_seed, warp_settings
 from .rounds import corrective_fits, warp_choice
-from .warp import AUTO_WARPS, check_warp, fit_warp, jacobian, pull_back, pulled_back, stacked_maps
+from .composite import block_pull, check as check_warp, fit_composite, jacobian, pulled_back, z_units
+from .warp import AUTO_WARPS, ESCALATE, ESCALATE_WARPS
 
 
 class Fit:
@@ -64,18 +68,33 @@ def fit(demos: Demonstrations, params: dict, progress=None, t_start: float | Non
         core = fit_core(demos, warp_maps(demos, warp_settings(params["warp"])), params, progress, t_start)
         return Fit(**vars(core), warp_scores_={})
     score_steps(demos)                  # the scoring rollouts' size, checked before any fit
-    t0 = time.perf_counter()
-    fits = candidate_fits(demos, {"none": None, **AUTO_WARPS}, params, progress)
-    t1 = time.perf_counter()
-    kept, scores = warp_choice(fits, demos, block_field)
-    t2 = time.perf_counter()
+    spent = {"candidates_s": 0.0, "choice_s": 0.0}
+
+    def timed(key, step, *args):
+        t0 = time.perf_counter()
+        out = step(*args)
+        spent[key] += time.perf_counter() - t0
+        return out
+
+    fits = timed("candidates_s", candidate_fits, demos, {"none": None, **AUTO_WARPS}, params, progress)
+    kept, scores = timed("choice_s", warp_choice, fits, demos, block_field)
+    if min(v for name, v in scores.items() if fits[name] is kept) > ESCALATE * diagonal(demos):
+        fits.update(timed("candidates_s", candidate_fits, demos, ESCALATE_WARPS, params, progress))
+        kept, scores = timed("choice_s", warp_choice, fits, demos, block_field)
     return Fit(**dict(vars(kept), warp_scores_=scores, timings_=dict(
-        kept.timings_, total_s=t2 - t_start, candidates_s=t1 - t0, choice_s=t2 - t1)))
+        kept.timings_, total_s=time.perf_counter() - t_start, **spent)))
+
+
+def diagonal(demos: Demonstrations) -> float:
+    """The diagonal of the demonstrations' bounding box (data units)."""
+    X = demos.stacked()[0]
+    return float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
 
 
 def warp_maps(demos: Demonstrations, settings: dict | None):
-    """The warp (centers, vectors, sigmas; data units) fitted with ``settings`` (None: no warp)."""
-    return None if settings is None else fit_warp([(d.t, d.pos) for d in demos], demos.goal, settings)
+    """The warp (bumps, twist or None; data units, :func:`~.composite.fit_composite`) fitted with
+    ``settings`` (None: no warp)."""
+    return None if settings is None else fit_composite([(d.t, d.pos) for d in demos], demos.goal, settings)
 
 
 def candidate_fits(demos: Demonstrations, candidates: dict, params: dict, progress) -> dict:
@@ -85,7 +104,8 @@ def candidate_fits(demos: Demonstrations, candidates: dict, params: dict, progre
     fitted, fits = {}, {}
     for name, settings in candidates.items():
         maps = warp_maps(demos, settings)
-        key = None if maps is None else b"".join(np.ascontiguousarray(a).tobytes() for a in maps)
+        key = None if maps is None else b"".join(np.ascontiguousarray(a).tobytes()
+                                                 for a in (*maps[0], *(maps[1] or ())))
         if key not in fitted:
             try:
                 fitted[key] = fit_core(demos, maps, params, tagged(progress, warp=name), time.perf_counter())
@@ -145,6 +165,7 @@ def fit_plain(demos: Demonstrations, maps, params: dict, progress, t_start: floa
     timings["verify_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - t_start
     state = Fit(seed_=seed, dim_=demos.dim, goal_=goal, scale_=scale, dt_=sample_step(demos), units_=demos.units,
+                columns_=demos.columns,
                 warp_=warp, history_=history.rows, timings_=timings, n_components_=gmm.n_components,
                 mixture_=mixture_, field_exps_=fexps, metric_exps_=mexps, gmr_cost_=gmr_cost(gmm, U, Udot),
                 C_=C, W_=W, certificate_=certificate, verification_=verification,
@@ -174,23 +195,11 @@ def scaled_data(demos: Demonstrations, n_components, max_samples):
     return goal, scale, (X - goal) / scale, Xdot / scale
 
 
-def z_units(maps, goal, scale) -> dict | None:
-    """The warp ``maps`` (data units) in z-units: {"centers", "vectors", "sigmas"}; None without bumps."""
-    if maps is None or not len(maps[2]):
-        return None
-    return {"centers": (maps[0] - goal) / scale, "vectors": maps[1] / scale, "sigmas": maps[2] / scale}
-
-
-def maps_of(warp: dict):
-    """(centers, vectors, sigmas) of a z-unit warp dict."""
-    return warp["centers"], warp["vectors"], warp["sigmas"]
-
-
 def warped_data(Z, Zdot, warp):
     """(phi(z_i), J_phi(z_i) zdot_i) through the z-unit ``warp`` (the data itself for None)."""
     if warp is None:
         return Z, Zdot
-    U, J = jacobian(Z, *maps_of(warp), np.zeros(Z.shape[1]))
+    U, J = jacobian(Z, warp)
     return U, np.einsum("tij,tj->ti", J, Zdot)
 
 
@@ -235,13 +244,13 @@ def field_at(X, goal, scale, mixture, C, fexps, warp):
     s J_phi(z)^{-1} f(phi(z)), z = (x - goal) / s."""
     Z = (X - goal) / scale
     core = lambda U: core_field(U, mixture, C, fexps)       # noqa: E731
-    return (core(Z) if warp is None else pulled_back(Z, maps_of(warp), core)) * scale
+    return (core(Z) if warp is None else pulled_back(Z, warp, core)) * scale
 
 
 def block_field(fits: list):
     """``field(X, live)``: fit b's field (:func:`field_at`, at its own goal) on the b-th block of
     equal consecutive rows of X, for b in ``live``; the blocks' warps evaluated together
-    (:func:`~.warp.stacked_maps`, prepared once per set of live blocks by :func:`~.warp.pull_back`):
+    (:func:`~.composite.block_pull`, prepared once per set of live blocks):
     the same numbers as each fit's field on its block."""
     stacked = {}                    # per set of live blocks: (goal, scale, pull-back or None, core) of their rows
 
@@ -249,9 +258,8 @@ def block_field(fits: list):
         key = (tuple(live), rows)
         if key not in stacked:
             each = lambda a: np.repeat(np.array([a(fits[b]) for b in live], dtype=float), rows, axis=0)  # noqa: E731
-            maps = stacked_maps([None if fits[b].warp_ is None else maps_of(fits[b].warp_) for b in live], rows, n)
             stacked[key] = (each(lambda f: f.goal_), each(lambda f: f.scale_)[:, None],
-                            None if maps is None else pull_back(maps, rows * len(live)),
+                            block_pull([fits[b].warp_ for b in live], rows, n),
                             block_core([(fits[b].mixture_, fits[b].C_, fits[b].field_exps_) for b in live], rows))
         return stacked[key]
 
@@ -265,11 +273,11 @@ def block_field(fits: list):
 
 def check_fit(C, fexps, W, mexps, gamma, certificate, warp, n_samples: int, seed: int) -> CertificateReport:
     """The independent check: Gram matrices and the sampled contraction inequality
-    (:func:`~.certificate.check_certificate`), and with a warp its own check (:func:`~.warp.check_warp`)."""
+    (:func:`~.certificate.check_certificate`), and with a warp its own check (:func:`~.composite.check`)."""
     report = check_certificate(C, fexps, W, mexps, gamma, certificate, n_samples, seed)
     if warp is None:
         return report
-    checked = check_warp(maps_of(warp), n_samples, seed)
+    checked = check_warp(warp, n_samples, seed)
     return replace(report, warp=checked, passed=report.passed and checked["passed"])
 
 
@@ -279,4 +287,4 @@ def tagged(progress, **tag):
 
 
 __all__ = ["Fit", "block_field", "candidate_fits", "check_fit", "core_field", "core_fields", "field_at", "fit", "fit_core", "fit_plain",
-           "maps_of", "scaled_data", "tagged", "warp_maps", "warped_data", "z_units"]
+           "scaled_data", "tagged", "warp_maps", "warped_data"]

@@ -14,8 +14,9 @@ The estimator holds parameters and learned state; the mathematics is in function
 :mod:`.certificate` (certify and check), :mod:`.refine` (the mixture), :mod:`.gmm` (EM),
 :mod:`.warp` (the pre-warp), :mod:`.rounds` (fits made of several fits).
 
-Model files (:meth:`CDSP.save`, :func:`~.model_files.load_model`; the file in :mod:`.model_io`, its
-state in :mod:`.model_state`): loading validates every field and re-checks the certificate from the
+CDSP is the first-order family of the model interface (:mod:`.base`). Model files
+(:meth:`~.base.MotionModel.save`, :func:`~.files.load_model`; the file in :mod:`.fileformat`, its
+content in :mod:`.content`): loading validates every field and re-checks the certificate from the
 model's own coefficients with the library's DEFAULT_SAMPLES states. The certificate lives in
 z-coordinates and does not involve the weights h_k, so an edited goal, scale or mixture leaves
 it valid while changing the motion: only the checksum (accidents) or the keyed signature
@@ -26,32 +27,37 @@ from __future__ import annotations
 import inspect
 import time
 from numbers import Integral
-from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from sosdyn.errors import InputError, NotFittedError
+from sosdyn.errors import InputError, ModelFileError, NotFittedError
 from ..fit.certificate import DEFAULT_SAMPLES, CertificateReport
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
 from ..data.demonstrations import check_demonstrations
-from ..data.poses import PoseDemonstrations
-from ..fit.learner import reuse_steps
-from ..fit.params import MAX_SEED, PARAMS, check_params, check_solver, preset_params
-from ..fit.pipeline import check_fit, field_at, maps_of
+from ..data.pose import PoseDemonstrations
+from ..fit.learner import Settings, reuse_steps
+from ..fit.params import LEGACY_PARAMS, MAX_SEED, PARAMS, check_params, check_solver, preset_params, resolve_seed
+from ..fit.composite import maps_of, twist_of
+from ..fit.pipeline import check_fit, field_at
 from ..fit.pipeline import fit as fit_path
 from ..rollout import rollout as integrate
-from ..rollout.quality import reproduction_table
+from ..rollout.quality import HORIZON, reproduction_table
+from ..runtime.export_cpp import to_cpp
+from ..runtime.export_python import to_python
 from ..runtime.predictor import StatePredictor
 from ..runtime.states import as_state, as_states, check_max_speed, limit_speed
-from .fileformat import FORMAT, VERSION, write_model_file
-from .state import STATE_FIELDS, state_record
+from .base import Layout, MotionModel, Reproductions
+from .content import STATE_FIELDS, check_param_names, need, state_record, validate_state
+from .fileformat import FORMAT, VERSION
+from .reach import reach_box
 
 METRIC_PROX = 1e-2              # default proximal weight of the metric step (well-posed alternation)
 
 
-class CDSP:
-    """Learn a partially contracting dynamical system from demonstrations.
+class CDSP(MotionModel):
+    """Learn a partially contracting dynamical system from demonstrations: the first-order family of
+    the model interface (:class:`~.base.MotionModel`).
 
     **Parameters**
 
@@ -114,7 +120,8 @@ class CDSP:
     Numbers may be Python or numpy scalars (np.float32, np.int64); booleans are not numbers
     here. Every parameter is checked before any optimisation (InputError saying what to try).
 
-    Learned attributes end in ``_``: ``goal_``, ``scale_``, ``mixture_``, ``C_`` (K, n, m),
+    Learned attributes end in ``_``: ``goal_``, ``scale_``, ``units_``, ``columns_`` (the position
+    columns' names, None: unnamed), ``mixture_``, ``C_`` (K, n, m),
     ``W_`` (n, n, p), ``warp_`` (None or the bumps' z-unit centers, vectors, sigmas), ``history_``,
     ``certificate_``, ``verification_``, ``metric_collapse_``; set by ``fit`` only (not in a
     model file): ``warp_scores_`` (each "auto" candidate's training deviation, data units),
@@ -122,6 +129,7 @@ class CDSP:
     """
 
     name = "CDSP"
+    file_format, file_version = FORMAT, VERSION
 
     def __init__(self, n_components=8, metric_degree=0, field_degree=1, gamma=0.1, metric="learned",
                  solver="CLARABEL", solver_method="ica", max_iter=20, tol=1e-4, eps=1e-3,
@@ -220,21 +228,24 @@ class CDSP:
                              "within a few orders of magnitude of the demonstrations.")
         return V
 
-    def predictor(self, max_speed=None) -> StatePredictor:
+    def predictor(self, max_speed=None, **other) -> StatePredictor:
         """A fast one-state evaluator, ``step(x, goal=None) -> xdot`` (:mod:`~sosdyn.lfd.runtime.predictor`):
         ``goal`` moves the goal at run time; ``max_speed`` (data units / s) scales xdot by
         min(1, max_speed / |xdot|) (same paths and goal, ``docs/theory.md``)."""
+        self.refuse(other, "predictor")
         self._check_fitted()
         return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
-                              None if self.warp_ is None else maps_of(self.warp_), max_speed)
+                              None if self.warp_ is None else maps_of(self.warp_), max_speed,
+                              twist_of(self.warp_))
 
-    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None):
+    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None, **other):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.
 
         ``dt`` None means the model's ``dt_``; duration and dt are checked by the integrator, whose
         absolute tolerance is relative to the data's scale ``scale_`` (the same relative accuracy
         in any units) and whose work is bounded (``max_rollout_calls``, ``max_rollout_seconds``).
         ``max_speed``: the field scaled by min(1, max_speed / |xdot|), as ``predictor(max_speed=...)``."""
+        self.refuse(other, "rollout")
         self._check_fitted()
         x0 = as_state(x0, self.dim_, "x0")
         goal = self.goal_ if goal is None else as_state(goal, self.dim_, "goal")
@@ -264,15 +275,81 @@ class CDSP:
         return check_fit(self.C_, self.field_exps_, self.W_, self.metric_exps_, self.gamma, self.certificate_,
                          self.warp_, n_samples, seed)
 
-    def save(self, path, key=None) -> Path:
-        """Write the model to ``path`` (JSON, atomically): format, version, parameters, learned state,
-        checksum and, with ``key`` (bytes or str; default $SOSDYN_MODEL_KEY), an HMAC-SHA256 signature.
-        A failing save leaves any previous file intact. ``random_state`` is recorded as ``seed_``."""
+    def excursion_bound(self, x0, goal=None, **other) -> float:
+        """A certified bound on max_t |x(t) - goal| (data units) from x0: the farthest corner of the
+        reach box (:func:`~.reach.reach_box`); inf when the metric is not constant (no bound known)."""
+        self.refuse(other, "excursion_bound")
         self._check_fitted()
-        state = state_record({k: getattr(self, k) for k in STATE_FIELDS})
-        params = dict(self.get_params(), random_state=self.seed_)
-        return write_model_file({"format": FORMAT, "version": VERSION, "params": params, "state": state},
-                                path, key)
+        goal = self.goal_ if goal is None else as_state(goal, self.dim_, "goal")
+        box = reach_box(self, as_state(x0, self.dim_, "x0") - goal + self.goal_)
+        if box is None:
+            return float("inf")
+        lo, hi = (b[0] - self.goal_ for b in box)
+        return float(np.linalg.norm(np.maximum(-lo, hi)))
+
+    # ------------------------------------------------------------------ code, files, people
+    def to_python(self, max_speed=None, **other) -> str:
+        """Source of a standalone numpy module with ``predict(X, goal=None)`` (:mod:`~sosdyn.lfd.runtime.export_python`)."""
+        self.refuse(other, "to_python")
+        return to_python(self, max_speed)
+
+    def to_cpp(self, namespace=None, max_speed=None, **other) -> str:
+        """Source of a header-only C++17 evaluator ``bool predict(const double* x, double* xdot, const
+        double* goal = nullptr)`` in ``namespace`` (default cdsp_model; :mod:`~sosdyn.lfd.runtime.export_cpp`)."""
+        self.refuse(other, "to_cpp")
+        return to_cpp(self, "cdsp_model" if namespace is None else namespace, max_speed)
+
+    def content(self) -> dict:
+        """Parameters (``random_state`` recorded as ``seed_``) and the learned state (:mod:`.content`)."""
+        self._check_fitted()
+        return {"params": dict(self.get_params(), random_state=self.seed_),
+                "state": state_record({k: getattr(self, k) for k in STATE_FIELDS})}
+
+    @classmethod
+    def from_content(cls, content: dict) -> CDSP:
+        """A CDSP (not yet verified) from a file's content; ModelFileError naming the first bad field."""
+        params = dict(LEGACY_PARAMS, **need(content, "params", "", dict))   # files older than a parameter
+        check_param_names(params, PARAMS)
+        model = cls(**params)
+        try:
+            check_params(params, DEFAULTS)
+        except InputError as exc:
+            raise ModelFileError(f"invalid params: {exc}") from None
+        model.seed_ = resolve_seed(model.random_state)
+        metric_degree = Settings.from_params(params).learned_metric_degree
+        state = validate_state(need(content, "state", "", dict), model.n_components, model.field_degree,
+                               metric_degree, 0.5 * model.eps)
+        model.__dict__.update(state)
+        return model
+
+    def layout(self) -> Layout:
+        names = self.names()
+        return Layout(names, (names,), names, names)
+
+    def reproductions(self, demos=None, duration=None) -> Reproductions:
+        """Rollouts from the demonstrations' first states (without: from the mixture's means), each for
+        ``duration`` s (default HORIZON x its demo's duration; 10 s without demos)."""
+        self._check_fitted()
+        starts = [d.pos[0] for d in demos] if demos else list(self.goal_ + self.scale_ * self.mixture_.means)
+        spans = [duration or HORIZON * d.duration for d in demos] if demos else [duration or 10.0] * len(starts)
+        runs = [self.rollout(x0, T) for x0, T in zip(starts, spans)]
+        return Reproductions(list(demos or []), runs, self.goal_, self.names(), self.units_,
+                             self.predict if self.dim_ == 2 else None)
+
+    def summary(self) -> list[str]:
+        """The certificate's numbers; the warp and how it was chosen."""
+        self._check_fitted()
+        r = self.verification_
+        lines = [f"min Gram eigenvalue {r.min_gram_eig:.2e}, max sampled generalised eigenvalue "
+                 f"{r.max_sampled_eig:.2e} over {r.n_samples} states"]
+        if self.warp_ is not None:
+            lines.append(f"warp: {r.warp['n_maps']} maps, max Lipschitz number {r.warp['max_lipschitz']:.3f} (< 1)")
+        scores = getattr(self, "warp_scores_", {})
+        if len(scores) > 1:          # the lowest training deviation is kept (ties: the first, as warp_choice)
+            listed = "; ".join(f"{name} {score:.4g}" for name, score in scores.items())
+            lines.append(f"warp candidates, training deviation (lower is better): {listed} -> kept "
+                         f"{min(scores, key=scores.get)} (the lowest)")
+        return lines
 
     @property
     def n_iter_(self) -> int:

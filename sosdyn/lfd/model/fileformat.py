@@ -1,7 +1,7 @@
 """Model files: plain JSON (no pickle), checksummed, optionally signed, written atomically.
 
 This module knows the file, not the estimator: its content is a dict whose ``state`` is
-checked field by field by :mod:`sosdyn.lfd.model.state`. A file is one JSON object::
+checked field by field by :mod:`sosdyn.lfd.model.content`. A file is one JSON object::
 
     format       "sosdyn-cdsp"
     version      2

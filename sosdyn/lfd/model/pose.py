@@ -1,7 +1,8 @@
-"""PoseCDSP: a certified model of position and orientation as two certified blocks (docs/theory.md, "Poses").
+"""PoseCDSP: a certified model of position and orientation as two certified blocks (docs/theory.md, "Poses");
+the pose family of the model interface (:class:`~.base.MotionModel`).
 
 The pose (x, R) is carried by the chart state s = (x, r), r = log(R_g^T R) the rotation vector of the
-orientation from the goal orientation R_g (:func:`~sosdyn.lfd.data.poses.chart`). The model is
+orientation from the goal orientation R_g (:func:`~sosdyn.lfd.data.pose.chart`). The model is
 
     xdot = F_x(x)        the certified CDSP of the positions (``position_``, as a position model),
     rdot = F_r(r)        a CDSP of r in the identity metric (``orientation_``, :mod:`~sosdyn.lfd.fit.pose`),
@@ -13,11 +14,11 @@ in the chart (|r| < pi, any orientation but the exact half turn, which has two l
 either) never leaves it: every start converges, with no refusal. A block that does not move in the
 demonstrations is fitted as a still block (:func:`~sosdyn.lfd.fit.pose.still_block`, ``still_``).
 
-The predictor evaluates one pose in plain floats (:mod:`~sosdyn.lfd.runtime.pose_step`, the same formulas).
+The predictor evaluates one pose in plain floats (:mod:`~sosdyn.lfd.runtime.pose`, the same formulas).
 
 Rollout: the chart state is integrated (the CDSP's integrator, absolute tolerance relative to each
 block's scale) and mapped by R = R_g exp(r): unit quaternions by construction. Velocities: v = xdot,
-and the world angular velocity omega = R J_r(r) rdot (:func:`~sosdyn.lfd.data.poses.body_velocity`).
+and the world angular velocity omega = R J_r(r) rdot (:func:`~sosdyn.lfd.runtime.pose.body_velocity`).
 A goal pose (x_g', R_g') translates the position field and moves the chart: r' = log(R_g'^T R).
 
 Speed limits (``max_speed`` on |v|, data units / s; ``max_angular_speed`` on |omega|, rad / s): the
@@ -32,40 +33,42 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from sosdyn.errors import InputError, NotFittedError
-from ..data.poses import (GOAL_TOL_DEG, PoseDemonstrations, align_orientations, body_velocity, chart, from_chart,
-                          goal_orientation, split_demonstrations)
+from sosdyn.errors import InputError, ModelFileError, NotFittedError
+from ..data.pose import (GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart, from_chart, goal_orientation,
+                         split_demonstrations)
+from ..data.pose_preprocess import preprocess_poses
+from ..fit.params import preset_params
 from ..fit.pose import check_moves, isotropic_demonstrations, orientation_params, still_block
 from ..rollout import ATOL_REL, rollout as integrate
-from ..runtime.pose_step import body_velocity_one, chart_one, rotate_one
-from ..runtime.states import check_max_speed, speed_factor
+from ..rollout.quality import HORIZON
+from ..runtime.pose import (body_velocity_one, chart_one, check_limits, pose_speed_factor, pose_to_cpp, pose_to_python,
+                            rotate_one)
+from ..runtime.states import speed_factor
+from .base import Layout, MotionModel, Reproductions
 from .cdsp import CDSP, DEFAULTS
-from .fileformat import write_model_file
-from .pose_export import pose_to_cpp, pose_to_python
+from .content import BLOCKS, POSE_FORMAT, POSE_VERSION, pose_fields
 from .pose_score import pose_reproduction_table
-from .reach import reach_box
-from .state import STATE_FIELDS, state_record
+from .reach import metric_matrix, reach_box
 
-POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 2
-BLOCKS = ("position", "orientation")
-
-
-def pose_speed_factor(R, Sdot, max_speed, max_angular_speed) -> np.ndarray:
-    """lambda = min(1, v_max / |v|, w_max / |omega|) (m, 1) at the rotation vectors R (m, 3) for the chart
-    velocities Sdot (m, 6): v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| (R orthogonal)."""
-    w = body_velocity(R, Sdot[:, 3:])
-    return np.minimum(speed_factor(Sdot[:, :3], max_speed), speed_factor(w, max_angular_speed))
+#: The numbers of a pose (a start, a goal, a rollout row) and of a push (a world rotation vector w).
+POSE_NAMES = ("x", "y", "z", "qw", "qx", "qy", "qz")
+PUSH_NAMES = ("dx", "dy", "dz", "wx", "wy", "wz")
 
 
 @dataclass
 class PoseTrajectory:
-    """A pose rollout: ``t`` (T,), ``pos`` (T, 3), ``quat`` (T, 4 unit, w x y z), ``goal`` (T, 7): the goal
-    pose in effect at each sample."""
+    """A pose rollout: ``t`` (T,), ``pos`` (T, 3), ``quat`` (T, 4 unit, w x y z), ``goal_history`` (T, 7): the
+    goal pose in effect at each sample."""
 
     t: np.ndarray
     pos: np.ndarray
     quat: np.ndarray
-    goal: np.ndarray
+    goal_history: np.ndarray | None = None
+
+    @property
+    def states(self) -> np.ndarray:
+        """The rows (x, y, z, qw, qx, qy, qz), (T, 7)."""
+        return np.hstack([self.pos, self.quat])
 
 
 @dataclass(frozen=True)
@@ -83,7 +86,7 @@ class PoseCertificateReport:
         return f"position: {self.position}\norientation (identity metric: the angle never increases): {self.orientation}"
 
 
-class PoseCDSP:
+class PoseCDSP(MotionModel):
     """Learn a certified pose motion (position and orientation) from :class:`PoseDemonstrations`.
 
     ``goal_tol_deg``: end orientations further than this from their chordal mean are refused (nearer
@@ -97,6 +100,8 @@ class PoseCDSP:
     """
 
     name = "PoseCDSP"
+    file_format, file_version = POSE_FORMAT, POSE_VERSION
+    columns_ = None             # pose files are read by their own header rule (x, y, z and a quaternion)
 
     def __init__(self, goal_tol_deg: float = GOAL_TOL_DEG, **cdsp_params):
         if isinstance(goal_tol_deg, bool) or not isinstance(goal_tol_deg, (int, float)) or \
@@ -112,12 +117,27 @@ class PoseCDSP:
         CDSP(**cdsp_params).check_params()
 
     def get_params(self) -> dict:
-        return {"goal_tol_deg": self.goal_tol_deg, **self.cdsp_params}
+        return {"goal_tol_deg": self.goal_tol_deg, **CDSP(**self.cdsp_params).get_params()}
+
+    @classmethod
+    def preset(cls, name: str, **overrides) -> PoseCDSP:
+        """An unfitted pose model whose blocks have the CDSP preset ``name``, then ``overrides``."""
+        return cls(**{**preset_params(name), **overrides})
+
+    @classmethod
+    def prepare(cls, demos, smooth_window="auto", trim_rest=True, align="auto", max_shift=None):
+        """(demos preprocessed, notes, []): :func:`~sosdyn.lfd.data.pose_preprocess.preprocess_poses` on both
+        parts (the end orientations are left to :meth:`fit`, which aligns them within ``goal_tol_deg``), and
+        what reading changed (renormalised quaternions, sign flips)."""
+        result, report = preprocess_poses(demos, smooth_window=smooth_window, trim_rest=trim_rest, align=align,
+                                          max_shift=max_shift, goal_tol_deg=None)
+        read = [f"read: {n}" for n in demos.notes if "renormalised" in n or "sign-flipped" in n]
+        return result, read + [f"preprocess: {line}" for line in report.lines(demos.units)], []
 
     def __repr__(self) -> str:
-        """``PoseCDSP(goal_tol_deg=20.0, ...)``; fitted, also the goal pose, each block's components and
-        whether the certificates passed."""
-        args = [f"{k}={v!r}" for k, v in self.get_params().items()]
+        """``PoseCDSP(goal_tol_deg=20.0, ...)``: the parameters given; fitted, also the goal pose, each
+        block's components and whether the certificates passed."""
+        args = [f"goal_tol_deg={self.goal_tol_deg:g}"] + [f"{k}={v!r}" for k, v in self.cdsp_params.items()]
         if hasattr(self, "position_"):
             blocks = ", ".join(f"{b}: " + (f"still (rate {self.still_[b]:.3g}/s)" if self.still_[b] else
                                           f"K={getattr(self, b + '_').C_.shape[0]}") for b in BLOCKS)
@@ -129,7 +149,7 @@ class PoseCDSP:
     def fit(self, demos: PoseDemonstrations) -> PoseCDSP:
         """Goal orientation, aligned end orientations, then the two certified blocks (module docstring)."""
         if not isinstance(demos, PoseDemonstrations):
-            raise InputError(f"PoseCDSP.fit takes PoseDemonstrations (sosdyn.lfd.data.poses.load_pose_demos), "
+            raise InputError(f"PoseCDSP.fit takes PoseDemonstrations (sosdyn.lfd.data.pose.load_pose_demos), "
                              f"got {type(demos).__name__}.")
         goal_quat = goal_orientation(demos)
         aligned, self.orientation_moved_deg_ = align_orientations(demos, goal_quat, self.goal_tol_deg)
@@ -180,6 +200,22 @@ class PoseCDSP:
     def verification_(self) -> PoseCertificateReport:
         return PoseCertificateReport(self.position_.verification_, self.orientation_.verification_)
 
+    @property
+    def history_(self) -> list:
+        """Both blocks' convex steps (position, then orientation)."""
+        return [*self.position_.history_, *self.orientation_.history_]
+
+    def accept(self, report: PoseCertificateReport) -> None:
+        """Record the check a loaded file passed, block by block."""
+        self.position_.accept(report.position)
+        self.orientation_.accept(report.orientation)
+
+    def names(self) -> tuple[str, ...]:
+        return POSE_NAMES[:3]
+
+    def layout(self) -> Layout:
+        return Layout(POSE_NAMES, (PUSH_NAMES,), POSE_NAMES, POSE_NAMES)
+
     @staticmethod
     def _pose(p, what: str) -> tuple[np.ndarray, np.ndarray]:
         """(x, unit q) of a pose p = (x, y, z, qw, qx, qy, qz); InputError if not 7 finite numbers with a
@@ -216,11 +252,12 @@ class PoseCDSP:
         return np.hstack([self.position_.field(S[:, :3], goal_pos), self.orientation_.field(S[:, 3:], np.zeros(3))])
 
     # ------------------------------------------------------------------ motion
-    def predictor(self, goal=None, max_speed=None, max_angular_speed=None):
+    def predictor(self, max_speed=None, max_angular_speed=None, goal=None, **other):
         """``step(x, quat, goal=None) -> (v, omega)``: linear velocity (3,) and world angular velocity
         (3,) at the position x and orientation quat (w x y z), for the goal pose (7-vector; default
         the model's, fixed here or per call); both scaled by one factor so that |v| <= max_speed and
         |omega| <= max_angular_speed (rad/s) when given. Every input is checked (InputError)."""
+        self.refuse(other, "predictor")
         self._check_fitted()
         fixed = self._goal(goal)
         limits = self._limits(max_speed, max_angular_speed)
@@ -239,21 +276,28 @@ class PoseCDSP:
 
     @staticmethod
     def _limits(max_speed, max_angular_speed) -> tuple:
-        return (check_max_speed(max_speed), check_max_speed(max_angular_speed, "max_angular_speed", "rad/s"))
+        return check_limits(max_speed, max_angular_speed)
 
-    def rollout(self, p0, duration, dt=None, goal=None, pushes=(), goal_changes=(), max_speed=None,
-                max_angular_speed=None) -> PoseTrajectory:
-        """Integrate from the pose p0 = (x, y, z, qw, qx, qy, qz) for ``duration`` s; ``pushes``
+    def predict(self, X, Q):
+        """(v, omega), (m, 3) each, at positions X (m, 3) and orientations Q (m, 4, w x y z): :meth:`predictor`'s."""
+        step = self.predictor()
+        rows = [step(x, q) for x, q in zip(np.atleast_2d(X), np.atleast_2d(Q))]
+        return np.array([v for v, _ in rows]), np.array([w for _, w in rows])
+
+    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None,
+                max_angular_speed=None, **other) -> PoseTrajectory:
+        """Integrate from the pose x0 = (x, y, z, qw, qx, qy, qz) for ``duration`` s; ``perturbations`` (pushes)
         [(t, (dx, dy, dz, wx, wy, wz))]: x += dx and R <- exp(w) R (world rotation vector);
         ``goal_changes`` [(t, goal pose)]. Between events the chart state at the goal in effect is
         integrated and mapped back (module docstring). ``max_speed`` / ``max_angular_speed``: as
         :meth:`predictor` (the same paths, traversed more slowly)."""
+        self.refuse(other, "rollout")
         self._check_fitted()
         limits = self._limits(max_speed, max_angular_speed)
-        x, q = self._pose(p0, "p0")
+        x, q = self._pose(x0, "x0")
         gx, gq = self._goal(goal)
         try:
-            events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in pushes] +
+            events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in perturbations] +
                             [(float(t), 1, np.concatenate(self._pose(g, "goal change"))) for t, g in goal_changes],
                             key=lambda e: e[:2])
         except (TypeError, ValueError):
@@ -289,17 +333,18 @@ class PoseCDSP:
         return integrate(field, np.concatenate([x, chart(q, gq)[0]]), duration=duration,
                          dt=self.dt_ if dt is None else dt, goal=np.concatenate([gx, np.zeros(3)]), atol=atol)
 
-    def excursion_bound(self, p0, goal=None) -> float | None:
-        """The certified bound on max_t |x(t) - x_g| (data units) from the pose p0: the farthest point of
-        the position block's reach box (:func:`~sosdyn.lfd.model.reach.reach_box`; None without a certified
+    def excursion_bound(self, x0, goal=None, **other) -> float:
+        """The certified bound on max_t |x(t) - x_g| (data units) from the pose x0: the farthest point of
+        the position block's reach box (:func:`~sosdyn.lfd.model.reach.reach_box`; inf without a certified
         constant metric). The angle from the goal orientation is bounded by its start value (module
         docstring)."""
+        self.refuse(other, "excursion_bound")
         self._check_fitted()
-        x, _ = self._pose(p0, "p0")
+        x, _ = self._pose(x0, "x0")
         gx, _ = self._goal(goal)
         box = reach_box(self.position_, (x - gx + self.goal_pos_)[None]) if self.position_.certified_ else None
         if box is None:
-            return None
+            return float("inf")
         lo, hi = box[0][0] - self.goal_pos_, box[1][0] - self.goal_pos_
         return float(np.linalg.norm(np.maximum(np.abs(lo), np.abs(hi))))
 
@@ -312,28 +357,82 @@ class PoseCDSP:
             raise InputError(f"PoseCDSP.score takes PoseDemonstrations, got {type(demos).__name__}.")
         return pose_reproduction_table(self, demos)
 
+    def reproductions(self, demos=None, duration=None) -> Reproductions:
+        """Rollouts from the pose demonstrations' first poses, each for ``duration`` s (default HORIZON x its
+        demo's duration); without pose demonstrations InputError (a pose model starts from poses)."""
+        self._check_fitted()
+        if not isinstance(demos, PoseDemonstrations):
+            raise InputError("a pose model is drawn with the pose demonstrations it starts from. Try: --demos "
+                             "with pose CSVs (t,x,y,z,qw,qx,qy,qz), e.g. the files it was fitted to.")
+        runs = [self.rollout(np.concatenate([d.pos[0], d.quat[0]]), duration or HORIZON * d.duration) for d in demos]
+        return Reproductions(list(demos), runs, self.goal_pos_, self.names(), self.units_)
+
     # ------------------------------------------------------------------ evidence and files
     def verify(self, n_samples=None, seed=None) -> PoseCertificateReport:
         """Each block's certificate check (:meth:`CDSP.verify`)."""
         self._check_fitted()
         return PoseCertificateReport(self.position_.verify(n_samples, seed), self.orientation_.verify(n_samples, seed))
 
-    def save(self, path, key=None):
-        """The pose model file: the goal orientation, the still rates, and each block's params and state."""
+    def summary(self) -> list[str]:
+        """Both blocks' certificate numbers, still blocks, and how far the end orientations were aligned."""
         self._check_fitted()
-        blocks = {b: {"params": dict(m.get_params(), random_state=m.seed_),
-                      "state": state_record({k: getattr(m, k) for k in STATE_FIELDS})}
-                  for b, m in (("position", self.position_), ("orientation", self.orientation_))}
-        content = {"format": POSE_FORMAT, "version": POSE_VERSION, "goal_tol_deg": self.goal_tol_deg,
-                   "goal_quat": self.goal_quat_, "still": self.still_, **blocks}
-        return write_model_file(content, path, key)
+        pos, ori = self.position_.summary(), self.orientation_.summary()
+        lines = [f"position block: {pos[0]}; orientation block (identity metric: the angle to the goal "
+                 f"orientation never increases): {ori[0]}", *pos[1:]]
+        lines += [f"the {block} does not move in the demonstrations: it is held at the goal (returns at rate "
+                  f"{rate:.3g}/s if pushed)" for block, rate in self.still_.items() if rate is not None]
+        if hasattr(self, "orientation_moved_deg_"):
+            moved = ", ".join(f"{a:.2g}" for a in self.orientation_moved_deg_)
+            lines.append(f"end orientations aligned onto their chordal mean by {moved} deg (refused beyond "
+                         f"goal_tol_deg {self.goal_tol_deg:g})")
+        return lines
 
-    def export(self, target: str = "python", max_speed=None, max_angular_speed=None, namespace="pose_model") -> str:
-        """The standalone source for ``target``: "python" (:func:`~.pose_export.pose_to_python`) or "cpp"
-        (:func:`~.pose_export.pose_to_cpp`, in ``namespace``)."""
+    def content(self) -> dict:
+        """The pose model file's fields (:mod:`.content`): the goal orientation, the still rates and each
+        block's params and state."""
         self._check_fitted()
-        if target == "python":
-            return pose_to_python(self, max_speed, max_angular_speed)
-        if target == "cpp":
-            return pose_to_cpp(self, namespace, max_speed, max_angular_speed)
-        raise InputError(f"unknown export target {target!r:.40}. Try: python or cpp.")
+        return {"goal_tol_deg": self.goal_tol_deg, "goal_quat": self.goal_quat_, "still": self.still_,
+                "position": self.position_.content(), "orientation": self.orientation_.content()}
+
+    @classmethod
+    def from_content(cls, content: dict) -> PoseCDSP:
+        """A pose model (not yet verified) from a file's content: :func:`~.content.pose_fields`, each block a
+        CDSP's content, the orientation block the identity-metric, goal-0, warp-free CDSP the angle needs."""
+        goal_quat, still, tol = pose_fields(content)
+        blocks = {}
+        for block in BLOCKS:
+            try:
+                blocks[block] = CDSP.from_content(content[block])
+            except ModelFileError as exc:
+                raise ModelFileError(f"{block}: {exc}") from None
+        params = {k: v for k, v in blocks["position"].get_params().items()
+                  if k != "progress" and not (v is DEFAULTS[k] or v == DEFAULTS[k])}
+        model = cls(tol, **params)
+        model.position_, model.orientation_ = blocks["position"], blocks["orientation"]
+        check_orientation_block(model.orientation_, model.position_)
+        model.goal_quat_, model.still_ = goal_quat, still
+        return model
+
+    def to_python(self, max_speed=None, max_angular_speed=None, **other) -> str:
+        """A standalone module with ``predict_pose(x, quat, goal=None) -> (v, omega)`` (:func:`~sosdyn.lfd.runtime.pose.pose_to_python`)."""
+        self.refuse(other, "to_python")
+        self._check_fitted()
+        return pose_to_python(self, max_speed, max_angular_speed)
+
+    def to_cpp(self, namespace=None, max_speed=None, max_angular_speed=None, **other) -> str:
+        """A header-only C++17 ``NS_pose::predict_pose(x, quat, v, omega, goal)`` (:func:`~sosdyn.lfd.runtime.pose.pose_to_cpp`)."""
+        self.refuse(other, "to_cpp")
+        self._check_fitted()
+        return pose_to_cpp(self, "pose_model" if namespace is None else namespace, max_speed, max_angular_speed)
+
+
+def check_orientation_block(orientation: CDSP, position: CDSP) -> None:
+    """ModelFileError unless the orientation block is a 3-D CDSP with the identity metric (``metric`` and
+    its W), no warp and goal exactly 0, and the position block is 3-D (the angle argument, docs/theory.md)."""
+    M = metric_matrix(orientation)
+    if orientation.metric != "identity" or orientation.warp_ is not None or orientation.dim_ != 3 or \
+            position.dim_ != 3 or M is None or not np.array_equal(M, M[0, 0] * np.eye(3)) or \
+            np.any(orientation.goal_ != 0.0):
+        raise ModelFileError("malformed: the orientation block must be a 3-D CDSP with the identity metric, no warp "
+                             "and goal 0 (the angle to the goal orientation then never increases), and the position "
+                             "block 3-D")

@@ -7,7 +7,7 @@ its duration, then per demonstration
 * ``mean_dev`` / ``max_dev``: distance from each demo position to the nearest reproduction position
   (:func:`~sosdyn.lfd.rollout.quality.deviation`, data units);
 * ``mean_dev_deg`` / ``max_dev_deg``: geodesic angle from each demo orientation to the nearest
-  reproduction orientation (:func:`~sosdyn.lfd.data.poses.angle_matrix`, degrees);
+  reproduction orientation (:func:`~sosdyn.lfd.data.pose.angle_matrix`, degrees);
 * ``arrival_s``: the first time within GOAL_FRACTION of the positions' diagonal (STILL_RELATIVE of their
   magnitude for positions that do not move) of the goal position and
   within ANGLE_TOL_DEG of the goal orientation (inf: not within the horizon);
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..data.poses import angle_matrix, chart, from_chart
+from ..data.pose import angle_matrix, chart, from_chart
 from ..rollout import euler_until_rest
 from ..fit.pose import STILL_RELATIVE
 from ..rollout.quality import GOAL_FRACTION, HORIZON, deviation

@@ -7,8 +7,12 @@ system u' = sum_k h_k f_k(u) (u = z, or u = phi(z) with a warp; z = (x - goal) /
 trajectory from u0 stays in the ellipsoid E = {u^T M u <= V0}, V0 = u0^T M u0, whose extent
 along coordinate i is |u_i| <= r_i = sqrt(V0 (M^-1)_ii). A warp moves a point by
 z - phi(z) = -sum_j t_j v_j with t_j = rho_j(.) - rho_j(0) in [-rho_j(0), 1 - rho_j(0)], so
-z_i lies in [u_i + d_lo_i, u_i + d_hi_i] with d_lo_i / d_hi_i the sums over the maps of the
-smaller / larger of rho_j(0) v_ji and -(1 - rho_j(0)) v_ji. Hence, for all t,
+z_i lies in [w_i + d_lo_i, w_i + d_hi_i] (w = B(z), the bumps' image) with d_lo_i / d_hi_i the
+sums over the maps of the smaller / larger of rho_j(0) v_ji and -(1 - rho_j(0)) v_ji. Without a
+twist w = u, |w_i| <= r_i; with one (:mod:`~sosdyn.lfd.fit.twist`), w = R(-alpha) u rotates u in
+the plane P = [p; q] by an unknown angle, so w_i = e_i^T (I - P^T P) u + (rotated in-plane part)
+and |w_i| <= r_i = sqrt(V0 (Q M^-1 Q)_ii) + |P e_i| sqrt(V0 lambda_max(P M^-1 P^T)), Q = I - P^T P.
+Hence, for all t,
 
     x(t) in [goal + scale (-r + d_lo), goal + scale (r + d_hi)]          (:func:`reach_box`),
 
@@ -21,8 +25,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..fit.contraction import constant_index, eval_metric
-from ..fit.pipeline import maps_of
-from ..fit.warp import apply as warp_apply, bumps_at
+from ..fit.composite import apply as warp_apply, maps_of, twist_of
+from ..fit.warp import bumps_at
 
 
 def metric_matrix(model) -> np.ndarray | None:
@@ -54,8 +58,16 @@ def reach_box(model, X0) -> tuple[np.ndarray, np.ndarray] | None:
     if model.warp_ is None:
         U, d_lo, d_hi = Z, np.zeros(n), np.zeros(n)
     else:
-        U = warp_apply(Z, *maps_of(model.warp_), np.zeros(n))
+        U = warp_apply(Z, model.warp_)
         d_lo, d_hi = warp_shift(*maps_of(model.warp_))
     level = np.maximum(np.einsum("ki,ij,kj->k", U, M, U), 0.0)
-    r = np.sqrt(level[:, None] * np.diag(np.linalg.inv(M))[None])
+    Minv, twist = np.linalg.inv(M), twist_of(model.warp_)
+    if twist is None:
+        r = np.sqrt(level[:, None] * np.diag(Minv)[None])
+    else:
+        P = twist[0]
+        Q = np.eye(n) - P.T @ P
+        reach = np.sqrt(np.maximum(np.diag(Q @ Minv @ Q), 0.0)) + \
+            np.linalg.norm(P, axis=0) * np.sqrt(np.linalg.eigvalsh(P @ Minv @ P.T).max())
+        r = np.sqrt(level)[:, None] * reach[None]
     return model.goal_ + model.scale_ * (d_lo - r), model.goal_ + model.scale_ * (d_hi + r)

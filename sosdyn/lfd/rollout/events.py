@@ -39,6 +39,11 @@ class Trajectory:
     events: list[dict] = field(default_factory=list)
     vel: np.ndarray | None = None
 
+    @property
+    def states(self) -> np.ndarray:
+        """The rows a model's rollout reports (the positions; a pose rollout adds its quaternions)."""
+        return self.pos
+
 
 def as_vector(value, n: int | None, what: str) -> np.ndarray:
     """``value`` as a finite float vector (of shape (n,) unless n is None); InputError otherwise."""
@@ -135,3 +140,20 @@ def parse_events(perturbations, goal_changes, n: int, duration: float) -> list[t
     events = _event_list(goal_changes, n, duration, "goal_change") + _event_list(perturbations, n, duration, "push")
     events.sort(key=lambda e: e[0])
     return events
+
+
+def lifted(items, n: int, kind: str, sizes: tuple, size: int) -> list:
+    """``[(time, vector)]`` with vectors of a length in ``sizes`` (n: position, 2n: position and
+    velocity), padded with zeros to a state of ``size`` numbers, such as a second-order model's (x, v, b);
+    InputError naming a bad pair (times are checked by the integrator's :func:`parse_events`)."""
+    try:
+        pairs = [(t, as_vector(v, None, f"{kind} {i} vector")) for i, (t, v) in enumerate(items)]
+    except InputError:
+        raise
+    except (TypeError, ValueError):
+        raise InputError(f"{kind}s must be a list of pairs (time, vector), got {items!r}.") from None
+    bad = [i for i, (_, v) in enumerate(pairs) if v.size not in sizes]
+    if bad:
+        raise InputError(f"{kind} {bad[0]} vector has {pairs[bad[0]][1].size} entries; expected "
+                         + (f"{n} (position) or {2 * n} (position and velocity)." if len(sizes) > 1 else f"{n}."))
+    return [(t, np.concatenate([v, np.zeros(size - v.size)])) for t, v in pairs]

@@ -10,7 +10,8 @@ Array functions on one reproduction ``path`` (T, n) sampled every ``dt`` seconds
 * final error: ``||path_T - goal||``.
 
 :func:`reproduction_table` rolls a field out from every demonstration's first sample for twice
-its duration and returns one row per demonstration (``CDSP.score`` and ``sosdyn fit``).
+its duration and returns one row per demonstration (:func:`reproduction_rows`, which scores
+reproductions made otherwise too: every model family's ``score`` and ``sosdyn fit``).
 """
 
 from __future__ import annotations
@@ -55,17 +56,27 @@ def box_excursion(box_lo: np.ndarray, box_hi: np.ndarray, lo: np.ndarray, hi: np
     return np.linalg.norm(worst, axis=1) / max(np.linalg.norm(hi - lo), np.finfo(float).tiny)
 
 
-def reproduction_table(field: Callable[[np.ndarray], np.ndarray], demos, goal: np.ndarray, dt: float) -> list[dict]:
-    """Per demonstration: explicit Euler (step ``dt``) of ``field`` from its first sample for
-    HORIZON x its duration; ``mean_dev`` / ``max_dev`` (:func:`deviation`, data units),
-    ``arrival_s`` (within GOAL_FRACTION of the diagonal of the goal, s; inf = not within the
-    horizon), ``duration_s`` (the demo's), ``final_error`` and ``at_goal`` (final error within
-    that radius). A diverging rollout raises SolverError (from :func:`euler_until_rest`)."""
+def reproduction_table(field: Callable[[np.ndarray], np.ndarray], demos, goal: np.ndarray, dt: float,
+                       starts: np.ndarray | None = None) -> list[dict]:
+    """Per demonstration: explicit Euler (step ``dt``) of ``field`` from its first sample (or the
+    row of ``starts``: a state whose first n coordinates are the position) for HORIZON x its
+    duration, scored by :func:`reproduction_rows`. A diverging rollout raises SolverError (from
+    :func:`euler_until_rest`)."""
+    n = len(goal)
+    steps = max(int(np.ceil(HORIZON * max(d.duration for d in demos) / dt)) + 2, 3)
+    starts = np.array([d.pos[0] for d in demos]) if starts is None else starts
+    paths = euler_until_rest(field, starts, dt=dt, max_steps=steps, vel_tol=np.finfo(float).tiny, window=1)
+    return reproduction_rows(demos, [p[:, :n] for p in paths], goal, dt)
+
+
+def reproduction_rows(demos, paths, goal: np.ndarray, dt: float) -> list[dict]:
+    """Per demonstration and its reproduction ``paths[i]`` (positions sampled every ``dt`` from its
+    start, at least HORIZON x the demo's duration; longer ones are cut there): ``mean_dev`` /
+    ``max_dev`` (:func:`deviation`, data units), ``arrival_s`` (within GOAL_FRACTION of the diagonal
+    of the goal, s; inf = not within the horizon), ``duration_s`` (the demo's), ``final_error`` and
+    ``at_goal`` (final error within that radius)."""
     pos = np.vstack([d.pos for d in demos])
     radius = GOAL_FRACTION * float(np.linalg.norm(pos.max(axis=0) - pos.min(axis=0)))
-    steps = max(int(np.ceil(HORIZON * max(d.duration for d in demos) / dt)) + 2, 3)
-    paths = euler_until_rest(field, np.array([d.pos[0] for d in demos]), dt=dt, max_steps=steps,
-                             vel_tol=np.finfo(float).tiny, window=1)
     rows = []
     for i, (d, full) in enumerate(zip(demos, paths)):
         path = full[:int(np.ceil(HORIZON * d.duration / dt)) + 1]       # full[0] is the start

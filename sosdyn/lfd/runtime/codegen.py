@@ -6,9 +6,11 @@ name is a Python literal written by ``ascii()`` or a C++ literal written by :fun
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
-from sosdyn.errors import NotFittedError
+from sosdyn.errors import InputError, NotFittedError
 
 
 def _literal(a) -> str:
@@ -28,9 +30,40 @@ def _check(model) -> None:
 
 
 def _warp(model):
-    """The model's warp (centers, vectors, sigmas) in z-units, or None."""
+    """The model's warp bumps (centers, vectors, sigmas) in z-units, or None."""
     w = getattr(model, "warp_", None)
     return None if w is None else (w["centers"], w["vectors"], w["sigmas"])
+
+
+#: C++17 keywords and alternative tokens, and names the header itself uses at namespace scope: none
+#: can name the generated namespace (``namespace class {`` does not compile).
+CPP_RESERVED = frozenset("""
+alignas alignof and and_eq asm auto bitand bitor bool break case catch char char16_t char32_t class
+compl const constexpr const_cast continue decltype default delete do double dynamic_cast else enum
+explicit export extern false float for friend goto if inline int long mutable namespace new noexcept
+not not_eq nullptr operator or or_eq private protected public register reinterpret_cast return short
+signed sizeof static static_assert static_cast struct switch template this thread_local throw true try
+typedef typeid typename union unsigned using virtual void volatile wchar_t while xor xor_eq
+final override import module concept requires co_await co_return co_yield char8_t consteval constinit
+std posix main
+""".split())
+
+
+def check_namespace(namespace, default: str) -> str:
+    """``namespace`` if it can name a C++ namespace: an ASCII identifier (a letter, then letters,
+    digits or single underscores, at most 64) that is no keyword nor reserved name; InputError otherwise."""
+    if not (isinstance(namespace, str) and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,63}", namespace)
+            and "__" not in namespace and namespace not in CPP_RESERVED):
+        why = ("a C++ keyword or reserved name" if isinstance(namespace, str) and namespace in CPP_RESERVED
+               else "not an ASCII C++ identifier (a letter, then letters, digits or _, no __, at most 64)")
+        raise InputError(f"namespace {namespace!r:.80} is {why}. Try: the default, {default!r}.")
+    return namespace
+
+
+def _twist(model):
+    """The model's twist after the bumps (plane, amplitudes, widths) in z-units, or None."""
+    t = (getattr(model, "warp_", None) or {}).get("twist")
+    return None if t is None else (t["plane"], t["amplitudes"], t["widths"])
 
 
 def cpp_string(text: str) -> str:
@@ -39,6 +72,11 @@ def cpp_string(text: str) -> str:
     escaped too, so no trigraph)."""
     safe = frozenset(b"abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 _.,/-")
     return '"' + "".join(chr(b) if b in safe else f"\\{b:03o}" for b in text.encode("utf-8")) + '"'
+
+
+def cpp_strings(texts) -> str:
+    """``texts`` as a C++ initialiser list of string literals (:func:`cpp_string`)."""
+    return ", ".join(cpp_string(str(t)) for t in texts)
 
 
 #: The first two lines of every generated file (after the comment marker): fixed text, so line 1 or
@@ -52,9 +90,10 @@ def _header(model, comment: str, max_speed: float | None) -> str:
     from the model (a units' name in line 1 or 2 of a Python file could be an encoding declaration;
     in a C++ comment a trailing backslash continues the comment onto the next line)."""
     K, n, m = model.C_.shape
-    warp = _warp(model)
+    warp, twist = _warp(model), _twist(model)
     formula = ("xdot = s * sum_k h_k(z) f_k(z), z = (x - goal) / s" if warp is None else
-               f"xdot = s * J_phi(z)^-1 sum_k h_k(u) f_k(u), u = phi(z), z = (x - goal) / s, {len(warp[2])} bumps")
+               f"xdot = s * J_phi(z)^-1 sum_k h_k(u) f_k(u), u = phi(z), z = (x - goal) / s, {len(warp[2])} bumps"
+               + ("" if twist is None else f" then a twist of {len(twist[1])} terms"))
     return "".join(f"{comment} {line}\n" for line in (
         *PREAMBLE, f"n = {n} state dimensions, K = {K} components, {m} monomials of degree "
         f"1..{int(model.field_exps_.sum(axis=1).max())}; positions in UNITS.", f"{formula}.",

@@ -1,16 +1,13 @@
 """The C++17 export of a fitted CDSP: a header-only evaluator (<array>, <cmath> only).
 
-The same numbers as :meth:`sosdyn.lfd.model.cdsp.CDSP.predict` (:mod:`.export`'s module docstring
+The same numbers as :meth:`sosdyn.lfd.model.cdsp.CDSP.predict` (:mod:`.export_python`'s module docstring
 states the formula), every number written out in full precision.
 """
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
-from sosdyn.errors import InputError
-from .codegen import _check, _flat, _header, _warp, cpp_string
+from .codegen import _check, _flat, _header, _twist, _warp, check_namespace, cpp_string, cpp_strings
 from .states import check_max_speed
 
 
@@ -24,12 +21,49 @@ def to_cpp(model, namespace: str = "cdsp_model", max_speed: float | None = None)
     The Cholesky factors of the mixture are precomputed here (L_k^-1 and the log normalisers)."""
     _check(model)
     max_speed = check_max_speed(max_speed)
-    if not (isinstance(namespace, str) and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,63}", namespace)):
-        raise InputError(f"namespace must be an ASCII C++ identifier (a letter, then letters, digits or _, "
-                         f"at most 64), got {namespace!r:.80}. Try: the default, 'cdsp_model'.")
+    namespace = check_namespace(namespace, "cdsp_model")
     K, n, m = model.C_.shape
-    inv, lognorm = model.mixture_.factors()
-    warp = _warp(model)
+    warp, twist = _warp(model), _twist(model)
+    twist_defs = "" if twist is None else f"""
+// The twist after the bumps, z-units: u <- R(alpha(|u|)) u, a rotation in the plane (p, q) by
+// alpha(r) = sum_j a_j (1 - exp(-r^2 / tau_j^2)); J <- J_T J, J_T = R (I + beta (S u) u^T),
+// beta = alpha'(r) / r, S u = (p.u) q - (q.u) p; twist_inv_w2[j] = 1 / tau_j^2.
+constexpr int TW = {len(twist[1])};
+constexpr std::array<double, N> twist_p = {{{_flat(twist[0][0])}}};
+constexpr std::array<double, N> twist_q = {{{_flat(twist[0][1])}}};
+constexpr std::array<double, TW> twist_amp = {{{_flat(twist[1])}}};
+constexpr std::array<double, TW> twist_inv_w2 = {{{_flat(1.0 / np.asarray(twist[2], dtype=float) ** 2)}}};
+
+// x <- x + ((c - 1) p.x - s q.x) p + ((c - 1) q.x + s p.x) q: R(alpha) x, c = cos alpha, s = sin alpha.
+inline void rotate(double* x, int stride, double c, double s) {{
+  double d0 = 0.0, d1 = 0.0;
+  for (int i = 0; i < N; ++i) {{ d0 += twist_p[i] * x[i * stride]; d1 += twist_q[i] * x[i * stride]; }}
+  const double a0 = (c - 1.0) * d0 - s * d1, a1 = (c - 1.0) * d1 + s * d0;
+  for (int i = 0; i < N; ++i) x[i * stride] += a0 * twist_p[i] + a1 * twist_q[i];
+}}
+
+inline void twist(double* u, double* J) {{
+  double r2 = 0.0;
+  for (int i = 0; i < N; ++i) r2 += u[i] * u[i];
+  double alpha = 0.0, beta = 0.0;
+  for (int j = 0; j < TW; ++j) {{
+    const double e = std::exp(-twist_inv_w2[j] * r2);
+    alpha += twist_amp[j] * (1.0 - e);
+    beta += 2.0 * twist_amp[j] * twist_inv_w2[j] * e;
+  }}
+  double c0 = 0.0, c1 = 0.0;
+  for (int i = 0; i < N; ++i) {{ c0 += twist_p[i] * u[i]; c1 += twist_q[i] * u[i]; }}
+  std::array<double, N> uJ{{}};     // u^T J
+  for (int a = 0; a < N; ++a)
+    for (int b = 0; b < N; ++b) uJ[b] += u[a] * J[a * N + b];
+  for (int a = 0; a < N; ++a)
+    for (int b = 0; b < N; ++b) J[a * N + b] += beta * (c0 * twist_q[a] - c1 * twist_p[a]) * uJ[b];
+  const double c = std::cos(alpha), s = std::sin(alpha);
+  for (int b = 0; b < N; ++b) rotate(J + b, N, c, s);
+  rotate(u, 1, c, s);
+}}
+"""
+    twist_call = "" if twist is None else "\n  twist(u, J);"
     warp_defs = "" if warp is None else f"""
 // The warp u = phi(z), z-units: phi = psi_W o ... o psi_1, psi_j(z) = z + (rho_j(z) - rho_j(0)) v_j,
 // rho_j(z) = exp(-|z - c_j|^2 / sigma_j^2); warp_centers/vectors[j * N + i], warp_rho0[j] = rho_j(0).
@@ -57,7 +91,7 @@ inline void warp(double* u, double* J) {{
     for (int a = 0; a < N; ++a)
       for (int b = 0; b < N; ++b) J[a * N + b] += warp_vectors[j * N + a] * row[b];
     for (int i = 0; i < N; ++i) u[i] += (rho - warp_rho0[j]) * warp_vectors[j * N + i];
-  }}
+  }}{twist_call}
 }}
 
 // Solves A y = b in place (y in b; A row-major N x N, overwritten) by Gaussian elimination with
@@ -109,6 +143,8 @@ namespace {namespace} {{
 
 constexpr const char* units = {cpp_string(str(model.units_))};
 constexpr int N = {n};   // state dimension
+// the names of the state's coordinates (the data's position columns)
+constexpr std::array<const char*, N> columns = {{{cpp_strings(model.names())}}};
 constexpr int K = {K};   // mixture components
 constexpr int M = {m};   // monomials of each field
 constexpr std::array<double, N> goal = {{{_flat(model.goal_)}}};
@@ -116,14 +152,56 @@ constexpr double scale = {float(model.scale_)!r};
 {speed_def}constexpr std::array<int, M * N> exponents = {{{", ".join(str(int(e)) for e in model.field_exps_.ravel())}}};
 // coefficients[(k * N + i) * M + j] = C[k, i, j]
 constexpr std::array<double, K * N * M> coefficients = {{{_flat(model.C_)}}};
-constexpr std::array<double, K * N> means = {{{_flat(model.mixture_.means)}}};
+{cpp_mixture(model.mixture_)}{twist_defs}{warp_defs}
+// xdot = scale * sum_k h_k(z) f_k(z), z = (x - g) / scale (with a warp: scale * J^-1 sum_k h_k(u) f_k(u),
+// u = phi(z)), g = goal (N doubles) or, for nullptr, the model's; false if xdot is not finite.
+inline bool predict(const double* x, double* xdot, const double* goal = nullptr) {{
+  const double* g = goal != nullptr ? goal : {namespace}::goal.data();
+  std::array<double, N> z{{}};
+  for (int i = 0; i < N; ++i) {{
+    if (!std::isfinite(x[i]) || !std::isfinite(g[i])) return false;
+    z[i] = (x[i] - g[i]) / scale;
+  }}
+{to_u}  std::array<double, M> mono{{}};
+  for (int j = 0; j < M; ++j) {{
+    double v = 1.0;
+    for (int i = 0; i < N; ++i)
+      if (exponents[j * N + i] != 0) v *= std::pow(z[i], static_cast<double>(exponents[j * N + i]));
+    mono[j] = v;
+  }}
+  std::array<double, K> h{{}};
+  responsibilities(z.data(), h.data());
+  bool finite = true;
+  for (int i = 0; i < N; ++i) {{
+    double v = 0.0;
+    for (int k = 0; k < K; ++k) {{
+      double f = 0.0;
+      for (int j = 0; j < M; ++j) f += coefficients[(k * N + i) * M + j] * mono[j];
+      v += h[k] * f;
+    }}
+    xdot[i] = v * scale;
+    finite = finite && std::isfinite(xdot[i]);
+  }}
+{from_u}{limit}  return finite;
+}}
+
+}}  // namespace {namespace}
+"""
+
+
+def cpp_mixture(mixture) -> str:
+    """The C++ of the gating h_k(z) (:mod:`~sosdyn.lfd.fit.gmm`) for a header that defines N (the
+    mixture's dimension) and K: its numbers (L_k^-1 and the log normalisers precomputed here) and
+    ``responsibilities(z, h)``; shared by the first- and second-order exports."""
+    inv, lognorm = mixture.factors()
+    return f"""constexpr std::array<double, K * N> means = {{{_flat(mixture.means)}}};
 // inv_chol[(k * N + a) * N + b] = (L_k^-1)[a, b], S_k = L_k L_k^T
 constexpr std::array<double, K * N * N> inv_chol = {{{_flat(inv)}}};
 // log pi_k - log det L_k - N/2 log(2 pi)
 constexpr std::array<double, K> log_norm = {{{_flat(lognorm)}}};
 // the gating's bound c (0: not tempered): where min_k q_k > c the forms are divided by min_k q_k / c
-constexpr double bound = {0.0 if model.mixture_.bound is None else float(model.mixture_.bound)!r};
-{warp_defs}
+constexpr double bound = {0.0 if mixture.bound is None else float(mixture.bound)!r};
+
 // Squared norm of L_k^-1 (z / c - mu_k / c).
 inline double whitened_sq(int k, const double* z, double c) {{
   double q = 0.0;
@@ -183,37 +261,4 @@ inline void responsibilities(const double* z, double* h) {{
   h[best] = 1.0;
 }}
 
-// xdot = scale * sum_k h_k(z) f_k(z), z = (x - g) / scale (with a warp: scale * J^-1 sum_k h_k(u) f_k(u),
-// u = phi(z)), g = goal (N doubles) or, for nullptr, the model's; false if xdot is not finite.
-inline bool predict(const double* x, double* xdot, const double* goal = nullptr) {{
-  const double* g = goal != nullptr ? goal : {namespace}::goal.data();
-  std::array<double, N> z{{}};
-  for (int i = 0; i < N; ++i) {{
-    if (!std::isfinite(x[i]) || !std::isfinite(g[i])) return false;
-    z[i] = (x[i] - g[i]) / scale;
-  }}
-{to_u}  std::array<double, M> mono{{}};
-  for (int j = 0; j < M; ++j) {{
-    double v = 1.0;
-    for (int i = 0; i < N; ++i)
-      if (exponents[j * N + i] != 0) v *= std::pow(z[i], static_cast<double>(exponents[j * N + i]));
-    mono[j] = v;
-  }}
-  std::array<double, K> h{{}};
-  responsibilities(z.data(), h.data());
-  bool finite = true;
-  for (int i = 0; i < N; ++i) {{
-    double v = 0.0;
-    for (int k = 0; k < K; ++k) {{
-      double f = 0.0;
-      for (int j = 0; j < M; ++j) f += coefficients[(k * N + i) * M + j] * mono[j];
-      v += h[k] * f;
-    }}
-    xdot[i] = v * scale;
-    finite = finite && std::isfinite(xdot[i]);
-  }}
-{from_u}{limit}  return finite;
-}}
-
-}}  // namespace {namespace}
 """

@@ -19,6 +19,13 @@ and with a warp (:mod:`.warp`; bumps c_j, v_j, sigma_j in z-units, rho_j(0) prec
 since J_phi = A_m ... A_1, A_j = I + v_j g_j^T, and A_j^-1 = I - v_j g_j^T / (1 + g_j.v_j)
 (Sherman-Morrison; 1 + g_j.v_j >= 1 - l_j > 0): O(m n) plain float arithmetic, no matrix
 (:func:`warp_forward` / :func:`warp_back`; unrolled for n = 2, the common case, 3-4x faster).
+With a twist about the goal after the bumps (:mod:`~sosdyn.lfd.fit.twist`: plane p, q, terms a_j,
+tau_j), between the two passes
+
+    alpha = sum_j a_j (1 - e_j),  beta = sum_j 2 a_j / tau_j^2 e_j,  e_j = exp(-|w|^2 / tau_j^2)
+    u = R(alpha) w,     w' = (I - beta (S w) w^T) R(alpha)^T w'      (:func:`twist_forward`, :func:`twist_back`)
+
+(R(alpha) the rotation by alpha in the plane, S w = (p.w) q - (q.w) p): J_T^-1 in closed form.
 The mixture and field run in plain floats too (precomputed tuples, ``math.exp``; n = 2 unrolled):
 for small n numpy's per-call cost (about 1 us a call) is most of the time. Bound with a warp:
 about 0.4 us of Python per bump, forward and back. The forward pass cannot be fused into a few
@@ -33,7 +40,7 @@ form overflows (|z| ~ 1e154 and up) the predictor falls back on the mixture's ow
 same as ``predict``'s too.
 
 The single-state arithmetic is module functions on plain tuples (:func:`tables`, :func:`field2`,
-:func:`fieldn`, :func:`warp_forward2`, ...): the Python export (:mod:`.export`) embeds their
+:func:`fieldn`, :func:`warp_forward2`, ...): the Python export (:mod:`.export_python`) embeds their
 source, so its one-state path is this code, not a copy.
 
 Runtime goal: ``predictor(x, goal=g)`` evaluates the model with its goal moved to g, i.e. the
@@ -60,11 +67,12 @@ class StatePredictor:
 
     Built from a fitted model's arrays (:meth:`sosdyn.lfd.model.cdsp.CDSP.predictor` does this):
     goal x* (n,), scale s, the position mixture, coefficients C (K, n, m), exponents E (m, n),
-    the warp (centers, vectors, sigmas) in z-units or None, and the speed limit or None.
+    the warp (centers, vectors, sigmas) in z-units or None, the speed limit or None, and the twist
+    after the warp's bumps (plane, amplitudes, widths; z-units) or None.
     """
 
     def __init__(self, goal: np.ndarray, scale: float, mixture: PositionMixture, C: np.ndarray,
-                 exps: np.ndarray, warp=None, max_speed: float | None = None):
+                 exps: np.ndarray, warp=None, max_speed: float | None = None, twist=None):
         n = C.shape[1]
         self.dim, self._shape = n, (n,)
         self._goal = np.array(goal, dtype=float)
@@ -72,6 +80,7 @@ class StatePredictor:
         self._tables = tables(mixture, C, exps)
         self._far = lambda z: mixture.responsibilities(np.array(z)[None])[0].tolist()
         self._maps = None if warp is None else warp_tables(*warp)
+        self._twist = None if twist is None else twist_tables(*twist)
         self._forward, self._back = (warp_forward2, warp_back2) if n == 2 else (warp_forward, warp_back)
         self.max_speed = check_max_speed(max_speed)
         self._field = field2 if n == 2 else fieldn
@@ -85,10 +94,14 @@ class StatePredictor:
         goal = self._goal if goal is None else self._state(goal, "goal")
         z = ((x - goal) / self._scale).tolist()
         grads = None
-        if self._maps is not None:                   # u = phi(z) and the gradients g_j
+        if self._maps is not None:                   # w = B(z) and the gradients g_j
             z, grads = self._forward(self._maps, z)
+        if self._twist is not None:                  # u = T(w)
+            z, turn = twist_forward(self._twist, z)
         v = self._field(self._tables, z, self._far)
-        if grads is not None:                        # J_phi^-1 v
+        if self._twist is not None:                  # J_T^-1 v
+            v = twist_back(self._twist, turn, v)
+        if grads is not None:                        # J_B^-1 v
             v = self._back(self._maps, grads, v)
         s = self._scale
         v = [s * a for a in v]
@@ -230,3 +243,36 @@ def warp_back2(maps, grads: list, w: list) -> list:
         r = (g0 * w0 + g1 * w1) / (1.0 + g0 * v0 + g1 * v1)
         w0, w1 = w0 - r * v0, w1 - r * v1
     return [w0, w1]
+
+
+def twist_tables(plane, amplitudes, widths) -> tuple:
+    """The plain-float twist of :func:`twist_forward`: (p, q, ((a_j, 1/tau_j^2), ...))."""
+    return (tuple(map(float, plane[0])), tuple(map(float, plane[1])),
+            tuple((float(a), 1.0 / float(t) ** 2) for a, t in zip(amplitudes, widths)))
+
+
+def twist_forward(T: tuple, w: list) -> tuple[list, tuple]:
+    """(u = T(w) = R(alpha) w, what :func:`twist_back` needs) for the twist T (:func:`twist_tables`):
+    R(alpha) w = w + ((cos - 1) c0 - sin c1) p + ((cos - 1) c1 + sin c0) q, c0 = p.w, c1 = q.w."""
+    p, q, terms = T
+    r2 = sum(map(mul, w, w))
+    alpha = beta = 0.0
+    for a, k in terms:
+        e = math.exp(-k * r2)
+        alpha += a * (1.0 - e)
+        beta += 2.0 * a * k * e
+    cos, sin = math.cos(alpha), math.sin(alpha)
+    c0, c1 = sum(map(mul, p, w)), sum(map(mul, q, w))
+    a0, a1 = (cos - 1.0) * c0 - sin * c1, (cos - 1.0) * c1 + sin * c0
+    return [x + a0 * y + a1 * z for x, y, z in zip(w, p, q)], (w, cos, sin, beta, c0, c1)
+
+
+def twist_back(T: tuple, turn: tuple, v: list) -> list:
+    """J_T(w)^-1 v = (I - beta (S w) w^T) R(alpha)^T v, S w = c0 q - c1 p (``turn`` from :func:`twist_forward`)."""
+    p, q, _ = T
+    w, cos, sin, beta, c0, c1 = turn
+    d0, d1 = sum(map(mul, p, v)), sum(map(mul, q, v))
+    a0, a1 = (cos - 1.0) * d0 + sin * d1, (cos - 1.0) * d1 - sin * d0
+    y = [x + a0 * b + a1 * c for x, b, c in zip(v, p, q)]
+    t = sum(beta * a * b for a, b in zip(w, y))          # beta w first: 0, not 0 * inf, far out
+    return [x - t * (c0 * c - c1 * b) for x, b, c in zip(y, p, q)]

@@ -86,3 +86,12 @@ def speed_factor(V: np.ndarray, max_speed: float | None) -> np.ndarray:
 def limit_speed(V: np.ndarray, max_speed: float | None) -> np.ndarray:
     """The rows of V scaled by min(1, max_speed / |v|): same directions, |v| <= max_speed."""
     return V if max_speed is None else V * speed_factor(V, max_speed)
+
+
+def as_levels(tank, m: int) -> np.ndarray:
+    """Tank levels (m,) from a number or m numbers, each finite and >= 0 (else InputError)."""
+    b = np.broadcast_to(np.asarray(tank, dtype=float), (m,)) if np.ndim(tank) == 0 else np.asarray(tank, dtype=float)
+    if b.shape != (m,) or not np.isfinite(b).all() or (b < 0).any():
+        raise InputError(f"tank must be a number or {m} numbers, finite and >= 0, got shape {np.shape(tank)}. "
+                         "Try: tank=None (a full tank: motions starting at these states).")
+    return b

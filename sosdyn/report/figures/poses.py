@@ -9,7 +9,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from sosdyn.evaluation.poses import angles_deg
-from .style import new_figure, styled
+from .style import axis_label, new_figure, styled
 
 ROLLOUT_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9")
 FRAME_COLORS = ("#d62728", "#2ca02c", "#1f77b4")     # x, y, z axes of a frame
@@ -26,7 +26,7 @@ def draw_frames(ax, pos, quat, length: float) -> None:
 
 
 @styled
-def pose_paths(title, background, demos, trajs, goal_pos, units: str = "", labels=None):
+def pose_paths(title, background, demos, trajs, goal_pos, units: str = "", labels=None, names=("x", "y", "z")):
     """Background demos (grey), demos (black, dashed) and rollouts (colour) with frames, the goal (star)."""
     fig = new_figure(7.0, 5.6)
     ax = fig.add_subplot(projection="3d")
@@ -41,10 +41,9 @@ def pose_paths(title, background, demos, trajs, goal_pos, units: str = "", label
     ax.scatter(*goal_pos, color="k", marker="*", s=80, label="goal")
     extent = np.ptp(np.vstack([allp] + [tr.pos for tr in trajs]), axis=0)
     ax.set_box_aspect(np.maximum(extent, 0.4 * extent.max()))       # near-equal scales, no axis squashed flat
-    unit = f" ({units})" if units else ""
-    ax.set_xlabel(f"x{unit}")
-    ax.set_ylabel(f"y{unit}")
-    ax.set_zlabel(f"z{unit}")
+    ax.set_xlabel(axis_label(0, units, names))
+    ax.set_ylabel(axis_label(1, units, names))
+    ax.set_zlabel(axis_label(2, units, names))
     ax.set_title(f"{title}: paths and orientation frames")
     ax.legend(loc="upper left", fontsize=7)
     return fig

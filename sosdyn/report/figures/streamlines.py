@@ -17,7 +17,7 @@ def streamlines(ax, predict: Callable[[np.ndarray], np.ndarray] | None,
                 demos_pos: Sequence[np.ndarray], reproductions: Sequence[np.ndarray],
                 goal, bounds: tuple[float, float, float, float] | None = None,
                 title: str | None = None, *, units: str = "mm", grid: int = 70,
-                density: float = 1.1) -> Figure:
+                density: float = 1.1, names=None) -> Figure:
     """Paper Fig. 1: a learned 2-D vector field with the data it was learned from.
 
     Gray streamlines of ``predict(X) -> Xdot`` on a ``grid`` x ``grid`` lattice over
@@ -25,7 +25,7 @@ def streamlines(ax, predict: Callable[[np.ndarray], np.ndarray] | None,
     reproductions and goal, padded by 10 %), the demonstrations as solid red lines,
     the reproductions (rollouts from the demonstrations' starts) as dashed blue lines
     and the goal as a black star. ``predict=None`` (e.g. a time-indexed DMP, which has
-    no field) draws the trajectories only.
+    no field) draws the trajectories only. ``names``: the axes' names (default $x_1$, $x_2$).
 
     With ``ax=None`` a new figure with its legend underneath is returned; with an
     ``ax`` the plot goes there, the caller owns the legend, and ``ax.figure`` is
@@ -55,7 +55,7 @@ def streamlines(ax, predict: Callable[[np.ndarray], np.ndarray] | None,
     ax.plot(*goal, **GOAL_STYLE)
 
     return finish_state_axes(ax, (xmin, xmax, ymin, ymax), units, title,
-                             stream_legend_handles(bool(demos)) if own_figure else None)
+                             stream_legend_handles(bool(demos), predict is not None) if own_figure else None, names=names)
 
 
 @styled

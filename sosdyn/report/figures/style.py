@@ -147,21 +147,28 @@ def data_bounds(arrays: Sequence[np.ndarray], pad: float = 0.1,
     return mid[0] - half[0], mid[0] + half[0], mid[1] - half[1], mid[1] + half[1]
 
 
-def frame_state_axes(ax, units: str) -> None:
-    """Equal aspect, a full frame and ``x_1``/``x_2`` labels in ``units``."""
+def axis_label(i: int, units: str, names=None) -> str:
+    """The label of coordinate i: its name (the data's column; default $x_{i+1}$) and the units."""
+    k = i + 1
+    name = names[i] if names is not None else f"$x_{k}$" if k < 10 else f"$x_{{{k}}}$"
+    return f"{name} ({units})" if units else name
+
+
+def frame_state_axes(ax, units: str, names=None) -> None:
+    """Equal aspect, a full frame and the first two coordinates' labels (:func:`axis_label`)."""
     ax.set_aspect("equal", adjustable="box")
     ax.spines[["top", "right"]].set_visible(True)
-    ax.set_xlabel(f"$x_1$ ({units})")
-    ax.set_ylabel(f"$x_2$ ({units})")
+    ax.set_xlabel(axis_label(0, units, names))
+    ax.set_ylabel(axis_label(1, units, names))
 
 
-def finish_state_axes(ax, bounds, units: str, title: str | None, legend_handles=None, ncols: int = 2):
+def finish_state_axes(ax, bounds, units: str, title: str | None, legend_handles=None, ncols: int = 2, names=None):
     """Limits ``bounds`` (xmin, xmax, ymin, ymax), the state frame, a title, and -- for a
     figure of its own (``legend_handles`` given) -- a legend below the axes; returns the figure."""
     xmin, xmax, ymin, ymax = bounds
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
-    frame_state_axes(ax, units)
+    frame_state_axes(ax, units, names)
     if title:
         ax.set_title(title)
     if legend_handles is not None:
@@ -196,11 +203,11 @@ def ordered_methods(table: Mapping[str, Mapping[str, object]]) -> list[str]:
     return list(dict.fromkeys(m for per_shape in table.values() for m in per_shape))
 
 
-def stream_legend_handles(demos: bool = True) -> list:
-    """Legend entries of the state-space plots; ``demos=False`` leaves out the demonstrations
-    (a plot without them lists only what it shows)."""
+def stream_legend_handles(demos: bool = True, streams: bool = True) -> list:
+    """Legend entries of the state-space plots; ``demos=False`` / ``streams=False`` leave out the
+    demonstrations / the streamlines (a plot without them lists only what it shows)."""
     return [
-        Line2D([], [], color=STREAM_COLOR, lw=1.0, label="streamlines of the model"),
+        *([Line2D([], [], color=STREAM_COLOR, lw=1.0, label="streamlines of the model")] if streams else []),
         *([Line2D([], [], color=DEMO_COLOR, lw=1.8, label="demonstrations")] if demos else []),
         Line2D([], [], color=REPRO_COLOR, lw=1.8, ls="--", label="reproductions"),
         Line2D([], [], label="goal", **GOAL_STYLE),

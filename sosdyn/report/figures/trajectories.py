@@ -9,7 +9,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import FancyArrowPatch
 from matplotlib.ticker import MaxNLocator
 
-from .style import (DEMO_COLOR, GOAL_STYLE, REPRO_COLOR, as_xy, data_bounds, finish_state_axes, method_color,
+from .style import (DEMO_COLOR, GOAL_STYLE, REPRO_COLOR, as_xy, axis_label, data_bounds, finish_state_axes, method_color,
                     new_figure, stream_legend_handles, styled)
 
 
@@ -85,7 +85,7 @@ def perturbation_trajectories(ax, demo, runs: Mapping[str, np.ndarray],
 
 @styled
 def trajectories_3d(demos: Sequence[np.ndarray], reproductions: Sequence[np.ndarray], goal,
-                    title: str | None = None, *, units: str = "mm") -> Figure:
+                    title: str | None = None, *, units: str = "mm", names=None) -> Figure:
     """3-D demonstrations (solid red) and reproductions (dashed blue) with the goal, and their
     projections on the three back walls of the box (the x1-x2 floor, the x1-x3 and x2-x3 walls;
     thin, light), which show the paths' shape whatever the view angle.
@@ -121,9 +121,9 @@ def trajectories_3d(demos: Sequence[np.ndarray], reproductions: Sequence[np.ndar
     ax.set_zlim(lo[2], hi[2])
     ranges = hi - lo
     ax.set_box_aspect(np.maximum(ranges, 0.35 * ranges.max() + 1e-9), zoom=0.88)
-    for axis, name in zip((ax.xaxis, ax.yaxis, ax.zaxis), ("x_1", "x_2", "x_3")):
+    for i, axis in enumerate((ax.xaxis, ax.yaxis, ax.zaxis)):
         axis.set_major_locator(MaxNLocator(4))
-        axis.set_label_text(f"${name}$ ({units})")
+        axis.set_label_text(axis_label(i, units, names))
     if title:
         ax.set_title(title)
     handles = stream_legend_handles(bool(demos))[1:] + [
@@ -137,7 +137,7 @@ def trajectories_3d(demos: Sequence[np.ndarray], reproductions: Sequence[np.ndar
 
 @styled
 def time_series(runs: Sequence[tuple[np.ndarray, np.ndarray]], goal, units: str = "mm",
-                title: str | None = None, demos: Sequence[tuple[np.ndarray, np.ndarray]] = ()) -> Figure:
+                title: str | None = None, demos: Sequence[tuple[np.ndarray, np.ndarray]] = (), names=None) -> Figure:
     """One panel per dimension: x_i(t) of every reproduction ``(t, pos)`` in ``runs`` (dashed
     blue) over the demonstrations ``demos`` (solid red, as in the 2-D figures), the goal's x_i
     dotted (the view of a model in more than three dimensions)."""
@@ -150,7 +150,7 @@ def time_series(runs: Sequence[tuple[np.ndarray, np.ndarray]], goal, units: str 
         for t, pos in runs:
             ax.plot(t, pos[:, i], color=REPRO_COLOR, lw=1.3, ls="--")
         ax.axhline(goal[i], color="black", ls=":", lw=1.0)
-        ax.set_ylabel(f"$x_{{{i + 1}}}$ ({units})")
+        ax.set_ylabel(axis_label(i, units, names))
     axes[-1].set_xlabel("t (s)")
     if title:
         axes[0].set_title(title)

@@ -7,7 +7,7 @@ import pytest
 import sosdyn as sd
 from sosdyn.errors import InputError
 from sosdyn.lfd.data.datasets import DATASETS, DATASETS_DIR, HAMMER_DT, load_dataset
-from sosdyn.lfd.data.poses import PoseDemonstrations
+from sosdyn.lfd.data.pose import PoseDemonstrations
 
 
 def test_every_set_ships_its_licence_readme_and_manifest():

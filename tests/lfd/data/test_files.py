@@ -5,7 +5,7 @@ import pytest
 
 from sosdyn.errors import DemonstrationError, InputError
 from sosdyn.lfd.data.files import load_demos
-from sosdyn.lfd.data.poses import PoseDemonstrations
+from sosdyn.lfd.data.pose import PoseDemonstrations
 
 # ---------------------------------------------------------------- files
 

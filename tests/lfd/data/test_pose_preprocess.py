@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 from sosdyn.errors import DemonstrationError, InputError
 from sosdyn.evaluation.poses import angles_deg
 from sosdyn.lfd.data.pose_preprocess import preprocess_poses
-from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
+from sosdyn.lfd.data.pose import PoseDemonstration, PoseDemonstrations
 
 AXIS = np.array([0.3, -0.5, 0.81])
 

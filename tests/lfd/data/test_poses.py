@@ -4,7 +4,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import DemonstrationError, InputError
-from sosdyn.lfd.data.poses import (PoseDemonstration, PoseDemonstrations, align_orientations, chart, demo_chart,
+from sosdyn.lfd.data.pose import (PoseDemonstration, PoseDemonstrations, align_orientations, chart, demo_chart,
                                    goal_orientation, pose_columns, read_pose_csv, sign_continuous)
 
 Q30 = Rotation.from_rotvec([0.0, 0.0, np.pi / 6]).as_quat(scalar_first=True)     # 30 deg about z

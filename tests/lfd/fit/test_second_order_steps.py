@@ -3,9 +3,9 @@ exact check agreeing with the eigenvalues."""
 import numpy as np
 import pytest
 
-from sosdyn.lfd.fit.second_order import companion, fit_gating, lmi, metric_step, nominal_fields, scaled_samples
-from sosdyn.lfd.fit.second_order_check import exact_lmis
-from sosdyn.lfd.fit.second_order_fit import METHODS, fit_second_order, lmi_margin
+from sosdyn.lfd.fit.second_order.core import companion, fit_gating, lmi, metric_step, nominal_fields, scaled_samples
+from sosdyn.lfd.fit.second_order.certificate import exact_lmis
+from sosdyn.lfd.fit.second_order.learner import METHODS, fit_second_order, lmi_margin
 from sosdyn.sos.gram import proven_min_eig
 
 

@@ -252,7 +252,7 @@ def test_auto_fits_each_distinct_warp_once(hook_models, monkeypatch):
     core = pipeline.fit_core
     monkeypatch.setattr(pipeline, "fit_core", lambda *a: calls.append(a[1]) or core(*a))
     scores = CDSP(**CDSP_SMALL).fit(hook_models[0]).warp_scores_
-    assert [None if m is None else len(m[2]) for m in calls] == [None, 10, 5]
+    assert [None if m is None else len(m[0][2]) for m in calls] == [None, 10, 5]
     assert scores["a"] == scores["b"] != scores["c"] and np.isfinite(list(scores.values())).all()
 
 
@@ -265,7 +265,8 @@ def test_auto_keeps_no_warp_where_it_reproduces_best(linear_demos):
 
 @pytest.mark.parametrize("warp", [{"n_maps": -1}, {"n_maps": 2.5}, {"n_maps": True}, {"l_max": 1.0},
                                   {"l_max": 0}, {"beta": 0}, {"beta": 1.5}, {"decay": 1.5}, {"n_points": 3},
-                                  {"match": "median"}, {"target": "circle"}, {"n_map": 10}, "yes", 3, None])
+                                  {"match": "median"}, {"target": "circle"}, {"n_map": 10}, {"twist": -1.0},
+                                  {"twist": np.inf}, {"twist": True}, {"twist": 2e6}, "yes", 3, None])
 def test_bad_warp_parameters_are_input_errors_before_fitting(warp, monkeypatch, hook_demos):
     monkeypatch.setattr("sosdyn.lfd.fit.pipeline.fit_joint_gmm", lambda *a: pytest.fail("fitted"))
     with pytest.raises(InputError, match="Try:"):

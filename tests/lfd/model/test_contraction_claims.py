@@ -4,8 +4,7 @@ shrinks at least as fast as e^{-gamma t / 2}; two nearby trajectories may move a
 import numpy as np
 import pytest
 
-from sosdyn.lfd.fit.pipeline import maps_of
-from sosdyn.lfd.fit.warp import jacobian
+from sosdyn.lfd.fit.composite import jacobian
 from sosdyn.lfd.model.cdsp import CDSP
 
 SMALL = {"n_components": 3, "max_samples": 300, "verify_samples": 500}
@@ -21,7 +20,7 @@ def certificate_coordinates(model, X):
     """u = phi(z), z = (x - goal) / scale: where the certified system u' = sum_k h_k(u) f_k(u) lives
     (u = z without a warp); its metric M is constant here (metric_degree = 0)."""
     Z = (X - model.goal_) / model.scale_
-    return Z if model.warp_ is None else jacobian(Z, *maps_of(model.warp_), np.zeros(model.dim_))[0]
+    return Z if model.warp_ is None else jacobian(Z, model.warp_)[0]
 
 
 @pytest.fixture(scope="module", params=list(PAIRS))

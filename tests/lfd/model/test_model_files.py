@@ -97,7 +97,7 @@ FORGED_CASES = [
      "K \\+ 1 = 3"),
     ("a weakened certificate eps", setin(["state", "certificate_", "eps"], 1e-300), r"eps / 2 = 0.0005"),
     ("boolean in an array", setin(["state", "goal_", 0], True), "numbers only"),
-    ("an unknown state field", setin(["state", "extra_"], 1), r"unknown fields \['extra_'\]"),
+    ("an unknown state field", setin(["state", "extra_"], 1), r"unknown field state\.extra_"),
     ("a missing state field", lambda d: d["state"].pop("dt_"), r"state\.dt_ is missing"),
     ("params.verify_samples = 10**9", setin(["params", "verify_samples"], 10**9), r"verify_samples must be .*\[100, 1000000\]"),
     ("params.verify_samples = 1", setin(["params", "verify_samples"], 1), "verify_samples must be"),

@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 from sosdyn.errors import DemonstrationError
 from sosdyn.evaluation.poses import angles_deg
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
-from sosdyn.lfd.data.poses import PoseDemonstration, PoseDemonstrations
+from sosdyn.lfd.data.pose import PoseDemonstration, PoseDemonstrations
 from sosdyn.lfd.fit.pose import STILL_RATE
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.files import load_model

@@ -1,15 +1,18 @@
-"""Generated evaluators (sosdyn.lfd.runtime.export) compute what CDSP.predict computes."""
+"""Generated evaluators (sosdyn.lfd.runtime.export_python, export_cpp) compute what CDSP.predict computes."""
 import re
 import shutil
 import subprocess
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from sosdyn.errors import InputError, NotFittedError
+from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.fit.gmm import with_bound
 from sosdyn.lfd.model.cdsp import CDSP
-from sosdyn.lfd.runtime.export import export, to_cpp, to_python
+from sosdyn.lfd.runtime.export_cpp import to_cpp
+from sosdyn.lfd.runtime.export_python import to_python
 
 from export_support import import_source, max_rel_error
 
@@ -64,7 +67,7 @@ def test_unfitted_model_and_unknown_target():
     with pytest.raises(NotFittedError, match="fitted"):
         to_python(CDSP())
     with pytest.raises(ValueError, match="python, cpp"):
-        export(CDSP(), "rust")
+        CDSP().export("rust")
 
 
 MAIN = """#include "model.hpp"
@@ -122,3 +125,38 @@ def test_python_export_of_one_state_is_the_predictors_arithmetic(model, tmp_path
     assert all(np.array_equal(gen.predict(x), step(x)) for x in X)
     g = model.goal_ + 0.1 * model.scale_
     assert all(np.array_equal(gen.predict(x, goal=g), step(x, goal=g)) for x in X[:20])
+
+
+@pytest.fixture(scope="module")
+def twisted_3d():
+    """A 3-D model through a twist in a tilted plane (and two bumps): spirals of xdot = A x whose plane is
+    not a coordinate plane, with a slow third coordinate."""
+    Q = np.linalg.qr(np.random.default_rng(0).normal(size=(3, 3)))[0]
+    A = Q @ np.array([[-0.5, 3.0, 0.0], [-3.0, -0.5, 0.0], [0.0, 0.0, -1.0]]) @ Q.T
+    t = np.linspace(0, 8, 200)
+    demos = [Demonstration(t, sol.y.T, sol.y.T @ A.T, f"d{k}") for k, x0 in enumerate(
+        ([1.0, 0.2, 0.3], [-0.5, 0.9, -0.2], [0.3, -1.0, 0.5])) for sol in [solve_ivp(
+            lambda _, x: A @ x, (0, 8), x0, t_eval=t, rtol=1e-10, atol=1e-12)]]
+    m = CDSP(n_components=2, warp={"n_maps": 2, "twist": 3.0}, corrective_rounds=0, random_state=0,
+             verify_samples=1000).fit(Demonstrations(demos, "spiral3d", "m"))
+    assert m.certified_ and "twist" in m.warp_ and m.dim_ == 3
+    return m
+
+
+def test_exports_of_a_3d_twisted_model_match_predict(twisted_3d, tmp_path):
+    m = twisted_3d
+    X = box_states(m, 500, seed=2)
+    gen = import_source(to_python(m), tmp_path / "twist3d.py")
+    assert max_rel_error(gen.predict(X), m.predict(X)) < TOL
+    assert all(np.array_equal(gen.predict(x), m.predictor()(x)) for x in X[:50])
+    assert max_rel_error(np.array([m.predictor()(x) for x in X]), m.predict(X)) < TOL
+    if shutil.which("g++") is None:
+        return
+    (tmp_path / "model.hpp").write_text(to_cpp(m))
+    (tmp_path / "main.cpp").write_text(MAIN)
+    subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(tmp_path / "main"),
+                    str(tmp_path / "main.cpp")], check=True, capture_output=True, text=True)
+    stdin = "\n".join(" ".join(repr(float(v)) for v in row) for row in X)
+    res = subprocess.run([str(tmp_path / "main")], input=stdin, capture_output=True, text=True, check=True)
+    out = np.array([[float(v) for v in line.split()] for line in res.stdout.splitlines()])
+    assert (out[:, -1] == 1).all() and max_rel_error(out[:, :-1], m.predict(X)) < TOL

@@ -14,7 +14,9 @@ from sosdyn.lfd.data.demonstrations import Demonstrations
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.fileformat import _digest
 from sosdyn.lfd.model.files import load_model
-from sosdyn.lfd.runtime.export import PREAMBLE, cpp_string, export, to_cpp, to_python
+from sosdyn.lfd.runtime.codegen import PREAMBLE, cpp_string
+from sosdyn.lfd.runtime.export_cpp import to_cpp
+from sosdyn.lfd.runtime.export_python import to_python
 
 # Each would run code or break the file if it reached the source as text: an encoding declaration
 # (line 1 or 2 of a Python file), quotes and newlines that end a literal or a comment, a C++
@@ -83,13 +85,13 @@ def test_cpp_string_escapes_everything_but_a_safe_alphabet():
 
 @pytest.mark.parametrize("namespace", ["a b", "x;int y", "é", "_x", "", 3, "a" * 65])
 def test_cpp_namespace_must_be_an_ascii_identifier(fitted, namespace):
-    with pytest.raises(InputError, match="namespace must be an ASCII C"):
+    with pytest.raises(InputError, match="not an ASCII C"):
         to_cpp(fitted, namespace)
 
 
 def test_unknown_target_is_typed(fitted):
     with pytest.raises(InputError, match="unknown export target 'rust'. Try: one of python, cpp"):
-        export(fitted, "rust")
+        fitted.export("rust")
 
 
 @pytest.mark.parametrize("units", ["coding:unicode_escape\\nprint(1)#", "coding=rot13", "m'", 'm"', "m\\",

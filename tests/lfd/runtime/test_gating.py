@@ -11,7 +11,7 @@ from sosdyn.lfd.fit.gmm import PositionMixture, gate_bound, with_bound
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.fileformat import _digest
 from sosdyn.lfd.model.files import load_model
-from sosdyn.lfd.runtime.export import to_python
+from sosdyn.lfd.runtime.export_python import to_python
 
 from export_support import import_source
 
@@ -134,5 +134,5 @@ def test_a_bad_bound_is_refused(saved, tmp_path, bound, match):
 def test_an_unknown_mixture_field_is_refused(saved, tmp_path):
     data = json.loads(json.dumps(saved))
     data["state"]["mixture_"]["temperature"] = 2.0
-    with pytest.raises(ModelFileError, match=r"state.mixture_ has unknown fields \['temperature'\]"):
+    with pytest.raises(ModelFileError, match=r"unknown field state\.mixture_\.temperature"):
         load_model(_write(data, tmp_path / "bad.json"))

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from sosdyn.errors import InputError
-from sosdyn.lfd.runtime.export import to_cpp, to_python
+from sosdyn.lfd.runtime.export_cpp import to_cpp
+from sosdyn.lfd.runtime.export_python import to_python
 from sosdyn.lfd.runtime.states import limit_speed
 
 from export_support import import_source
@@ -107,7 +108,7 @@ def test_speed_limited_rollout_follows_the_same_path_to_the_goal(model):
     """Time reparametrisation: the limited rollout visits the free rollout's path, slower, and
     still reaches the goal (a longer duration)."""
     x0 = model.goal_ + model.scale_ * np.array([1.5, -1.0])
-    free = model.rollout(x0, 20.0, dt=0.002)
+    free = model.rollout(x0, 80.0, dt=0.002)       # as long as the limited one: it covers the whole path
     speeds = np.linalg.norm(np.diff(free.pos, axis=0), axis=1) / 0.002
     v_max = 0.3 * speeds.max()
     slow = model.rollout(x0, 80.0, dt=0.01, max_speed=v_max)
