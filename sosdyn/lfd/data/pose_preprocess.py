@@ -35,7 +35,7 @@ from sosdyn.errors import DemonstrationError, InputError
 from .demonstrations import Demonstration, Demonstrations, end_distances
 from .pose import (GOAL_TOL_DEG, PoseDemonstration, PoseDemonstrations, align_orientations, demo_chart,
                     from_chart, goal_orientation)
-from .preprocess import (ALIGN_MIN, MIN_WINDOW, REST_NOISE, PreprocessReport, align_ends,
+from .preprocess import (ALIGN_MIN, MIN_WINDOW, REST_NOISE, PreprocessReport, align_ends, check_options,
                          noise_level, resample_uniform, rest_bounds, savgol_derivatives, smoothing_window,
                          typical_step)
 
@@ -110,13 +110,7 @@ def preprocess_poses(demos: PoseDemonstrations, *, smooth_window: int | str | No
     if not isinstance(demos, PoseDemonstrations):
         raise InputError(f"preprocess_poses takes PoseDemonstrations, got {type(demos).__name__}. "
                          "Try: sosdyn.preprocess for position demonstrations.")
-    if not (smooth_window in ("auto", "off", None) or (isinstance(smooth_window, (int, np.integer))
-                                                        and not isinstance(smooth_window, bool)
-                                                        and smooth_window >= MIN_WINDOW and smooth_window % 2)):
-        raise InputError(f"smooth_window must be 'auto', 'off', None or an odd integer >= {MIN_WINDOW}, got "
-                         f"{smooth_window!r}. Try: 'auto'.")
-    if align not in ("auto", True, False):
-        raise InputError(f"align must be 'auto', True or False, got {align!r}.")
+    check_options(smooth_window, align)
     for d in demos:
         _check_length(d, d.source)
     items = [resample_pose(d) for d in demos]
