@@ -19,12 +19,19 @@ $(STAMP): pyproject.toml
 run: venv
 	$(BIN)/python -m problems run
 
+# The suite in TEST_JOBS processes (pytest-xdist), a test file's tests in one process (its module
+# fixtures built once); the workers share the toy experiment's cache (tests/problems/conftest.py).
+# `make test TEST_JOBS=0` runs it in one process.
+TEST_JOBS ?= 2
+XDIST    := $(if $(filter 0,$(TEST_JOBS)),,-n $(TEST_JOBS) --dist loadfile)
+
 test: venv
 	$(BIN)/lint-imports
-	$(PYTEST) -q -m "not slow"
+	$(PYTEST) -q -m "not slow" $(XDIST)
 
+# Experiment-sized runs (quick versions of the experiments, benchmarks, the wheel): not in `make test`.
 test-slow: venv
-	$(PYTEST) -q -m slow
+	$(PYTEST) -q -m slow $(XDIST)
 
 # Build the wheel, install it into a fresh venv, run `sosdyn --version` and `sosdyn fit lasa:Sshape` (~1 min).
 wheel: venv

@@ -1,7 +1,13 @@
 """``make report`` / ``python -m problems report``: rebuild results.json, the figures,
 ``reports/index.html`` and ``reports/report.pdf`` (the user report) from the cached experiment
 entries (no refitting; pairs that are not cached are shown as "not run"), and the benchmark
-report ``reports/bench/index.html`` from what the benchmarks wrote there.
+report ``reports/bench/index.html`` from what the benchmarks wrote there. Without a cache (a fresh
+clone) the user report is rendered again from its ``results.json``: the findings, the methods'
+descriptions and the index of all reports are written anew from the data, the tables and figures
+are those of the run that made it.
+
+The user report opens with the index of every report under ``reports/``
+(:mod:`problems.report_pages`), each with one finding read from that page's own data.
 
 Not to be confused with ``sosdyn report --results FILE``, which only renders an existing
 results file into HTML and PDF.
@@ -12,14 +18,16 @@ import time
 from pathlib import Path
 
 from sosdyn.report.bench import render_bench
-from sosdyn.report.html import build_report
+from sosdyn.report.html import build_report, load_results
 
 from . import fig1, fig2, fig3, fig4
 from .cache import cached_entries
 from .lasa_all import DEFAULT_LABEL
 from .plumbing import Context, context_from_args, parse_args
 from .jsonio import write_json
-from .results import assemble, relpath
+from .findings import findings
+from .report_pages import index_pages
+from .results import assemble, meta, redescribed, relpath
 
 #: Figures other experiments write (lasa-all, demo3d), included when present; each may
 #: have further pages ``<name>_2``, ``<name>_3``, ...
@@ -68,22 +76,44 @@ def build(entries: dict, ctx: Context, *, extra_meta=None, command=None) -> dict
     figures = draw_figures(entries, ctx)
     results = assemble(entries, ctx.shapes, ctx.methods, ctx.config, figures, command=command,
                        meta_extra={"quick": ctx.config.quick, **(extra_meta or {})})
-    path = write_json(Path(ctx.out_dir) / "results.json", results)
+    return _render(results, ctx)
+
+
+def rebuild(ctx: Context) -> dict:
+    """The user report again from ``results.json`` alone: findings, method descriptions and the
+    index of all reports written anew from its data; tables, figures and meta as they were."""
+    results = load_results(Path(ctx.out_dir) / "results.json")
+    results.update(findings=findings(results), methods=redescribed(results.get("methods") or {}))
+    now = meta()
+    results["meta"]["rendered_again"] = (f"{now['created']}, commit {now['git_commit']}: findings, method "
+                                         "descriptions and the index written again from this data")
+    return _render(results, ctx)
+
+
+def _render(results: dict, ctx: Context) -> dict:
+    """Index the reports into ``results``, write it and render the pages (the benchmark page
+    first: the index reads it)."""
     bench_dir = Path(ctx.out_dir) / "bench"
-    bench = render_bench(bench_dir) if bench_dir.is_dir() else None     # first: the user report links it
+    bench = render_bench(bench_dir) if bench_dir.is_dir() else None
+    results["pages"] = index_pages(ctx.out_dir, results)
+    path = write_json(Path(ctx.out_dir) / "results.json", results)
     paths = build_report(path, ctx.out_dir)
     return {**paths, "bench": bench} if bench else paths
 
 
 def main(argv=None):
     args = parse_args(argv, "Rebuild results.json and the report from the cached experiment entries "
-                            "(no refitting)")
+                            "(no refitting); without a cache, from results.json")
     ctx = context_from_args(args)
     t0 = time.perf_counter()
     entries = cached_entries(ctx.shapes, ctx.methods, config=ctx.config, cache_dir=ctx.cache_dir)
     n = sum(len(v) for v in entries.values())
     print(f"{n} cached results of {len(ctx.shapes) * len(ctx.methods)} in {ctx.cache_dir}")
-    paths = build(entries, ctx)
+    if n == 0 and (Path(ctx.out_dir) / "results.json").is_file():
+        print(f"no cache: rendering {Path(ctx.out_dir) / 'results.json'} again (findings and index from its data)")
+        paths = rebuild(ctx)
+    else:
+        paths = build(entries, ctx)
     print(f"report: {paths['html']} and {paths['pdf']}"
           f"{' (benchmarks: ' + str(paths['bench']) + ')' if 'bench' in paths else ''} "
           f"({time.perf_counter() - t0:.1f} s)")

@@ -12,6 +12,7 @@ from . import report
 from .findings import failures
 from .jobs import evaluate_all
 from .plumbing import context_from_args, parse_args
+from .results import results_sections
 
 
 def main(argv=None):
@@ -26,7 +27,7 @@ def main(argv=None):
     print(f"fits and evaluations: {t_fit:.1f} s; drawing figures and rendering the report", flush=True)
     paths = report.build(entries, ctx, extra_meta={"n_jobs": ctx.n_jobs,
                                                    "fit_and_evaluate_wall_s": round(t_fit, 1)})
-    for s, m, err in failures(entries):
+    for s, m, err in failures(results_sections(entries)):
         print(f"FAILED {s} / {m}: {err}")
     print(f"done in {time.perf_counter() - t0:.1f} s: {paths['html']}  {paths['pdf']}")
     return 0

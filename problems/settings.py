@@ -79,7 +79,7 @@ def _cdsp(metric_degree=0, field_degree=1, solver_method="alternating", metric="
 
 
 def _default(shp: Shape, quick: bool) -> dict:
-    """``CDSP()`` as a user gets it: every parameter at its default (K = 8, ICA, warp, refits)."""
+    """``CDSP()`` as a user gets it: every parameter at its default."""
     return dict(max_samples=400, max_iter=4, verify_samples=2000) if quick else {}
 
 
@@ -99,26 +99,17 @@ def _clfdm(shp: Shape, quick: bool) -> dict:
 
 
 METHODS: dict[str, Method] = {m.name: m for m in (
-    Method("CDSP", "The default model, CDSP() with no arguments: K = 8 linear sub-systems with a "
-           "constant metric (ICA), a diffeomorphic pre-warp (warp='auto') and corrective refits; "
-           "SOS certificate.", _default, "cdsp", plot_field=True),
-    Method("CDSP (paper)",
-           "The paper's formulation (linear sub-systems A_k z + b_k, degree-2 polynomial metric "
-           "M(z)) fitted with our solver: plain alternation of the convex dynamics and metric "
-           "steps, SOS certificate.", _cdsp(2, 1, "alternating"), "cdsp"),
-    Method("CDSP-ICA",
-           "Linear sub-systems with a constant metric M, learned with the inner convex "
-           "approximation (ICA) of the bilinear constraint; SOS certificate. This is also the "
-           "LPV-DS-like model (GMM-weighted linear systems sharing one quadratic Lyapunov "
-           "matrix).", _cdsp(0, 1, "ica"), "cdsp", plot_field=True),
-    Method("CDSP-cubic",
-           "Cubic polynomial sub-systems with a degree-2 state-dependent metric M(z), started "
-           "from the ICA solution and alternated; SOS certificate.", _cdsp(2, 3, "ica"), "cdsp",
+    # A CDSP method's description says what it stands for; what it is (sub-systems, metric,
+    # solver, warp, refits) is written from its parameters (problems.results.cdsp_summary).
+    Method("CDSP", "The default model, as a user gets it: CDSP() with no arguments.", _default, "cdsp",
            plot_field=True),
-    Method("SEDS-like",
-           "Linear sub-systems with the metric fixed to the identity (a quadratic Lyapunov "
-           "function V = z^T z, as in SEDS); one convex fit.", _cdsp(0, 1, "alternating", "identity"),
+    Method("CDSP (paper)", "The paper's formulation, fitted with our solver.", _cdsp(2, 1, "alternating"),
            "cdsp"),
+    Method("CDSP-ICA", "The LPV-DS-like model: GMM-weighted sub-systems sharing one quadratic Lyapunov "
+           "matrix.", _cdsp(0, 1, "ica"), "cdsp", plot_field=True),
+    Method("CDSP-cubic", "The paper's general model class.", _cdsp(2, 3, "ica"), "cdsp", plot_field=True),
+    Method("SEDS-like", "A quadratic Lyapunov function V = z^T z, as in SEDS.",
+           _cdsp(0, 1, "alternating", "identity"), "cdsp"),
     Method("GMR", "Gaussian mixture regression on [x, xdot] (same K and EM seed); no stability "
            "guarantee.", _gmr, "autonomous"),
     Method("DMP", "Dynamic movement primitives, one per demonstration (time-indexed; "

@@ -9,9 +9,14 @@ machines::
     sd.set_limits(max_bytes=32 * 2**30)          # for the rest of the session
     with sd.limits(max_rollout_steps=10**8):      # for one block
         model.rollout(x0, duration=1e4)
+
+The session starts from the defaults, each replaced by the environment variable ``SOSDYN_<NAME>``
+when it is set (``SOSDYN_MAX_BYTES=34359738368 sosdyn fit ...``): the way to raise a limit for the
+``sosdyn`` command. A value that is not a positive integer is an InputError when a limit is first read.
 """
 from __future__ import annotations
 
+import os
 import re
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
@@ -37,19 +42,43 @@ class Limits:
     max_sampled_work: int = 3 * 10**9     # multiply-adds of a file's sampled certificate check, S K n^2 (m + p)
 
 
-_current = Limits()
+ENV_PREFIX = "SOSDYN_"
+_current: Limits | None = None         # read from the defaults and the environment when first needed
+
+
+def env_name(name: str) -> str:
+    """The environment variable of the limit ``name``: SOSDYN_MAX_BYTES for max_bytes."""
+    return ENV_PREFIX + name.upper()
+
+
+def _from_environment() -> Limits:
+    """The defaults, each replaced by its environment variable when set (module docstring)."""
+    changes = {}
+    for f in fields(Limits):
+        text = os.environ.get(env_name(f.name))
+        if text is None:
+            continue
+        try:
+            changes[f.name] = int(text.strip().replace("_", ""))
+        except ValueError:
+            raise InputError(f"the environment variable {env_name(f.name)} = {text!r:.40} is not an integer. "
+                             f"Try: a positive integer (e.g. {getattr(Limits(), f.name)}), or unset it.") from None
+    return _validated(replace(Limits(), **changes), "the environment variable ")
 
 
 def get_limits() -> Limits:
     """The limits in force now."""
+    global _current
+    if _current is None:
+        _current = _from_environment()
     return _current
 
 
 def set_limits(**changes) -> Limits:
     """Change limits for the rest of the session; returns the previous ones."""
     global _current
-    previous = _current
-    _current = _validated(replace(_current, **_checked_names(changes)))
+    previous = get_limits()
+    _current = _validated(replace(previous, **_checked_names(changes)))
     return previous
 
 
@@ -58,7 +87,7 @@ def limits(**changes):
     """Temporarily change limits: ``with sd.limits(max_bytes=2**34): ...``."""
     previous = set_limits(**changes)
     try:
-        yield _current
+        yield get_limits()
     finally:
         _restore(previous)
 
@@ -76,12 +105,18 @@ def _checked_names(changes: dict) -> dict:
     return changes
 
 
-def _validated(lim: Limits) -> Limits:
+def _validated(lim: Limits, where: str = "") -> Limits:
     for f in fields(Limits):
         v = getattr(lim, f.name)
         if isinstance(v, bool) or not isinstance(v, int) or v <= 0:
-            raise InputError(f"limit {f.name} must be a positive integer, got {v!r}")
+            name = env_name(f.name) if where else f"limit {f.name}"
+            raise InputError(f"{where}{name} must be a positive integer, got {v!r}")
     return lim
+
+
+def raise_hint(name: str) -> str:
+    """How to raise the limit ``name``, in Python and for the ``sosdyn`` command."""
+    return f"sosdyn.set_limits({name}=...) (the sosdyn command: {env_name(name)}=... in the environment)"
 
 
 def format_bytes(n: float) -> str:
@@ -94,21 +129,21 @@ def format_bytes(n: float) -> str:
 
 def check_bytes(estimate: float, what: str, hint: str = "") -> None:
     """Raise ResourceLimitError if ``estimate`` bytes exceed ``max_bytes``."""
-    limit = _current.max_bytes
+    limit = get_limits().max_bytes
     if not estimate <= limit:
         raise ResourceLimitError(
             f"{what} needs about {format_bytes(estimate)}, over the limit of {format_bytes(limit)}. "
             f"Try: {hint + '; or ' if hint else ''}raise the limit with "
-            f"sosdyn.set_limits(max_bytes=...) if this machine has the memory.")
+            f"{raise_hint('max_bytes')} if this machine has the memory.")
 
 
 def check_count(value: float, limit_name: str, what: str, hint: str = "") -> None:
     """Raise ResourceLimitError if ``value`` exceeds the named count limit."""
-    limit = getattr(_current, limit_name)
+    limit = getattr(get_limits(), limit_name)
     if not value <= limit:
         raise ResourceLimitError(
             f"{what} is {value:.3g}, over the limit {limit_name}={limit}. "
-            f"Try: {hint + '; or ' if hint else ''}raise it with sosdyn.set_limits({limit_name}=...).")
+            f"Try: {hint + '; or ' if hint else ''}raise it with {raise_hint(limit_name)}.")
 
 
 _JSON_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"')     # a JSON string literal, escapes included

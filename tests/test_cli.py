@@ -195,6 +195,9 @@ def test_rollout_writes_csv(capsys, monkeypatch, tmp_path):
     np.testing.assert_array_equal(calls["x0"], [10.0, -5.0])
     lines = (tmp_path / "traj.csv").read_text().splitlines()
     assert lines[0] == "t,x1,x2" and len(lines) == 1 + 5
+    assert lines[1] == "0,10,-5" and lines[2] == "0.5,6.0653066,-3.0326533"    # readable, not %.18e
+    np.testing.assert_allclose(np.loadtxt(tmp_path / "traj.csv", delimiter=",", skiprows=1)[:, 1],
+                               10 * np.exp(-np.arange(5) * 0.5), rtol=1e-8)
     assert "wrote" not in out and out.startswith("t = 2 s: x = (1.353, -0.6767), goal (0, 0)")
     assert calls["perturbations"] == [] and calls["goal_changes"] == [] and calls["max_speed"] is None
 

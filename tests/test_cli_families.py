@@ -5,6 +5,7 @@ controller; column names and units remembered by the model file."""
 from __future__ import annotations
 
 import importlib.util
+import re
 import shutil
 import subprocess
 
@@ -162,7 +163,7 @@ def test_first_order_fit_of_crossings_points_to_order_2(capsys, tmp_path):
     code, out, err = run(capsys, "fit", logs, "--components", "2", "--warp", "none", "--max-iter", "2",
                          "--out", tmp_path / "m.json")
     assert code == 0, err
-    assert "crossing(s) of the demonstrations" in out and "sosdyn fit --order 2" in out
+    assert re.search(r"\d+ crossings? involving \d+ demonstrations?", out) and "sosdyn fit --order 2" in out
     code, _, err = run(capsys, "rollout", tmp_path / "m.json", "--start", "1,2", "--start-velocity", "0,0")
     assert_one_error_line(code, err, "--start-velocity does not apply to a CDSP model (SecondOrderCDSP takes it)",
                           need_try=True)

@@ -146,3 +146,14 @@ def test_walkthrough_runs_on_the_shipped_data(capsys, tmp_path, monkeypatch):
     exec(compile(block, "README.md", "exec"), scope)  # noqa: S102 -- the README's own code, run as written
     assert np.linalg.norm(scope["xdot"]) <= 0.3 * (1 + 1e-12)
     np.testing.assert_allclose(scope["traj"].pos[-1], [0.35, -0.05, 0.25], atol=5e-3)
+
+
+def test_install_starts_with_the_venv_and_states_measured_times():
+    """A newcomer's first command installs (the old README opened with the 43-minute `make run`),
+    and `make test`'s time is the one measured on 2 cores."""
+    block = re.search(r"## Install\n\n```bash\n(.*?)```", README, flags=re.DOTALL).group(1)
+    lines = [ln for ln in block.splitlines() if ln.startswith("make ")]
+    assert [ln.split()[1] for ln in lines] == ["venv", "run", "test"]
+    assert re.search(r"\d+ (s|min) measured", lines[1])
+    assert re.search(r"\d+(\.\d+)? min measured on 2 cores", lines[2])
+

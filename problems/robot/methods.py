@@ -19,8 +19,8 @@ from scipy.spatial.transform import Rotation
 import sosdyn as sd
 from sosdyn.evaluation.baselines import GMR
 from sosdyn.lfd.data.pose import align_orientations, chart, goal_orientation, split_demonstrations
-from sosdyn.lfd.runtime.pose import body_velocity
-from sosdyn.lfd.runtime.states import limit_speed, speed_factor
+from sosdyn.lfd.runtime.pose import body_velocity, pose_speed_factor
+from sosdyn.lfd.runtime.states import limit_speed
 
 from ..settings import SEED
 from .trials import MAX_ANGULAR_SPEED, MAX_SPEED, pose_command, position_command
@@ -36,8 +36,8 @@ def gmr_pose_step(pos_model, rot_model, max_speed, max_angular_speed):
     def step(x, q, goal):
         r = chart(q, goal[3:])
         v, rdot = pos_model.field(x[None], goal[:3])[0], rot_model.field(r, origin)[0]
+        lam = float(pose_speed_factor(r, np.concatenate([v, rdot])[None], max_speed, max_angular_speed)[0, 0])
         w = Rotation.from_quat(q, scalar_first=True).apply(body_velocity(r, rdot)[0])
-        lam = min(float(speed_factor(v, max_speed)[0]), float(speed_factor(w, max_angular_speed)[0]))
         return lam * v, lam * w
     return step
 

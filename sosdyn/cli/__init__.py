@@ -40,6 +40,7 @@ from __future__ import annotations
 import importlib
 import logging
 import sys
+import warnings
 from pathlib import Path
 from typing import Annotated
 
@@ -48,6 +49,7 @@ from rich.logging import RichHandler
 from rich.markup import escape
 
 from ..errors import InputError, SosdynError
+from ..limits import env_name
 from . import fit, models  # noqa: F401 -- registers their commands on the app
 from .base import State, app, err, info, lasa_app, out, status
 from .paths import check_folder, check_output, existing
@@ -158,7 +160,8 @@ _HINTS = (
     (PermissionError, "check the permissions, or choose another path."),
     (OSError, "check the path."),
     (RecursionError, "check that the file is one sosdyn wrote (its nesting is too deep to read)."),
-    (MemoryError, "smaller inputs; sosdyn.set_limits(max_bytes=...) bounds what is attempted."),
+    (MemoryError, f"smaller inputs; or a lower {env_name('max_bytes')} in the environment: sosdyn estimates its "
+                  "large allocations first and refuses work estimated over that limit before it starts."),
     (SosdynError, "rerun with --debug for details."),
     (ValueError, "check the options (sosdyn COMMAND --help); rerun with --debug for the traceback."),
 )
@@ -182,12 +185,26 @@ def error_line(exc: BaseException) -> str:
     return text
 
 
+def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A Python warning raised while a command runs, as one line: ``note: ...`` for a UserWarning (what
+    the loaders announce, e.g. repeated time stamps merged), ``warning: ...`` for anything else
+    (nothing with --quiet); the source line only with --debug."""
+    if State.debug:
+        err.print(warnings.formatwarning(message, category, filename, lineno, line), highlight=False, markup=False)
+    elif issubclass(category, UserWarning) and not issubclass(category, RuntimeWarning):
+        info(f"note: {escape(str(message))}")
+    elif not State.quiet:
+        err.print(f"[yellow]warning:[/] {escape(f'{category.__name__}: {message}')}", soft_wrap=True, highlight=False)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the CLI; the errors in ``_REPORTED`` become one line ``error: ...`` and exit 1
     (re-raised with --debug or SOSDYN_DEBUG=1)."""
     State.debug = False
     try:
-        app(args=argv, prog_name="sosdyn")
+        with warnings.catch_warnings():
+            warnings.showwarning = show_warning
+            app(args=argv, prog_name="sosdyn")
     except _REPORTED as exc:
         if State.debug:
             raise

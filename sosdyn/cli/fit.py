@@ -18,8 +18,10 @@ reported when the family cannot follow them. An option the family has no paramet
 naming the family that takes it. Progress: one plain line per
 convex step on stdout (step, cost, seconds of the step and since the start) when stdout is not a
 terminal, a live status line when it is; nothing with ``--quiet``. After the fit: the
-certificate and the model's summary (e.g. which warp candidate was kept), a line for every fit that
-stopped at the iteration cap, and a table of how the model reproduces each demonstration.
+certificate, right under it a caution when reproductions do not reach the goal within twice their
+demonstration's duration (what the certificate does and does not promise), the model's summary (e.g.
+which warp candidate was kept), a line for every fit that stopped at the iteration cap, and a table of
+how the model reproduces each demonstration (with the time each takes to reach the goal).
 """
 from __future__ import annotations
 
@@ -28,7 +30,6 @@ import time
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.markup import escape
 
@@ -36,13 +37,13 @@ from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
 from ..lfd.fit.learner import COST_FLOOR, stalled
-from ..lfd.data.pose import GOAL_TOL_DEG, is_pose_file
+from ..lfd.data.pose import GOAL_TOL_DEG
 from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
 from ..lfd.model.base import FAMILIES, family_for
 from ..lfd.model.second_order import FIELDS as SECOND_ORDER_FIELDS
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
-from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_score
-from .paths import check_folder, check_output, demo_inputs
+from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_arrival, print_score
+from .paths import LASA_PREFIX, check_folder, check_output, demo_inputs
 
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
 
@@ -174,7 +175,8 @@ def _default(name: str) -> str:
 def fit(
     demos: Annotated[list[str], typer.Argument(
         help="Demonstration files (CSV/NPY, one demonstration each, or several with a demo column), "
-             "folders of them, quoted patterns like 'demos/*.csv', or lasa:NAME.", show_default=False)],
+             "folders of them, quoted patterns like 'demos/*.csv', or one lasa:NAME or dataset:NAME alone.",
+        show_default=False)],
     out_path: Annotated[Path, typer.Option("--out", "-o", help="Where to save the model (JSON).")] = Path("model.json"),
     order: Annotated[int, typer.Option(
         "--order", min=1, max=2, help="1: a first-order model xdot = f(x) (CDSP; PoseCDSP for pose files); 2: a "
@@ -219,9 +221,9 @@ def fit(
                               "plots; the numbers are not rescaled.", show_default="none")] = None,
     goal_tol: Annotated[float | None, typer.Option(
         "--goal-tol", min=0.0, help="Largest distance of a demonstration's end point from the mean end point "
-                                    "(data units) as recorded; demonstrations ending farther apart are refused.",
-        show_default=f"{GOAL_TOL_FRACTION:.0%} of the data's bounding-box diagonal with --align-ends off; "
-                     "else --align-ends' limit")] = None,
+                                    "(data units) after preprocessing (--align-ends moves the ends onto their "
+                                    "mean); demonstrations ending farther apart are refused, as by Python's fit.",
+        show_default=f"{GOAL_TOL_FRACTION:.0%} of the data's bounding-box diagonal")] = None,
     smooth: Annotated[str, typer.Option(
         parser=parse_smooth, help="Savitzky-Golay smoothing before differentiation: auto = a window from the "
                                   "noise and the sampling (off for smooth data such as LASA), off, or an odd "
@@ -253,7 +255,7 @@ def fit(
     """
     import sosdyn as sd
 
-    lasa = len(demos) == 1 and demos[0].startswith("lasa:")
+    lasa = len(demos) == 1 and demos[0].startswith(LASA_PREFIX)
     shipped = len(demos) == 1 and demos[0].startswith(DATASET_PREFIX)
     if lasa and (dt, units, goal_tol, time_units, columns) != (None,) * 5:
         raise InputError("--dt, --units, --goal-tol, --time-units and --columns apply to files, not to "
@@ -265,14 +267,12 @@ def fit(
     check_output(out_path, paths, "demonstration file")
     check_folder(out_path.parent)
     folder = len(demos) == 1 and Path(demos[0]).is_dir()      # the set is named after its folder
-    pose_files = columns is None and any(map(is_pose_file, paths))    # read as poses: no end tolerance here
-    raw_tol = goal_tol if goal_tol is not None or align_ends is False or pose_files else np.inf
-    read = {"units": units, "goal_tol": raw_tol, "name": Path(demos[0]).resolve().name if folder else None}
+    read = {"units": units, "goal_tol": goal_tol, "name": Path(demos[0]).resolve().name if folder else None}
     if shipped:
         data = load_dataset_input(demos[0], dt)
     else:
-        data = sd.load_lasa(demos[0].removeprefix("lasa:")) if lasa else sd.load_demos(
-            paths, **{k: v for k, v in read.items() if v is not None},   # aligning: --align-ends refuses
+        data = sd.load_lasa(demos[0].removeprefix(LASA_PREFIX)) if lasa else sd.load_demos(
+            paths, **{k: v for k, v in read.items() if v is not None},   # the ends: checked after prepare
             **read_options(dt, time_units, columns))
     family = family_for(data, order)
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
@@ -292,10 +292,12 @@ def fit(
     info(f"[green]saved[/] {escape(str(out_path))}  ({len(data)} demonstrations, fit in "
          f"{time.perf_counter() - progress.start:.1f} s, {len(model.history_)} convex steps)")
     lines = model.summary()
+    rows = None if State.quiet else model.score(data)
     info(f"certificate: {'[green]passed[/]' if model.certified_ else '[red]FAILED[/]'} — {escape(lines[0])}")
+    params = model.get_params()
+    print_arrival(rows, params.get("gamma"))
     for line in lines[1:]:
         info(escape(line))
-    params = model.get_params()
     for line in progress.caps(params["max_iter"], params["tol"]):
         info(f"[yellow]iteration cap[/]: {escape(line)}")
-    print_score(model, data)
+    print_score(rows, data)

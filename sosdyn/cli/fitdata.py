@@ -5,8 +5,10 @@ table of how the fitted model reproduces each demonstration.
 hammer's declared time step, are printed). ``--smooth``, ``--trim-rest`` and ``--align-ends``
 are the options of the family's ``prepare`` (:func:`sosdyn.preprocess`'s), which also warns about
 crossing demonstrations when the family cannot follow them (:mod:`sosdyn.lfd.data.crossing`); after
-the fit the model's ``score`` is printed, with a warning when a reproduction deviates by more than
-:data:`DEVIATION_WARN` of the data's extent (bounding-box diagonal).
+the fit the model's ``score`` is printed (with the time each reproduction takes to reach the goal), a
+caution under the certificate when some do not arrive within twice their demonstration's duration
+(:func:`~sosdyn.lfd.rollout.quality.arrival_caution`), and a warning when a reproduction deviates by more
+than :data:`DEVIATION_WARN` of the data's extent (bounding-box diagonal).
 """
 from __future__ import annotations
 
@@ -17,9 +19,10 @@ import typer
 from rich.markup import escape
 
 from ..lfd.data.datasets import load_dataset
+from ..lfd.rollout.quality import arrival_caution
 from .base import State, info, out
+from .paths import DATASET_PREFIX
 
-DATASET_PREFIX = "dataset:"
 DEVIATION_WARN = 0.10
 
 
@@ -74,25 +77,35 @@ def prepare(family, data, smooth: str | int, trim_rest: bool, align):
     return result
 
 
-def print_score(model, data) -> None:
-    """The table of the model's ``score`` and a warning for reproductions far from their demo."""
-    if State.quiet:
+def print_arrival(rows: list[dict] | None, gamma: float | None) -> None:
+    """The caution of :func:`~sosdyn.lfd.rollout.quality.arrival_caution` (printed under the certificate)."""
+    message = None if rows is None else arrival_caution(rows, gamma)
+    if message:
+        out.print(f"[yellow]arrival:[/] {escape(message)}", soft_wrap=True)
+
+
+def print_score(rows: list[dict] | None, data) -> None:
+    """The table of the model's ``score`` rows (None: --quiet, nothing) and a warning for reproductions
+    far from their demonstration."""
+    if rows is None:
         return
-    rows = model.score(data)
     pos = np.vstack([d.pos for d in data])
     extent = float(np.linalg.norm(pos.max(axis=0) - pos.min(axis=0)))
     u = data.units or "units"
-    out.print(f"reproduction of each demonstration from its start ({u}; at goal = within 1% of the extent "
-              f"{extent:.4g}):", highlight=False, soft_wrap=True)
+    out.print(f"reproduction of each demonstration from its start ({u}; reaches goal = the first time within 1% "
+              f"of the extent {extent:.4g}, 'never' = not within twice the demo's duration):", highlight=False,
+              soft_wrap=True)
     angles = any("max_dev_deg" in r for r in rows)       # a pose model's rows also score the orientation (deg)
     if angles:
-        out.print("orientations: deviation in deg; at goal also within 1 deg of the goal orientation.", highlight=False)
+        out.print("orientations: deviation in deg; the goal is reached within 1 deg of the goal orientation too.",
+                  highlight=False)
     out.print(f"{'demo':>4}  {'mean dev':>10}  {'max dev':>10}  " + (f"{'mean deg':>8}  {'max deg':>8}  " if angles else "")
-              + f"{'arrival s':>9}  {'demo s':>7}  at goal", highlight=False)
+              + f"{'reaches goal s':>14}  {'demo s':>7}  at goal", highlight=False)
     for r in rows:
+        arrival = f"{r['arrival_s']:.3g}" if np.isfinite(r["arrival_s"]) else "never"
         out.print(f"{r['demo']:>4}  {r['mean_dev']:>10.4g}  {r['max_dev']:>10.4g}  "
                   + (f"{r['mean_dev_deg']:>8.3g}  {r['max_dev_deg']:>8.3g}  " if angles else "")
-                  + f"{r['arrival_s']:>9.3g}  {r['duration_s']:>7.3g}  {'yes' if r['at_goal'] else 'NO'}", highlight=False)
+                  + f"{arrival:>14}  {r['duration_s']:>7.3g}  {'yes' if r['at_goal'] else 'NO'}", highlight=False)
     far = [r for r in rows if r["max_dev"] > DEVIATION_WARN * extent]
     if far:
         worst = max(far, key=lambda r: r["max_dev"])
@@ -100,7 +113,3 @@ def print_score(model, data) -> None:
                   f"by more than {DEVIATION_WARN:.0%} of the data's extent (worst: demo {worst['demo']}, "
                   f"{worst['max_dev']:.4g} {escape(u)}). Try: more components (--components), --smooth, or check "
                   "the demonstrations for crossings.", soft_wrap=True)
-    stalled = [r["demo"] for r in rows if not r["at_goal"]]
-    if stalled:
-        out.print(f"[yellow]warning:[/] reproductions of demos {stalled} are not at the goal after twice the "
-                  "demonstration's duration.", soft_wrap=True)

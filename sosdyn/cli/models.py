@@ -119,7 +119,8 @@ def rollout(
     t, states = np.asarray(traj.t), np.asarray(traj.states)
     if out_path is not None:                     # the layout load_demos reads
         np.savetxt(out_path, np.column_stack([t, states]), delimiter=",", comments="",
-                   header=",".join(["t", *layout.columns]))
+                   header=",".join(["t", *layout.columns]),
+                   fmt="%.9g")                # 9 significant digits: readable, and well below any sensor's noise
         info(f"[green]wrote[/] {escape(str(out_path))}  ({len(t)} steps)")
     end = ", ".join(f"{v:.4g}" for v in states[-1])
     goal = ", ".join(f"{v:.4g}" for v in traj.goal_history[-1])

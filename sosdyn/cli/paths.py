@@ -60,6 +60,8 @@ def check_folder(folder: Path, *, create: bool = False) -> None:
 
 
 DEMO_SUFFIXES = (".csv", ".npy")
+#: Inputs that name a shipped set instead of files: read alone, one set per command.
+LASA_PREFIX, DATASET_PREFIX = "lasa:", "dataset:"
 _GLOB_CHARS = frozenset("*?[")
 
 
@@ -73,10 +75,15 @@ def demo_inputs(specs: Sequence[str]) -> list[Path]:
     is, a file (``run[1].csv`` is that file, never a pattern) or a folder (its ``*.csv`` and ``*.npy``
     files, sorted by name, not recursive, dotfiles skipped); otherwise a pattern with ``*``, ``?`` or
     ``[`` as its matching files (sorted, dotfiles skipped unless the pattern's name starts with a dot;
-    quote it so the shell leaves it alone). FileNotFoundError / InputError when a spec names nothing."""
+    quote it so the shell leaves it alone). FileNotFoundError / InputError when a spec names nothing, and
+    InputError for ``lasa:NAME`` / ``dataset:NAME`` among other inputs (a shipped set is read alone)."""
     files: list[Path] = []
     for spec in specs:
         path = Path(spec)
+        if spec.startswith((LASA_PREFIX, DATASET_PREFIX)) and not path.exists():
+            raise InputError(f"{spec} names a shipped set, and a shipped set is read alone: it cannot be mixed "
+                             f"with other inputs ({', '.join(s for s in specs if s != spec)[:120]}). Try: "
+                             f"sosdyn fit {spec} on its own, or only files and folders.")
         if path.is_dir():
             found = sorted(p for p in path.iterdir()
                            if p.suffix.lower() in DEMO_SUFFIXES and _visible(p) and p.is_file())

@@ -17,6 +17,8 @@ Lengths are in the demonstrations' unit (mm for LASA), times in seconds. A *stat
 
     {"meta": {"sosdyn_version", "git_commit", "created", "python", "platform",
               "packages": {name: version}, "seed", "command"},
+     "pages": [{"title": str, "href": str | null, "finding": str, "numbers": {label: value},
+                "data": str | null, "command": str}],
      "findings": [{"title": str, "text": str (markup subset), "numbers": {label: value}}],
      "methods": {method: {"description": str, "settings": {name: value}}},
      "accuracy": {shape: {method: {
@@ -31,7 +33,16 @@ Lengths are in the demonstrations' unit (mm for LASA), times in seconds. A *stat
          "min_gram_eig", "max_coeff_residual", "max_sampled_eig", "n_samples",
          "passed": bool, "metric_collapse": {label: value} | null}}},
      "timings": {shape: {method: {"em_s", "build_s", "solve_s", "verify_s", "total_s"}}},
+     "diagnostics": {shape: {method: {"final_cost", "history": [{"step", "cost", "margin"}]}
+                                     | {"error": str}}},
      "figures": {name: {"svg": path, "png": path, "caption": str}}}
+
+``pages`` is the index of the reports (shown first, one row per page: a link to it, relative to
+the report folder, or none for a page not built yet; its one-line finding, plain text, with the
+values it quotes in ``numbers``; the data file it was read from; the command that builds it).
+``diagnostics`` is what the findings are computed from beside the tables; it is not shown.
+A stat whose ``per_demo`` holds non-finite values (failed runs) is shown as the mean ± std of
+the finite ones and "k of n failed".
 
 Figure paths are relative to ``base_dir`` (for :func:`build_report`: the folder of
 ``results.json``); SVG is embedded when present and below 2 MB, PNG otherwise.
@@ -57,6 +68,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import jinja2
+import numpy as np
 from markupsafe import Markup, escape
 
 from ..errors import InputError, SosdynError
@@ -126,12 +138,26 @@ def _mean(entry) -> float | None:
     return None if value is None or isinstance(value, bool) else float(value)
 
 
+def _finite(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
 def _stat_text(entry) -> str:
-    if isinstance(entry, Mapping):
-        if entry.get("std") is None:
-            return fmt(entry.get("mean"))
-        return f"{fmt(entry.get('mean'))} ± {fmt(entry.get('std'), digits=2)}"
-    return fmt(entry)
+    """"mean ± std"; with failed runs (non-finite per-demo values) the mean ± std of the others
+    and "k of n failed", never "∞ ± ∞"."""
+    if not isinstance(entry, Mapping):
+        return fmt(entry)
+    per_demo = entry.get("per_demo") or []
+    failed = sum(not _finite(v) for v in per_demo)
+    if failed or (entry.get("mean") is not None and not _finite(entry.get("mean"))):
+        done = [float(v) for v in per_demo if _finite(v)]
+        if not done:
+            return f"all {len(per_demo)} failed" if per_demo else "failed"
+        return (f"{fmt(float(np.mean(done)))} ± {fmt(float(np.std(done)), digits=2)} "
+                f"({failed} of {len(per_demo)} failed)")
+    if entry.get("std") is None:
+        return fmt(entry.get("mean"))
+    return f"{fmt(entry.get('mean'))} ± {fmt(entry.get('std'), digits=2)}"
 
 
 def _percent(value) -> str:
@@ -318,8 +344,13 @@ def _figures(section: Mapping, base_dir: Path, trusted: bool = False) -> list[di
     return figures
 
 
+def _pages(section) -> list[dict]:
+    return [{"title": str(p.get("title", "")), "href": p.get("href"), "finding": str(p.get("finding") or ""),
+             "data": p.get("data"), "command": p.get("command")} for p in section]
+
+
 _SECTIONS: dict[str, Callable] = {
-    "findings": _findings, "methods": _methods, "accuracy": _accuracy,
+    "pages": _pages, "findings": _findings, "methods": _methods, "accuracy": _accuracy,
     "robustness": _robustness, "certificates": _certificates, "timings": _timings,
     "meta": _environment,
 }

@@ -13,9 +13,9 @@ from ..limits import check_count, check_json_depth, get_limits
 _JSON_KINDS = {"object": Mapping, "array": list, "string": str, "boolean": bool, "number": (int, float),
                "null": type(None)}
 # JSON kind of each top-level value of a results file (null also allowed); the first two are required.
-_SECTION_KINDS = {"meta": "object", "findings": "array", "methods": "object", "accuracy": "object",
-                  "robustness": "object", "certificates": "object", "timings": "object",
-                  "figures": "object"}
+_SECTION_KINDS = {"meta": "object", "pages": "array", "findings": "array", "methods": "object",
+                  "accuracy": "object", "robustness": "object", "certificates": "object",
+                  "timings": "object", "diagnostics": "object", "figures": "object"}
 _REQUIRED_SECTIONS = ("meta", "findings")
 RESULTS_HINT = ("pass the results.json written by `python -m problems run` (or `make run`), "
                  "e.g. reports/results.json")

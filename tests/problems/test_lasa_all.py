@@ -3,10 +3,12 @@ from __future__ import annotations
 
 import json
 
+import pytest
 
 from problems import lasa_all
 
 
+@pytest.mark.slow      # experiment-sized: make test-slow
 def test_lasa_all_toy(tmp_path, toy_config):
     paths = lasa_all.run(["Leaf_1", "Sine"], ("CDSP-ICA", "GMR"), toy_config, tmp_path, n_jobs=1, K=3,
                          render_pdf=False)

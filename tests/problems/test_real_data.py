@@ -10,6 +10,7 @@ from problems import real_data
 from sosdyn.evaluation import dsopt, realdata
 
 
+@pytest.mark.slow      # experiment-sized: make test-slow
 def test_quick_run_writes_results_page_and_figure(tmp_path):
     paths = real_data.run(("hammer",), ("CDSP default", "GMR"), quick=True, out_dir=tmp_path)
     res = json.loads(paths["results"].read_text())

@@ -72,8 +72,12 @@ def test_gmr_pose_step_turns_to_the_goal_and_keeps_both_limits():
     np.testing.assert_allclose(v, goal[:3])
     np.testing.assert_allclose(w, [0, 0, -0.5], atol=1e-12)                           # rdot = -r about z
     v, w = methods.gmr_pose_step(Field(), Field(), 0.5, 0.1)(np.zeros(3), q, goal)
-    lam = min(0.5 / np.linalg.norm(goal[:3]), 0.1 / 0.5)
-    np.testing.assert_allclose(np.concatenate([v, w]), lam * np.concatenate([goal[:3], [0, 0, -0.5]]), atol=1e-12)
+    a, b = np.linalg.norm(goal[:3]) / 0.5, 0.5 / 0.1                      # |v| / v_max, |omega| / w_max
+    rho = max(a, b) * ((a / max(a, b)) ** 4 + (b / max(a, b)) ** 4) ** 0.25     # their joint ratio (4-norm)
+    y = (rho - 0.5) / 0.5
+    lam = (0.5 + 0.5 * y / (1 + y ** 4) ** 0.25) / rho                      # sigma(rho) / rho, the smooth limit
+    np.testing.assert_allclose(np.concatenate([v, w]), lam * np.concatenate([goal[:3], [0, 0, -0.5]]), rtol=1e-12)
+    assert np.linalg.norm(v) < 0.5 and np.linalg.norm(w) < 0.1
 
 
 def test_time_to_goal_and_path_deviation():

@@ -13,6 +13,7 @@ from problems import second_order
 from sosdyn.evaluation import dsopt
 
 
+@pytest.mark.slow      # experiment-sized: make test-slow
 def test_quick_run_writes_results_page_and_figure(tmp_path):
     paths = second_order.run(second_order.QUICK_SETS, quick=True, out_dir=tmp_path)
     res = json.loads(paths["results"].read_text())

@@ -6,6 +6,7 @@ from problems import warp_figure
 from sosdyn.errors import SosdynError
 
 
+@pytest.mark.slow      # experiment-sized: make test-slow
 def test_warp_figure_on_doublebendedline(tmp_path):
     try:
         sd.load_lasa("DoubleBendedLine")

@@ -1,12 +1,51 @@
-"""Synthetic data for the report tests: a stable spiral field, curved demos, a results dict.
+"""Synthetic data for the report tests: a stable spiral field, curved demos, a results dict;
+and the page tools (Debian's chromium, poppler's pdftoppm, playwright).
 
-Everything is deterministic (fixed seeds) and small, so the tests are fast.
+Everything is deterministic (fixed seeds) and small, so the tests are fast. A test needing a
+page tool skips without it, unless ``SOSDYN_REQUIRE_PAGE_TOOLS=1`` (set by ``.ci/run``, which
+installs them): then a missing tool fails the test, so CI never passes by skipping.
 """
 
 from __future__ import annotations
 
+import os
+import shutil
+from pathlib import Path
+
 import numpy as np
 import pytest
+
+CHROMIUM = Path("/usr/bin/chromium")
+REQUIRE_TOOLS = os.environ.get("SOSDYN_REQUIRE_PAGE_TOOLS") == "1"
+
+
+def need(found, what: str):
+    """``found`` if truthy; else skip (or fail, when the tools are required) naming ``what``."""
+    if not found:
+        (pytest.fail if REQUIRE_TOOLS else pytest.skip)(f"needs {what}")
+    return found
+
+
+@pytest.fixture
+def pdftoppm() -> str:
+    """The path of poppler's pdftoppm."""
+    return need(shutil.which("pdftoppm"), "pdftoppm (apt-get install poppler-utils)")
+
+
+@pytest.fixture
+def browser():
+    """Debian's chromium (/usr/bin/chromium) driven by playwright, headless."""
+    need(CHROMIUM.exists(), "Debian's chromium at /usr/bin/chromium (apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        need(False, "playwright (pip install 'sosdyn[test]')")
+    args = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+            "--disable-component-update", "--disable-sync", "--no-first-run"]
+    with sync_playwright() as pw:
+        chromium = pw.chromium.launch(executable_path=str(CHROMIUM), args=args)
+        yield chromium
+        chromium.close()
 
 SHAPES = ("BendedLine", "Leaf_1", "Leaf_2")
 METHODS = ("CDSP", "DMP", "CLF-DM", "GMR")

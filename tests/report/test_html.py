@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 from html.parser import HTMLParser
 
@@ -182,21 +181,19 @@ def test_load_results_errors(tmp_path):
         H.load_results(bad)
 
 
-def test_build_report_writes_html_and_a_pdf_with_ink(tmp_path, results_factory, figure_files):
+def test_build_report_writes_html_and_a_pdf_with_ink(tmp_path, results_factory, figure_files, pdftoppm):
     (tmp_path / "results.json").write_text(json.dumps(results_factory(figures=figure_files)))
     paths = H.build_report(tmp_path / "results.json", tmp_path / "out")
     assert paths["html"].is_file()
     pdf = paths["pdf"]
     assert pdf == tmp_path / "out" / "report.pdf"
     assert pdf.read_bytes().startswith(b"%PDF") and pdf.stat().st_size > 20_000
-    if shutil.which("pdftoppm") is None:
-        pytest.skip("pdftoppm (poppler-utils) is not installed: PDF not rasterised")
-    subprocess.run(["pdftoppm", "-r", "40", "-png", "-f", "1", "-l", "1", str(pdf),
+    subprocess.run([pdftoppm, "-r", "40", "-png", "-f", "1", "-l", "1", str(pdf),
                     str(tmp_path / "page")], check=True)
     (page,) = tmp_path.glob("page*.png")
     img = mpimg.imread(page)[..., :3]
     assert img.std() > 0.03 and (img < 0.5).mean() > 0.001
-    subprocess.run(["pdftoppm", "-r", "10", "-png", str(pdf), str(tmp_path / "all")], check=True)
+    subprocess.run([pdftoppm, "-r", "10", "-png", str(pdf), str(tmp_path / "all")], check=True)
     assert len(list(tmp_path.glob("all*.png"))) >= 3
 
 
@@ -207,11 +204,18 @@ def test_pdf_of_an_empty_report(tmp_path):
 
 
 def test_diverged_values_from_json_render_as_text(tmp_path, results):
-    """A diverged baseline (inf/NaN, written by json as Infinity/NaN) is shown, not a crash."""
+    """A diverged baseline (inf/NaN, written by json as Infinity/NaN) is shown as failed runs,
+    the others' mean ± std beside it: never a crash, never "∞ ± ∞" (the old robustness cells)."""
     results["accuracy"]["Leaf_1"]["DMP"]["sea"] = {"mean": float("inf"), "std": float("nan")}
+    inf = float("inf")
+    results["robustness"]["Leaf_2"]["GMR"]["push"]["dtwd_total"] = {
+        "mean": inf, "std": inf, "per_demo": [7167.8, inf, 2284.4, inf, 6517.8, 6560.0, inf]}
+    results["robustness"]["Leaf_2"]["GMR"]["push"]["goal_error"] = {"mean": inf, "std": inf, "per_demo": [inf, inf]}
     (tmp_path / "r.json").write_text(json.dumps(results))
     text = H.render_html(H.load_results(tmp_path / "r.json"), tmp_path).read_text()
-    assert "∞ ± nan" in text
+    assert "∞" not in text and "nan" not in text
+    assert "<td>failed</td>" in text and "<td>all 2 failed</td>" in text
+    assert "<td>5632 ± 1950 (3 of 7 failed)</td>" in text   # the mean and std of the 4 finite values
 
 
 def test_per_shape_numbers_of_a_finding_become_one_table(tmp_path, results):

@@ -78,6 +78,21 @@ def parse_columns(columns) -> list | None:
     return columns
 
 
+def suggest_columns(names: list[str]) -> list[str]:
+    """The columns a hint proposes as positions among ``names`` (time and demo id already left out):
+    the largest family of numbered names sharing a prefix (panda_joint1..panda_joint7, not gripper_width
+    beside them), in numeric order; without such a family, the names that are not orientations."""
+    families: dict[str, dict[int, str]] = {}
+    for name in names:
+        m = re.fullmatch(r"(.*?)(\d+)", name)
+        if m:
+            families.setdefault(m.group(1), {})[int(m.group(2))] = name
+    best = max(families.values(), key=len, default={})
+    if len(best) >= 2:
+        return [best[k] for k in sorted(best)]
+    return [h for h in names if not ORIENTATION.fullmatch(h)] or list(names)
+
+
 def refuse_unclaimed(header: list[str], used: set[int], positions: list[int], where: str) -> None:
     """InputError when header columns besides ``used`` exist: never a silent drop. Orientation
     columns get their own message (the pose header to use); the hint selects the ``positions``."""
@@ -95,4 +110,4 @@ def refuse_unclaimed(header: list[str], used: set[int], positions: list[int], wh
     raise InputError(
         f"{where}: columns {extra} are neither time, demo id, positions nor velocities, and would be "
         f"ignored. Try: select the position columns explicitly, {COLUMNS_HINT}, e.g. --columns "
-        f"{positions or ','.join(extra)}.")
+        f"{positions or ','.join(suggest_columns(extra))}.")

@@ -14,8 +14,12 @@ A hit counts when the two velocities point differently: more than :data:`SELF_AN
 on one demo (a loop), more than :data:`PAIR_ANGLE_DEG` between two demos (two demos of one
 motion cross at small angles as they vary; above 90 deg they disagree on the direction of
 travel). Ignored: points within ``goal_radius`` (default :data:`GOAL_FRACTION` of the diagonal)
-of the mean end, where every demonstration meets the others, and samples slower than
+of the mean end, where every demonstration meets the others; the rest at a demo's ends, its samples
+before it first leaves the ball of radius ``goal_radius`` about its first sample and after it enters
+the one about its last for good (:func:`~.preprocess.rest_bounds`: an arm leaving rest wobbles back
+over its start, 13 false crossings on robottasks/openbox); and samples slower than
 :data:`SLOW_FRACTION` of their demo's median speed (at rest, the direction is noise).
+:func:`crossing_warning` says how many, between how many demos, and the first few.
 """
 
 from __future__ import annotations
@@ -23,6 +27,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from sosdyn.lfd.data.preprocess import rest_bounds
 
 NEAR_FRACTION, GOAL_FRACTION, SLOW_FRACTION = 0.01, 0.05, 0.1
 SELF_ANGLE_DEG, PAIR_ANGLE_DEG = 30.0, 90.0
@@ -80,13 +86,17 @@ def find_crossings(demos, *, tol: float | None = None, goal_radius: float | None
     arc = [np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(d.pos[k], axis=0), axis=1))])
            for d, k in zip(items, keep)]
     slow = [SLOW_FRACTION * np.median(np.linalg.norm(d.vel, axis=1)) for d in items]
+    moving = []                                   # per demo, which kept samples are not the rest at its ends
+    for d, k in zip(items, keep):
+        first, last = rest_bounds(d.pos, goal_radius)
+        moving.append((k > first) & (k < last))
     found = []
     for a in range(len(items)):
         for b in range(a, len(items)):
             P, V, Q, W = items[a].pos[keep[a]], items[a].vel[keep[a]], items[b].pos[keep[b]], items[b].vel[keep[b]]
             i, j, pts = (_segment_hits(P, Q) if P.shape[1] == 2 else _near_passes(P, V, Q, W, tol))
             angles = _angle(V[i], W[j])
-            ok = np.linalg.norm(pts - goal, axis=1) > goal_radius
+            ok = (np.linalg.norm(pts - goal, axis=1) > goal_radius) & moving[a][i] & moving[b][j]
             ok &= angles > (SELF_ANGLE_DEG if a == b else PAIR_ANGLE_DEG)
             ok &= (np.linalg.norm(V[i], axis=1) > slow[a]) & (np.linalg.norm(W[j], axis=1) > slow[b])
             if a == b:
@@ -99,8 +109,9 @@ def find_crossings(demos, *, tol: float | None = None, goal_radius: float | None
     return found
 
 
-def crossing_warning(crossings: list[Crossing], units: str = "", shown: int = 5) -> str | None:
-    """A sentence for the user about ``crossings`` (None when there are none)."""
+def crossing_warning(crossings: list[Crossing], units: str = "", shown: int = 3) -> str | None:
+    """A sentence for the user about ``crossings`` (None when there are none): how many, between how
+    many demonstrations, and the first ``shown`` of them."""
     if not crossings:
         return None
     u = f" {units}" if units else ""
@@ -108,8 +119,12 @@ def crossing_warning(crossings: list[Crossing], units: str = "", shown: int = 5)
         (f"demo {c.a} crosses itself" if c.a == c.b else f"demos {c.a} and {c.b} cross")
         + f" at ({', '.join(f'{v:.4g}' for v in c.point)}){u}, {c.angle_deg:.0f} deg apart"
         for c in crossings[:shown])
-    more = f" (and {len(crossings) - shown} more)" if len(crossings) > shown else ""
-    return (f"{len(crossings)} crossing(s) of the demonstrations: {where}{more}. A first-order model "
+    demos = len({d for c in crossings for d in (c.a, c.b)})
+    loops = len({c.a for c in crossings if c.a == c.b})
+    count = (f"{len(crossings)} crossing{'s' * (len(crossings) > 1)} involving {demos} "
+             f"demonstration{'s' * (demos > 1)}" + (f" ({loops} crossing itself)" if loops else ""))
+    first = f"the first {shown}: " if len(crossings) > shown else ""
+    return (f"{count}; {first}{where}. A first-order model "
             "xdot = f(x) has one velocity per state and cannot follow paths that cross: expect the "
             "reproductions to take one branch or cut the loop there. Try: the second-order model, which can "
             "follow them (sosdyn fit --order 2, sosdyn.SecondOrderCDSP), demonstrations that do not cross, or "

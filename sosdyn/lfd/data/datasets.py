@@ -105,6 +105,9 @@ def dataset_names(synthetic: bool | None = None) -> list[str]:
 
 def dataset_info(name: str) -> DatasetInfo:
     """The :class:`DatasetInfo` of ``name``; InputError with the close names if unknown."""
+    if not isinstance(name, str):
+        raise InputError(f"a data set's name is one string, got {type(name).__name__} {name!r:.60}. Try: one of "
+                         f"{', '.join(dataset_names())}; load several one by one.")
     if name not in DATASETS:
         close = difflib.get_close_matches(str(name), DATASETS, n=3, cutoff=0.4)
         hint = f"Did you mean {', '.join(close)}? " if close else ""
@@ -121,11 +124,12 @@ def _read_csv(path: Path, info: DatasetInfo) -> tuple[np.ndarray, np.ndarray]:
 
 
 def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | None = None,
-                 goal_tol: float = np.inf) -> Demonstrations | PoseDemonstrations:
+                 goal_tol: float | None = None) -> Demonstrations | PoseDemonstrations:
     """The demonstrations of the shipped set ``name`` (:func:`dataset_names`), checked by
-    :func:`check_demonstrations` with ``goal_tol`` (default ``np.inf``: the ends are not compared here,
-    since ``pouring``'s scatter; :func:`sosdyn.lfd.data.preprocess.preprocess` aligns them and
-    ``CDSP.fit`` refuses ends too far apart).
+    :func:`check_demonstrations` except for the ends, which are one rule applied after preprocessing
+    (``pouring``'s ends scatter up to 11 cm: :func:`sosdyn.lfd.data.preprocess.preprocess` aligns
+    them, and every model's ``fit`` refuses ends farther apart than ``goal_tol``, recorded here;
+    None: 5 % of the data's diagonal).
 
     Positions as recorded, in the units of the set's README (``units`` names them, with
     "(inferred)" where the source does not state them); velocities estimated from positions
@@ -156,4 +160,5 @@ def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | N
         t, pos = _read_csv(path, info)
         demos.append(Demonstration.from_positions(t * step if info.index_time else t, pos,
                                                   f"{name}/{path.name}"))
-    return check_demonstrations(Demonstrations(demos, name, info.units, columns=info.columns), goal_tol=goal_tol)
+    return check_demonstrations(Demonstrations(demos, name, info.units, columns=info.columns), goal_tol=goal_tol,
+                                ends=False)

@@ -14,8 +14,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from sosdyn.errors import DemonstrationError, InputError
+from sosdyn.lfd.data.columns import COLUMNS_HINT
 
 MIN_SAMPLES = 10
+#: A demonstration whose positions stay within STILL_ULPS round-off units (eps x its largest |coordinate|)
+#: of its first sample does not move: what is left is round-off, and a model of it is a model of noise.
+STILL_ULPS = 1000.0
+#: The largest |position| or |velocity| accepted (data units, per s): their squares and cubes (a cubic
+#: field's terms) must stay far from float's overflow at 1.8e308.
+MAX_MAGNITUDE = 1e100
 GOAL_TOL_FRACTION = 0.05
 MAX_UNITS_CHARS = 32           # the units' name, e.g. 'mm' (a model file holds it)
 #: Besides letters and digits (any script: 'µm', 'm²'), the only characters a units' name may hold:
@@ -191,12 +198,31 @@ def time_problem(t: np.ndarray) -> str | None:
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
         return f"time t is not finite (NaN or inf) at sample {bad[0]} of {len(t)}"
-    back = np.flatnonzero(np.diff(t) <= 0)
+    steps = np.diff(t)
+    back = np.flatnonzero(steps < 0) if (steps < 0).any() else np.flatnonzero(steps == 0)   # going back first
     if back.size:
         k = back[0] + 1
         return (f"time is not strictly increasing at sample {k} of {len(t)} "
-                f"(t[{k - 1}] = {t[k - 1]:g}, t[{k}] = {t[k]:g}); sort the samples and drop duplicates")
+                f"(t[{k - 1}] = {t[k - 1]:g}, t[{k}] = {t[k]:g}); sort the samples (load_demos merges samples "
+                "that share a stamp, but refuses time that goes back)")
     return None
+
+
+def merge_repeated_stamps(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """One sample per time stamp where a non-decreasing ``t`` repeats one (the logs of mice and robots
+    do): the rows sharing a stamp become one, their mean -- their common row when they are identical.
+    Returns (t, values, identical rows dropped, differing rows averaged in); ``t`` that decreases
+    somewhere, or repeats nothing, is returned as it is (:func:`time_problem` judges it)."""
+    steps = np.diff(t)
+    if not (steps == 0).any() or (steps < 0).any() or not np.isfinite(t).all():
+        return t, values, 0, 0
+    starts = np.r_[0, np.flatnonzero(steps > 0) + 1]
+    counts = np.diff(np.r_[starts, len(t)])
+    first = values[starts]
+    differs = np.logical_or.reduceat((values != np.repeat(first, counts, axis=0)).any(axis=1), starts)
+    merged = np.where(differs[:, None], np.add.reduceat(values, starts, axis=0) / counts[:, None], first)
+    extra = counts - 1
+    return t[starts], merged, int(extra[~differs].sum()), int(extra[differs].sum())
 
 
 def estimate_velocity(t, pos) -> np.ndarray:
@@ -253,19 +279,55 @@ def _check_one(demo: Demonstration, label: str) -> None:
     problem = time_problem(t)
     if problem:
         raise DemonstrationError(f"{label}: {problem}.")
+    for what, values, hint in (("positions", pos, "other units for the positions"),
+                               ("velocities", vel, "the time step in s (--dt / dt=) or the time units (--time-units "
+                                                   "/ time_units=)")):
+        top = float(np.abs(values).max())
+        if top > MAX_MAGNITUDE:
+            raise DemonstrationError(
+                f"{label}: the {what} reach {top:.3g} (positions up to {float(np.abs(pos).max()):.3g} over "
+                f"{demo.duration:.3g} s), above {MAX_MAGNITUDE:g}: the fit's squares and products of them would "
+                f"overflow float. Try: {hint}.")
+    problem = still_problem(pos)
+    if problem:
+        raise DemonstrationError(f"{label}: {problem}")
 
 
-def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrations:
+def still_coordinates(pos: np.ndarray) -> np.ndarray:
+    """Which coordinates of the positions ``pos`` (T, n) do not move: every sample within STILL_ULPS
+    round-off units (eps x the coordinate's largest magnitude) of the first. (n,) booleans."""
+    moved = np.abs(pos - pos[0]).max(axis=0)
+    return moved <= STILL_ULPS * np.finfo(float).eps * np.abs(pos).max(axis=0)
+
+
+def still_problem(pos: np.ndarray) -> str | None:
+    """Why the positions ``pos`` (T, n) are not a motion -- no coordinate moves
+    (:func:`still_coordinates`) -- as a sentence with a hint; None when they move."""
+    if not still_coordinates(pos).all():
+        return None
+    return (f"the positions do not move (every sample within {float(np.abs(pos - pos[0]).max()):.3g} of the "
+            f"first, round-off at their magnitude {float(np.abs(pos).max()):.3g}): there is no motion to learn. "
+            f"Try: check that the position columns are the moving ones ({COLUMNS_HINT}), or drop this "
+            "demonstration.")
+
+
+def check_demonstrations(demos, *, goal_tol: float | None = None, ends: bool = True) -> Demonstrations:
     """Validate demonstrations for learning and return them as :class:`Demonstrations`.
 
     Raises :class:`DemonstrationError` for: no demonstrations; shapes that disagree (t (T,),
-    pos and vel (T, n)); fewer than ``MIN_SAMPLES`` (10) samples; non-finite values (the
+    pos and vel (T, n)); fewer than ``MIN_SAMPLES`` (10) samples; positions that do not move
+    (:func:`still_problem`); positions or velocities above MAX_MAGNITUDE; non-finite values (the
     message names the demo and the first bad sample); time not strictly increasing;
     dimensions that differ between demos; end points that disagree, i.e. a spread
     ``max_i ||x_i(T_i) - mean_j x_j(T_j)||`` above ``goal_tol`` (same units as the data;
     default: the tolerance ``demos`` was accepted with (``Demonstrations.goal_tol``), else 5 %
     of the diagonal of the bounding box of all positions; ``np.inf`` disables). The returned
     set records the tolerance used, so checking it again (``CDSP.fit``) accepts it again.
+
+    The ends are one acceptance rule with one home, applied after preprocessing: the loaders
+    (:func:`~.files.load_demos`, :func:`~.datasets.load_dataset`) check everything else and pass
+    ``ends=False`` (recording ``goal_tol``), :func:`~.preprocess.preprocess` may align the ends, and
+    every model's ``prepare`` and ``fit`` check them here -- the same in Python and in ``sosdyn fit``.
     """
     try:
         items = list(demos)
@@ -285,6 +347,8 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
                 f"{_label(i, items[i], name)} has dimension {n} but demo 0 has {dims[0]}; "
                 "all demonstrations must live in the same space."
             )
+    if not ends:
+        return demos
     all_pos = np.vstack([d.pos for d in items])
     diagonal = float(np.linalg.norm(all_pos.max(axis=0) - all_pos.min(axis=0)))
     if goal_tol is None:
@@ -295,8 +359,9 @@ def check_demonstrations(demos, *, goal_tol: float | None = None) -> Demonstrati
         raise DemonstrationError(
             f"{_label(worst, items[worst], name)} ends {spread[worst]:.4g} {demos.units or 'units'} "
             f"from the mean end point, more than goal_tol = {goal_tol:.4g}; the demonstrations do "
-            f"not share a goal. Try: trim or drop that demo, or a larger goal_tol (e.g. "
-            f"{1.1 * spread[worst]:.3g}; sosdyn fit --goal-tol)."
+            f"not share a goal. Try: align the ends first (sosdyn.preprocess(demos), as sosdyn fit does unless "
+            f"--align-ends off), trim or drop that demo, or a larger goal_tol (e.g. {1.1 * spread[worst]:.3g}; "
+            "sosdyn fit --goal-tol)."
         )
     return demos
 

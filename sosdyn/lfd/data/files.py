@@ -7,21 +7,26 @@ from __future__ import annotations
 
 import csv
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from sosdyn.errors import DemonstrationError, InputError
+from sosdyn.limits import check_bytes, format_bytes
 from sosdyn.lfd.data.columns import (COLUMNS_HINT, TIME_UNITS, check_duration, check_time_units, parse_columns,
-                                    refuse_unclaimed, time_header_names, time_unit)
-from sosdyn.lfd.data.demonstrations import (Demonstration, Demonstrations, check_demonstrations, time_problem,
-                                            units_problem)
+                                    refuse_unclaimed, suggest_columns, time_header_names, time_unit)
+from sosdyn.lfd.data.demonstrations import (Demonstration, Demonstrations, check_demonstrations, still_coordinates,
+                                            merge_repeated_stamps, time_problem, units_problem)
 from sosdyn.lfd.data.pose import PoseDemonstrations, is_pose_file, load_pose_demos
 
 _AXES = ("x", "y", "z")
 _DEFAULT_DEMO_NAME = "demo"
 _SNIFF_LINES = 50
+#: Working memory of reading a file, per byte of it: a text cell becomes a Python string (measured 8x
+#: for 25-character numbers, about 20x for 4-character ones); an .npy array of int8 becomes float64 (8x).
+READ_BYTES_PER_BYTE = 24
 _DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab", None: "whitespace"}
 _DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
 _NO_TIME_HINT = ("name the time column t, time or timestamp (t_ms / t_us for milli- / microseconds), or "
@@ -113,7 +118,10 @@ def _read_npy(path: Path) -> _Table:
 def _read_table(path: Path) -> _Table:
     """The cells of a .npy or text file; text: delimiter and decimal mark detected, header
     taken only from a first row none of whose cells is a number (so a data row never is one).
-    Blank lines and lines starting with '#' are skipped."""
+    Blank lines and lines starting with '#' are skipped. The memory of reading it, READ_BYTES_PER_BYTE x
+    the file's size, is checked against ``max_bytes`` (:mod:`sosdyn.limits`) first."""
+    check_bytes(path.stat().st_size * READ_BYTES_PER_BYTE, f"reading {path} ({format_bytes(path.stat().st_size)})",
+                "a smaller file (every k-th row: sosdyn subsamples long demonstrations anyway)")
     if path.suffix.lower() == ".npy":
         return _read_npy(path)
     try:
@@ -153,7 +161,11 @@ def _read_table(path: Path) -> _Table:
 
 
 def _column_index(spec, table: _Table, what: str) -> int:
+    """The index of the column ``spec``: a header name (any case), or an index (an int, or a string of
+    digits that is not a header name: ``--columns 1,2``)."""
     header, ncols = table.header, table.cells.shape[1]
+    if isinstance(spec, str) and (header is None or spec.lower() not in header) and re.fullmatch(r"-?\d+", spec.strip()):
+        spec = int(spec)
     if isinstance(spec, str):
         if header is None or spec.lower() not in header:
             raise InputError(f"{table.path}: no column named {spec!r} for {what} (header: {header}; "
@@ -212,6 +224,18 @@ def _roles(table: _Table, dim, time_column, demo_column, dt, columns):
         pos = [_column_index(c, table, "position") for c in columns]
         if dim is not None and len(pos) != dim:
             raise InputError(f"{table.path}: {len(pos)} position columns {columns} but dim = {dim}.")
+        if len(set(pos)) != len(pos):
+            raise InputError(f"{table.path}: the position columns {columns} name one column twice. Try: each "
+                             "position column once.")
+        names = {i: f"{table.header[i]!r}" if table.header else f"column {i}" for i in pos}
+        taken = [(i, role) for i, role in ((ti, "time"), (di, "demo id")) if i in pos]
+        taken += [(i, "time") for i in pos if table.header and table.header[i] in time_header_names() and i != ti]
+        if taken:
+            i, role = taken[0]
+            others = [h for k, h in enumerate(table.header or []) if k not in (ti, di) and table.header[k] not in time_header_names()]
+            raise InputError(f"{table.path}: the position columns include {names[i]}, the {role} column: a model of it "
+                             f"would take {role} for a coordinate. Try: only the coordinates' columns, {COLUMNS_HINT}"
+                             + (f", e.g. --columns {','.join(suggest_columns(others))}." if others else "."))
         return ti, di, pos, []
     if header is not None:
         pos, vel = _numbered(header, "x") or _axes(header, ""), _numbered(header, "v") or _axes(header, "v")
@@ -220,7 +244,7 @@ def _roles(table: _Table, dim, time_column, demo_column, dt, columns):
                 f"{table.path}: header {header} (read with {table.layout}) does not give positions "
                 f"x1..xn or x, y, z (and optionally velocities v1..vn or vx, vy, vz with the same "
                 f"n{'' if dim is None else f' = {dim}'}). Try: name the position columns, {COLUMNS_HINT}, "
-                f"e.g. --columns {','.join(h for i, h in enumerate(header) if i not in (ti, di))}."
+                f"e.g. --columns {','.join(suggest_columns([h for i, h in enumerate(header) if i not in (ti, di)]))}."
             )
         refuse_unclaimed(header, {ti, di, *pos, *vel}, pos, str(table.path))
         return ti, di, pos, vel
@@ -256,7 +280,8 @@ def _as_float(table: _Table, columns: list[int]) -> np.ndarray:
 
 
 def _demos_from_file(path: Path, dim, time_column, demo_column, dt, time_units, columns):
-    """(the file's demonstrations, the names of their position columns: the header's, or None)."""
+    """(the file's demonstrations, the names of their position columns: the header's, or None, and per
+    demonstration whose time stamps repeat: (source, identical rows dropped, differing rows averaged))."""
     table = _read_table(path)
     ti, di, pos_idx, vel_idx = _roles(table, dim, time_column, demo_column, dt, columns)
     name = None if ti is None or table.header is None else table.header[ti]
@@ -267,13 +292,16 @@ def _demos_from_file(path: Path, dim, time_column, demo_column, dt, time_units, 
     cells = table.cells
     ids = np.asarray(cells[:, di]).astype(str) if di is not None else np.zeros(len(cells), dtype=str)
     _, first = np.unique(ids, return_index=True)
-    demos = []
+    demos, repeats = [], []
     for key in ids[np.sort(first)]:
         rows = ids == key
         source = path.name if di is None else f"{path.name} demo {key}"
         # stamps relative to the first before scaling: exact differences even for epoch stamps
         t = np.arange(np.count_nonzero(rows)) * dt if times is None else (times[rows] - times[rows][0]) * TIME_UNITS[unit]
-        pos, vel = values[rows, :n], values[rows, n:]
+        t, kept, dropped, averaged = merge_repeated_stamps(t, values[rows])
+        if dropped or averaged:
+            repeats.append((source, dropped, averaged))
+        pos, vel = kept[:, :n], kept[:, n:]
         problem = time_problem(t)
         if problem:
             where = f"time column {table.header[ti]!r}" if table.header else f"column {ti} (time)"
@@ -294,7 +322,16 @@ def _demos_from_file(path: Path, dim, time_column, demo_column, dt, time_units, 
                 raise DemonstrationError(f"{source}: {exc}") from exc
     names = None if table.header is None else tuple(table.header[i] for i in pos_idx)
     # names a model file, a plot or generated code could not carry (units_problem's rule) stay unnamed
-    return demos, names if names and all(n and not units_problem(n) for n in names) else None
+    return demos, names if names and all(n and not units_problem(n) for n in names) else None, repeats
+
+
+def repeat_note(repeats: list[tuple[str, int, int]], total: int) -> str:
+    """The one-line note of :func:`load_demos` about repeated time stamps (``repeats``: per demonstration
+    (source, identical rows dropped, differing rows averaged))."""
+    dropped, averaged = sum(r[1] for r in repeats), sum(r[2] for r in repeats)
+    return (f"repeated time stamps in {len(repeats)} of {total} demonstrations (first: {repeats[0][0]}): one sample per "
+            f"stamp kept, {dropped} identical row(s) dropped and {averaged} differing row(s) averaged into their "
+            "stamp's sample.")
 
 
 def _check_dt(dt) -> float | None:
@@ -310,7 +347,8 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
                demo_column: int | str | None = None, dt: float | None = None, name: str | None = None,
                units: str = "", goal_tol: float | None = None, time_units: str | None = None,
                columns=None) -> Demonstrations | PoseDemonstrations:
-    """Load demonstrations from CSV or NPY files and check them (:func:`check_demonstrations`).
+    """Load demonstrations from CSV or NPY files and check them (:func:`check_demonstrations`, all but
+    the ends: ``goal_tol`` is recorded for the check after preprocessing, which every model's ``fit`` runs).
 
     Pose files (a header naming quaternion columns qw, qx, qy, qz, e.g. ``t,x,y,z,qw,qx,qy,qz``
     or ``t,x,y,z,qx,qy,qz,qw``) give :class:`~sosdyn.lfd.data.pose.PoseDemonstrations` (read by
@@ -341,8 +379,9 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
     the column name's suffix, else s) is the unit of the time column; times are converted to
     seconds from each demonstration's first stamp (t[0] = 0; epoch stamps keep their precision), and a demonstration lasting more than 10 min is refused as implausible (probably
     ms read as s). Without ``dt`` a header must name a time
-    column, and a headerless file has time in column 0 (or ``time_column``); the time must be
-    strictly increasing. ``time_column`` / ``demo_column`` override the defaults (an index, or
+    column, and a headerless file has time in column 0 (or ``time_column``); the time must not go
+    back, and samples that share a time stamp become one (their mean; identical rows: the row), said
+    in one UserWarning for the whole call. ``time_column`` / ``demo_column`` override the defaults (an index, or
     a name with a header). Without a header the non-time columns are positions, unless ``dim``
     is given and they number ``2 * dim``: then the second half are velocities. Files without
     velocities get them from :func:`estimate_velocity`. Blank lines and lines starting with
@@ -362,17 +401,34 @@ def load_demos(paths, *, dim: int | None = None, time_column: int | str | None =
                          "Try: drop one of them.")
     if columns is None and any(map(is_pose_file, paths)):
         return _pose_demos(paths, dim, time_column, demo_column, dt, name, units, goal_tol, time_units)
-    demos, names = [], []
+    demos, names, repeats = [], [], []
     for path in map(Path, paths):
         if path.suffix.lower() not in (".csv", ".npy"):
             raise InputError(f"{path}: unsupported file type {path.suffix!r}; use .csv or .npy.")
         if not path.is_file():
             raise InputError(f"{path}: no such file.")
-        found, named = _demos_from_file(path, dim, time_column, demo_column, dt, time_units, columns)
+        found, named, repeated = _demos_from_file(path, dim, time_column, demo_column, dt, time_units, columns)
         demos.extend(found)
         names.append(named)
+        repeats.extend(repeated)
+    if repeats:
+        warnings.warn(repeat_note(repeats, len(demos)), UserWarning, stacklevel=2)
     name = Path(paths[0]).stem if name is None else name
-    return check_demonstrations(Demonstrations(demos, name, units, columns=names[0]), goal_tol=goal_tol)
+    if columns is not None:
+        _refuse_constant(demos, columns)
+    return check_demonstrations(Demonstrations(demos, name, units, columns=names[0]), goal_tol=goal_tol, ends=False)
+
+
+def _refuse_constant(demos: list[Demonstration], columns: list) -> None:
+    """InputError when a selected position column holds one value (to round-off) in every sample of
+    every demonstration: it carries no motion (a gripper width, a fixed joint)."""
+    still = still_coordinates(np.vstack([d.pos for d in demos]))
+    if still.any():
+        j = int(np.flatnonzero(still)[0])
+        moving = [str(c) for c, s in zip(columns, still) if not s]
+        raise InputError(f"the position column {columns[j]!r} holds the same value ({demos[0].pos[0, j]:.6g}) in every "
+                         "sample of every demonstration: it carries no motion, and a model of it is trivial. Try: "
+                         f"leave it out ({COLUMNS_HINT})" + (f", e.g. --columns {','.join(moving)}." if moving else "."))
 
 
 def _pose_demos(paths, dim, time_column, demo_column, dt, name, units, goal_tol, time_units) -> PoseDemonstrations:

@@ -31,13 +31,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from sosdyn.errors import DemonstrationError, InputError
-from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, end_distances
+from sosdyn.lfd.data.demonstrations import MIN_SAMPLES, Demonstration, Demonstrations, end_distances
+from sosdyn.limits import check_bytes
 
 IRREGULAR_TOL = 0.01      # relative deviation of a time step from the median step that triggers resampling
 REST_NOISE = 5.0          # rest ball radius, in noise sigmas
 SMOOTH_OFF_RATIO = 0.01   # noise / typical step at or below which data count as smooth
 VEL_NOISE = 0.02          # target velocity noise / typical step of the smoothing window
 SG_ORDER, MIN_WINDOW = 3, 5
+GRID_BYTES_PER_VALUE = 32   # working memory of a resampled demo per number (t, x, velocity estimate, copies)
 ALIGN_MIN, ALIGN_MAX, BLEND_FRACTION = 0.01, 0.25, 0.5
 
 
@@ -74,12 +76,22 @@ def smoothing_window(demos) -> int | None:
 
 def resample_uniform(demo: Demonstration) -> Demonstration:
     """``demo`` on a uniform grid with its median step if a step deviates from it by more than
-    IRREGULAR_TOL (velocities re-estimated), else ``demo`` itself."""
+    IRREGULAR_TOL (velocities re-estimated), else ``demo`` itself. The grid's memory (its points x
+    (1 + n) numbers x GRID_BYTES_PER_VALUE) is checked against ``max_bytes`` (:mod:`sosdyn.limits`)
+    before it is allocated: a gap in the recording (steps of 1 us, then one of 500 s) would make
+    it 5e8 points long."""
     steps = np.diff(demo.t)
     h = float(np.median(steps))
     if np.all(np.abs(steps - h) <= IRREGULAR_TOL * h):
         return demo
-    t = demo.t[0] + h * np.arange(int(np.floor((demo.t[-1] - demo.t[0]) / h + 1e-9)) + 1)
+    points = np.floor((demo.t[-1] - demo.t[0]) / h + 1e-9) + 1          # a float: no int overflow
+    check_bytes(points * (1 + demo.pos.shape[1]) * GRID_BYTES_PER_VALUE,
+                f"resampling {demo.source or 'a demonstration'} to uniform time steps ({points:.3g} points of the "
+                f"median step {h:.3g} s over {demo.duration:.4g} s; its steps range from {steps.min():.3g} to "
+                f"{steps.max():.3g} s)",
+                "if the long step is a gap in the recording (a pause, a clock jump), split the recording there "
+                "or drop the isolated samples")
+    t = demo.t[0] + h * np.arange(int(points))
     t[-1] = demo.t[-1] if t[-1] < demo.t[-1] - 0.5 * h else t[-1]
     pos = np.column_stack([np.interp(t, demo.t, demo.pos[:, i]) for i in range(demo.pos.shape[1])])
     return Demonstration.from_positions(t, pos, demo.source)
@@ -210,6 +222,15 @@ def preprocess(demos, *, smooth_window: int | str | None = "auto", trim_rest: bo
         trimmed.append((a, len(d.t) - 1 - b))
         kept.append(d if (a, b) == (0, len(d.t) - 1) else Demonstration(d.t[a:b + 1], d.pos[a:b + 1],
                                                                           d.vel[a:b + 1], d.source))
+    short = [i for i, d in enumerate(kept) if len(d.t) < MIN_SAMPLES]
+    if short:
+        i = short[0]
+        raise DemonstrationError(
+            f"demo {i} ({resampled[i].source or name or 'the set'}) keeps {len(kept[i].t)} of its {len(resampled[i].t)} "
+            f"samples once the rest at its ends is trimmed (rest: within {REST_NOISE:g} noise sigmas = "
+            f"{REST_NOISE * sigma:.3g} of its first / last sample), fewer than the {MIN_SAMPLES} a demonstration "
+            "needs: it barely moves, or jumps between two rests within a few samples. Try: drop that demo, "
+            "record the motion at a higher rate, or keep the rest (trim_rest=False; sosdyn fit --trim-rest off).")
     window = smoothing_window(kept) if smooth_window == "auto" else (
         None if smooth_window in ("off", None) else int(smooth_window))
     out = Demonstrations([smooth(d, window) if window else d for d in kept], name, units,

@@ -231,7 +231,8 @@ class CDSP(MotionModel):
     def predictor(self, max_speed=None, **other) -> StatePredictor:
         """A fast one-state evaluator, ``step(x, goal=None) -> xdot`` (:mod:`~sosdyn.lfd.runtime.predictor`):
         ``goal`` moves the goal at run time; ``max_speed`` (data units / s) scales xdot by
-        min(1, max_speed / |xdot|) (same paths and goal, ``docs/theory.md``)."""
+        the smooth positive factor of :mod:`~sosdyn.lfd.runtime.states` (|xdot| < max_speed, unchanged below half of
+        it; same paths and goal, ``docs/theory.md``)."""
         self.refuse(other, "predictor")
         self._check_fitted()
         return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
@@ -244,7 +245,8 @@ class CDSP(MotionModel):
         ``dt`` None means the model's ``dt_``; duration and dt are checked by the integrator, whose
         absolute tolerance is relative to the data's scale ``scale_`` (the same relative accuracy
         in any units) and whose work is bounded (``max_rollout_calls``, ``max_rollout_seconds``).
-        ``max_speed``: the field scaled by min(1, max_speed / |xdot|), as ``predictor(max_speed=...)``."""
+        ``max_speed``: the field under the speed limit (:func:`~sosdyn.lfd.runtime.states.limit_speed`), as
+        ``predictor(max_speed=...)``."""
         self.refuse(other, "rollout")
         self._check_fitted()
         x0 = as_state(x0, self.dim_, "x0")

@@ -43,7 +43,7 @@ import numpy as np
 
 from sosdyn.errors import InputError, ModelFileError, ResourceLimitError
 from sosdyn.files import replace_atomically as write_atomically
-from sosdyn.limits import check_json_depth, format_bytes, get_limits
+from sosdyn.limits import check_json_depth, format_bytes, get_limits, raise_hint
 
 FORMAT, VERSION = "sosdyn-cdsp", 2
 CHECKSUM, SIGNATURE = "sha256", "hmac_sha256"
@@ -163,7 +163,7 @@ def _not_regular(path: Path, mode: int) -> ModelFileError:
 def _too_big(path: Path, size: str, cap: int) -> ModelFileError:
     return ModelFileError(f"{path} is {size}, over the limit max_file_bytes = {format_bytes(cap)} for a "
                           "model file. Try: check it is the right file; if it is, raise the limit with "
-                          "sosdyn.set_limits(max_file_bytes=...).")
+                          f"{raise_hint('max_file_bytes')}.")
 
 
 def read_bytes_capped(path: Path) -> bytes:

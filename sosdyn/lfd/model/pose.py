@@ -22,9 +22,10 @@ and the world angular velocity omega = R J_r(r) rdot (:func:`~sosdyn.lfd.runtime
 A goal pose (x_g', R_g') translates the position field and moves the chart: r' = log(R_g'^T R).
 
 Speed limits (``max_speed`` on |v|, data units / s; ``max_angular_speed`` on |omega|, rad / s): the
-chart velocity is scaled by lambda = min(1, v_max / |v|, w_max / |omega|) (:func:`pose_speed_factor`, built
-on :func:`~sosdyn.lfd.runtime.states.speed_factor`); one positive factor on the whole velocity keeps the
-paths and the goal (a time change of the certified system).
+chart velocity is scaled by one factor lambda, the speed limit's of the joint ratio of |v| / v_max and
+|omega| / w_max (:func:`~sosdyn.lfd.runtime.pose.pose_speed_factor`, built on :mod:`~sosdyn.lfd.runtime.states`;
+|v| < v_max, |omega| < w_max); one positive factor on the whole velocity keeps the paths and the goal (a time
+change of the certified system).
 """
 from __future__ import annotations
 
@@ -43,7 +44,6 @@ from ..rollout import ATOL_REL, rollout as integrate
 from ..rollout.quality import HORIZON
 from ..runtime.pose import (body_velocity_one, chart_one, check_limits, pose_speed_factor, pose_to_cpp, pose_to_python,
                             rotate_one)
-from ..runtime.states import speed_factor
 from .base import Layout, MotionModel, Reproductions
 from .cdsp import CDSP, DEFAULTS
 from .content import BLOCKS, POSE_FORMAT, POSE_VERSION, pose_fields
@@ -270,7 +270,8 @@ class PoseCDSP(MotionModel):
             r = chart_one(q, gq.tolist())
             v, rdot = step_x(x, gx), step_r(np.array(r), origin)
             w = np.array(rotate_one(q, body_velocity_one(r, rdot.tolist())))
-            lam = min(float(speed_factor(v, limits[0])[0]), float(speed_factor(w, limits[1])[0]))
+            lam = float(pose_speed_factor(np.array([r]), np.concatenate([v, rdot])[None], *limits)[0, 0]) \
+                if limits != (None, None) else 1.0
             return lam * v, lam * w
         return step
 

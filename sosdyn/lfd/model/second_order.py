@@ -15,10 +15,11 @@ Two fields (``field``), scaled units e = ((x - g)/s, v T/s) (:mod:`sosdyn.lfd.fi
 Both are checked independently (:mod:`sosdyn.lfd.fit.second_order.certificate`) before a model is
 returned (docs/theory.md, "Second order"). The field depends on v, so two branches may cross at one x.
 
-Speed limit (``rollout(max_speed=...)``): the whole field (v, a, db/dt) scaled by lambda = min(1,
-v_max / |v|) > 0 is a time change of the certified system (same paths, same goal, V + b still
-decreasing), so |dx/dt| = lambda |v| <= v_max; the state's v is then not dx/dt, so a controller that
-reads the measured velocity cannot apply it: the predictor and the exports refuse ``max_speed``.
+Speed limit (``rollout(max_speed=...)``): the whole field (v, a, db/dt) scaled by the speed limit's
+factor lambda(|v| / v_max) > 0 (:func:`~sosdyn.lfd.runtime.states.speed_factor`) is a time change of
+the certified system (same paths, same goal, V + b still decreasing), so |dx/dt| = lambda |v| <
+v_max; the state's v is then not dx/dt, so a controller that reads the measured velocity cannot apply
+it: the predictor and the exports refuse ``max_speed``.
 """
 from __future__ import annotations
 
@@ -305,7 +306,7 @@ class SecondOrderCDSP(MotionModel):
         for ``duration`` s on a grid of step ``dt`` (None: ``dt_``). Pushes ``[(t, dx)]`` with dx of
         shape (n,) (position) or (2n,) (position and velocity; the tank keeps its level); goal changes
         ``[(t, g)]`` (the motion translates); ``max_speed``: the field (v, a, db/dt) scaled by
-        min(1, max_speed / |v|), a time change (module docstring). The Trajectory has ``vel`` (dx/dt);
+        the speed limit's factor of |v| (< max_speed), a time change (module docstring). The Trajectory has ``vel`` (dx/dt);
         a push's ``before`` / ``after`` are (x, v) states (:func:`sosdyn.lfd.rollout.rollout`)."""
         self.refuse(other, "rollout")
         self._check_fitted()

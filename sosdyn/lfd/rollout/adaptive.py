@@ -52,6 +52,8 @@ def _ode(fld: Field, goal: np.ndarray, n: int, meter: WorkMeter | None = None):
             raise SolverError(f"The field returned NaN/inf at t = {t:g}, x = {X[0]} (the trajectory "
                               "blew up or left the range where the field is finite).",
                               status="solver_error", hint=_SOLVER_HINT)
+        if meter is not None:
+            meter.seen(X[0], Xdot[0], goal)
         return Xdot.T.reshape(y.shape)
 
     return rhs

@@ -98,7 +98,7 @@ def _header(model, comment: str, max_speed: float | None) -> str:
         *PREAMBLE, f"n = {n} state dimensions, K = {K} components, {m} monomials of degree "
         f"1..{int(model.field_exps_.sum(axis=1).max())}; positions in UNITS.", f"{formula}.",
         "goal: the model's, or the one passed to predict; " + ("no speed limit." if max_speed is None else
-        f"speed limit {max_speed!r} units/s: xdot scaled by min(1, max_speed / |xdot|).")))
+        f"speed limit {max_speed!r} units/s: |xdot| kept below it, unchanged below half of it.")))
 
 
 #: The generated Python's mixture: Cholesky factors and log normalisers (WEIGHTS, MEANS,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from .codegen import _check, _flat, _header, _twist, _warp, check_namespace, cpp_string, cpp_strings
-from .states import check_max_speed
+from .states import CPP_SPEED_LIMIT, check_max_speed
 
 
 def to_cpp(model, namespace: str = "cdsp_model", max_speed: float | None = None) -> str:
@@ -125,15 +125,9 @@ inline bool solve(double* A, double* b) {{
     from_u = "" if warp is None else """  if (finite && !solve(J.data(), xdot)) return false;   // xdot <- J^-1 xdot
   for (int i = 0; i < N; ++i) finite = finite && std::isfinite(xdot[i]);
 """
-    limit = "" if max_speed is None else """  double speed2 = 0.0;
-  for (int i = 0; i < N; ++i) speed2 += xdot[i] * xdot[i];
-  if (finite && speed2 > max_speed * max_speed) {
-    const double f = max_speed / std::sqrt(speed2);
-    for (int i = 0; i < N; ++i) xdot[i] *= f;
-  }
-"""
+    limit = "" if max_speed is None else "  if (finite) limit_speed(xdot, N, max_speed);\n"
     speed_def = "" if max_speed is None else (
-        f"// the largest |xdot| (units/s): xdot scaled by min(1, max_speed / |xdot|)\n"
+        f"// the largest |xdot| (units/s): the speed limit below\n"
         f"constexpr double max_speed = {max_speed!r};\n")
     return _header(model, "//", max_speed) + f"""#pragma once
 #include <array>
@@ -153,6 +147,7 @@ constexpr double scale = {float(model.scale_)!r};
 // coefficients[(k * N + i) * M + j] = C[k, i, j]
 constexpr std::array<double, K * N * M> coefficients = {{{_flat(model.C_)}}};
 {cpp_mixture(model.mixture_)}{twist_defs}{warp_defs}
+{CPP_SPEED_LIMIT}
 // xdot = scale * sum_k h_k(z) f_k(z), z = (x - g) / scale (with a warp: scale * J^-1 sum_k h_k(u) f_k(u),
 // u = phi(z)), g = goal (N doubles) or, for nullptr, the model's; false if xdot is not finite.
 inline bool predict(const double* x, double* xdot, const double* goal = nullptr) {{

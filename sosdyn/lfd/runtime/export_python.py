@@ -30,8 +30,8 @@ the C++ namespace an ASCII identifier.
 
 Run-time goal: ``predict(X, goal=None)`` / ``predict(x, xdot, goal = nullptr)`` evaluate the
 field with the goal moved to ``goal`` (z = (x - goal) / s; the goal-shifted model translated,
-as a rollout's goal change does). Speed limit (``max_speed``, written into the code): xdot
-scaled by min(1, max_speed / |xdot|), same direction (:func:`~.states.limit_speed`).
+as a rollout's goal change does). Speed limit (``max_speed``, written into the code): the functions
+of :mod:`.states` (source embedded), the same smooth positive factor as every other path.
 """
 from __future__ import annotations
 
@@ -42,7 +42,14 @@ import numpy as np
 from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _twist, _warp
 from .predictor import (_monomial, field2, fieldn, gating, tables, twist_back, twist_forward, twist_tables, warp_back,
                         warp_back2, warp_forward, warp_forward2, warp_tables)
-from .states import check_max_speed
+from .states import (SPEED_KNEE, check_max_speed, joint_ratio, limit_speed, limit_speed_one, saturated_speed,
+                     saturated_speeds, saturation_factor, speed_ratio)
+
+
+#: The speed limit's functions (:mod:`.states`, source embedded; the generated module defines SPEED_KNEE):
+#: one state in plain floats, arrays, and the joint factor of two limits (the pose export).
+SPEED_LIMIT_PY = "\n\n".join(inspect.getsource(f) for f in (saturated_speed, limit_speed_one, speed_ratio, saturated_speeds,
+                                                           saturation_factor, limit_speed, joint_ratio))
 
 
 def to_python(model, max_speed: float | None = None) -> str:
@@ -112,7 +119,8 @@ UNITS = {ascii(str(model.units_))}
 COLUMNS = {ascii(tuple(map(str, model.names())))}     # the names of the state's coordinates
 GOAL = np.array({_literal(model.goal_)})
 SCALE = {float(model.scale_)!r}
-MAX_SPEED = {max_speed!r}     # None, or the largest |xdot| (units/s): xdot scaled by min(1, MAX_SPEED / |xdot|)
+MAX_SPEED = {max_speed!r}     # None, or the largest |xdot| (units/s): the speed limit below
+SPEED_KNEE = {SPEED_KNEE!r}    # velocities slower than SPEED_KNEE * MAX_SPEED are not changed
 # the mixture of h_k(z), in z coordinates: weights pi_k, means mu_k, covariances S_k
 WEIGHTS = np.array({_literal(mix.weights)})
 MEANS = np.array({_literal(mix.means)})
@@ -160,11 +168,12 @@ def predict(X, goal=None):
         raise ValueError(f"X row {{bad[0]}} is so far from the data (scale {{SCALE:.3g}}) that the field "
                          "overflows float. Try: states within a few orders of magnitude of the data.")
     if MAX_SPEED is not None:
-        speed = np.linalg.norm(V, axis=1, keepdims=True)
-        with np.errstate(divide="ignore"):
-            V = V * np.minimum(1.0, MAX_SPEED / speed)
+        V = limit_speed(V, MAX_SPEED)
     return V[0] if single else V
 
+
+# The speed limit: sosdyn.lfd.runtime.states's own functions.
+{SPEED_LIMIT_PY}
 
 # One state in plain floats: the predictor's own functions (sosdyn.lfd.runtime.predictor).
 {one_state}'''
@@ -213,8 +222,6 @@ def one_state(x, goal):
     if not math.isfinite(sum(v)):
         return None
     if MAX_SPEED is not None:
-        speed = math.sqrt(sum(a * a for a in v))
-        if speed > MAX_SPEED:
-            v = [a * (MAX_SPEED / speed) for a in v]
+        v = limit_speed_one(v, MAX_SPEED)
     return np.array(v)
 """

@@ -17,8 +17,9 @@ Exports: each block is its CDSP's own export (:func:`~sosdyn.lfd.runtime.export_
 :func:`~sosdyn.lfd.runtime.export_cpp.to_cpp`): the position block's ``predict(x, goal)`` and the orientation
 block's ``predict(r, 0)``, then the chart (the half turn takes either logarithm), v = xdot, omega = R J_r(r) rdot
 (:func:`body_velocity`, its source copied verbatim into the Python). Speed limits (``max_speed`` on |v|,
-``max_angular_speed`` on |omega|, written into the code): (v, omega) scaled by lambda = min(1, v_max / |v|,
-w_max / |omega|), as :meth:`~sosdyn.lfd.model.pose.PoseCDSP.predictor`. Every orientation has a velocity: no
+``max_angular_speed`` on |omega|, written into the code): (v, omega) scaled by one smooth factor, the speed
+limit's (:mod:`.states`, embedded in each block's code) of the joint ratio of |v| / v_max and |omega| / w_max,
+as :meth:`~sosdyn.lfd.model.pose.PoseCDSP.predictor`. Every orientation has a velocity: no
 state is refused but one that is not finite or a quaternion whose norm is not in (0.5, 1.5) (Python:
 ValueError; C++: false).
 
@@ -37,7 +38,7 @@ import numpy as np
 from .codegen import _flat, _literal, check_namespace
 from .export_cpp import to_cpp
 from .export_python import to_python
-from .states import check_max_speed, speed_factor
+from .states import check_max_speed, joint_ratio, saturation_factor, speed_ratio
 
 SMALL_ANGLE = 1e-4            # below this |r| the right Jacobian's series is used
 UNIT_RANGE = (0.5, 1.5)       # accepted quaternion norms (renormalised), as PoseCDSP's inputs
@@ -58,11 +59,14 @@ def body_velocity(r, rdot) -> np.ndarray:
 
 
 def pose_speed_factor(R, Sdot, max_speed, max_angular_speed) -> np.ndarray:
-    """lambda = min(1, v_max / |v|, w_max / |omega|) (m, 1) at the rotation vectors R (m, 3) for the chart
-    velocities Sdot (m, 6): v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| (R orthogonal). One positive
-    factor on the whole velocity keeps the chart paths and the goal (docs/theory.md)."""
+    """lambda (m, 1) at the rotation vectors R (m, 3) for the chart velocities Sdot (m, 6): the speed limit's
+    factor (:mod:`.states`) of the joint ratio of |v| / v_max and |omega| / w_max (:func:`~.states.joint_ratio`),
+    v = sdot_x, |omega| = |R J_r(r) rdot| = |J_r(r) rdot| (R orthogonal). One positive factor on the whole
+    velocity keeps the chart paths and the goal (docs/theory.md); |v| < v_max and |omega| < w_max."""
     w = body_velocity(R, Sdot[:, 3:])
-    return np.minimum(speed_factor(Sdot[:, :3], max_speed), speed_factor(w, max_angular_speed))
+    rho = joint_ratio([None if max_speed is None else speed_ratio(Sdot[:, :3], max_speed),
+                       None if max_angular_speed is None else speed_ratio(w, max_angular_speed)])
+    return np.broadcast_to(saturation_factor(rho), (len(R),))[:, None]
 
 
 def check_limits(max_speed, max_angular_speed) -> tuple:
@@ -160,18 +164,16 @@ def predict_pose(x, quat, goal=None):
     r = (Rotation.from_quat(_unit(goal[3:], "the goal's quaternion"), scalar_first=True).inv() * R).as_rotvec()
     v = position.predict(x, goal[:3])
     omega = R.apply(body_velocity(r, orientation.predict(r, _ORIGIN))[0])
-    with np.errstate(divide="ignore"):
-        scale = min([1.0, *(limit / np.linalg.norm(u) for limit, u in
-                            ((POSE_MAX_SPEED, v), (POSE_MAX_ANGULAR_SPEED, omega)) if limit is not None)])
+    scale = float(position.saturation_factor(position.joint_ratio([None if limit is None else position.speed_ratio(
+        u, limit) for limit, u in ((POSE_MAX_SPEED, v), (POSE_MAX_ANGULAR_SPEED, omega))])))
     return scale * v, scale * omega
 '''
 
 
-def _cpp_limit(name: str, limit: float | None, vector: str) -> str:
-    """C++ lines lowering ``scale`` to limit / |vector| when that is smaller (nothing without a limit)."""
-    return "" if limit is None else (
-        f"  const double {name}2 = {vector}[0] * {vector}[0] + {vector}[1] * {vector}[1] + {vector}[2] * {vector}[2];\n"
-        f"  if ({name}2 * scale * scale > {limit!r} * {limit!r}) scale = {limit!r} / std::sqrt({name}2);\n")
+def _cpp_ratio(limit: float | None, pointer: str, namespace: str) -> str:
+    """A C++ expression: |vector| / limit of the 3 doubles at ``pointer`` (the speed limit's
+    :func:`~.states.speed_ratio`, the block header's ``speed_ratio``), 0 without a limit."""
+    return "0.0" if limit is None else f"{namespace}::speed_ratio({pointer}, 3, {limit!r}, top, norm)"
 
 
 def pose_to_cpp(model, namespace: str = "pose_model", max_speed: float | None = None,
@@ -182,7 +184,10 @@ def pose_to_cpp(model, namespace: str = "pose_model", max_speed: float | None = 
     namespace = check_namespace(namespace, "pose_model")
     pos_ns, ori_ns = f"{namespace}_position", f"{namespace}_orientation"
     blocks = to_cpp(model.position_, pos_ns) + to_cpp(model.orientation_, ori_ns)
-    limits = _cpp_limit("speed", max_speed, "v") + _cpp_limit("turn", max_angular_speed, "w_out")
+    limits = (("  double top, norm;   // scratch of speed_ratio\n" if (max_speed, max_angular_speed) != (None, None) else "")
+              + f"  const double speed = {_cpp_ratio(max_speed, 'v', pos_ns)};\n"
+              f"  const double turn = {_cpp_ratio(max_angular_speed, 'w_out.data()', pos_ns)};\n"
+              f"  const double scale = {pos_ns}::joint_factor(speed, turn);   // |v| < max_speed, |omega| < max_angular_speed\n")
     lo, hi = UNIT_RANGE
     return blocks + f"""
 namespace {namespace}_pose {{
@@ -232,7 +237,7 @@ inline bool predict_pose(const double* x, const double* quat, double* v, double*
   const std::array<double, 4> qw = qmul(q.data(), wb.data());
   const std::array<double, 4> w = qmul(qw.data(), qc.data());     // omega = R omega_b = q omega_b q*
   const std::array<double, 3> w_out = {{w[1], w[2], w[3]}};
-  double scale = 1.0;   // speed limits (|v| <= max_speed, |omega| <= max_angular_speed): one factor on both
+  // speed limits: one smooth factor on (v, omega), the speed limit's of their joint ratio
 {limits}  bool finite = true;
   for (int i = 0; i < 3; ++i) {{
     v[i] *= scale;

@@ -45,8 +45,8 @@ source, so its one-state path is this code, not a copy.
 
 Runtime goal: ``predictor(x, goal=g)`` evaluates the model with its goal moved to g, i.e. the
 goal-shifted field translated, s f((x - g) / s) = predictor(x - g + x*): what a rollout uses
-after a goal change. Speed limit (``max_speed``): the velocity scaled by min(1, v_max / |xdot|)
-(:func:`~.states.limit_speed`).
+after a goal change. Speed limit (``max_speed``): the velocity scaled by the smooth positive factor
+of :mod:`.states` (:func:`~.states.limit_speed_one`; unchanged below half the limit).
 
 A predictor is a snapshot of the model's arrays: refit or reload the model, then build a new one.
 """
@@ -59,7 +59,7 @@ import numpy as np
 
 from sosdyn.errors import InputError
 from ..fit.gmm import PositionMixture
-from .states import as_state, check_max_speed
+from .states import as_state, check_max_speed, limit_speed_one
 
 
 class StatePredictor:
@@ -110,9 +110,7 @@ class StatePredictor:
                              "overflows float. Try: states within a few orders of magnitude of the "
                              "demonstrations.")
         if self.max_speed is not None:
-            speed = math.sqrt(sum(a * a for a in v))
-            if speed > self.max_speed:
-                v = [a * (self.max_speed / speed) for a in v]
+            v = limit_speed_one(v, self.max_speed)
         return np.array(v)
 
     def _state(self, value, what: str) -> np.ndarray:

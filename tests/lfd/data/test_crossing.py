@@ -51,3 +51,40 @@ def test_lasa_shapes_that_do_not_cross(shape):
     except Exception as exc:       # LASA data not installed
         pytest.skip(str(exc))
     assert find_crossings(demos) == []
+
+
+def _reach_leaving_rest(offset=0.0):
+    """A 3-D reach that first backs off its start by 1.5 % of its length, then goes out: it passes its
+    start again in the opposite direction, within the rest ball at its start."""
+    t = np.linspace(0.0, 2.0, 300)
+    s = np.where(t < 0.3, -0.015 * np.sin(np.pi * t / 0.3), 0.0) + np.clip((t - 0.3) / 1.7, 0, 1) ** 2 * (3 - 2 * np.clip((t - 0.3) / 1.7, 0, 1))
+    pos = np.column_stack([s, 0.3 * s ** 2, offset + 0.1 * s])
+    return Demonstration.from_positions(t, pos)
+
+
+def test_an_arm_leaving_rest_is_no_crossing():
+    """Before: every demo of robottasks/openbox 'crossed itself' at its first sample (13 warnings on an
+    ordinary reach): the rest at the ends is ignored, as the goal region is."""
+    demos = [_reach_leaving_rest(), _reach_leaving_rest(0.002)]
+    assert find_crossings(demos) == []
+    assert find_crossings(demos, goal_radius=1e-4)               # the same hits, counted inside the rest ball
+
+
+def test_openbox_reaches_do_not_cross():
+    import warnings
+
+    import sosdyn as sd
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        demos, _ = sd.preprocess(sd.load_dataset("robottasks/openbox", positions_only=True))
+    assert find_crossings(demos) == []
+
+
+def test_the_warning_is_a_count_and_the_first_few():
+    t = np.linspace(0, 1, 100)
+    a = Demonstration.from_positions(t, np.column_stack([t, 0.5 - t]))
+    bs = [Demonstration.from_positions(t, np.column_stack([1 - t, 0 * t + k * 0.05])) for k in range(5)]
+    found = find_crossings([a, *bs], goal_radius=0.01)
+    text = crossing_warning(found)
+    assert text.startswith(f"{len(found)} crossings involving 6 demonstrations; the first 3: demos 0 and 1 cross at")
+    assert text.count(" cross at ") == 3 and "--order 2" in text

@@ -198,7 +198,9 @@ def test_speed_limits_scale_v_and_omega_by_one_factor(fitted):
     for scale in (1.0, 0.3, 0.02):                 # both limits active, one, none (near the goal)
         x, q = X_GOAL + scale * (x0 - X_GOAL), (R_GOAL * Rotation.from_rotvec(scale * r0)).as_quat(scalar_first=True)
         v, w = free(x, q)
-        lam = min(1.0, V_MAX / np.linalg.norm(v), W_MAX / np.linalg.norm(w))
+        rho = ((np.linalg.norm(v) / V_MAX) ** 4 + (np.linalg.norm(w) / W_MAX) ** 4) ** 0.25    # the joint ratio
+        y = (rho - 0.5) / 0.5
+        lam = 1.0 if rho <= 0.5 else (0.5 + 0.5 * y / (1 + y ** 4) ** 0.25) / rho             # smooth, < 1 / rho
         vl, wl = limited(x, q)
         np.testing.assert_allclose(np.concatenate([vl, wl]), lam * np.concatenate([v, w]), rtol=1e-12, atol=1e-15)
         assert np.linalg.norm(vl) <= V_MAX * (1 + 1e-12) and np.linalg.norm(wl) <= W_MAX * (1 + 1e-12)

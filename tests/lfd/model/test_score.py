@@ -49,3 +49,21 @@ def test_score_refuses_demos_of_another_dimension(leaf):
     other = Demonstrations([Demonstration.from_positions(t, np.column_stack([t, t, t]))])
     with pytest.raises(InputError, match=r"or \(m, 2\)"):
         model.score(other)
+
+
+def rows(arrivals, durations):
+    return [{"demo": i, "arrival_s": a, "duration_s": d} for i, (a, d) in enumerate(zip(arrivals, durations))]
+
+
+def test_the_arrival_caution_says_what_the_certificate_promises():
+    """Issue 34 item 5: 'certificate: passed' stood next to 16 of 63 pouring reproductions that never
+    reached the goal in twice the demo's duration; the caution says so, and what is (not) promised."""
+    from sosdyn.lfd.rollout.quality import arrival_caution
+    assert arrival_caution(rows([0.5, 1.9], [1.0, 1.0])) is None                       # all within 2 x duration
+    text = arrival_caution(rows([0.5, np.inf, 2.5], [1.0, 1.0, 1.2]), gamma=0.1)
+    assert text.startswith("2 of 3 reproductions do not reach the goal within twice their demonstration's "
+                           "duration (demos 1, 2).")
+    assert f"over 2 s (twice the median demonstration) that is {np.exp(-0.2):.2g}" in text     # exp(-gamma 2 T)
+    assert "it promises eventual arrival, not arrival within the demonstrations' time" in text
+    assert "Try: a larger contraction rate, e.g. --gamma 5 (gamma=5)" in text                 # 5 / median duration
+    assert "e.g." not in arrival_caution(rows([np.inf], [1.0]), gamma=8.0)                 # already faster than 5

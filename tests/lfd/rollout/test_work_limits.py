@@ -70,3 +70,37 @@ def test_motion_scale_and_explicit_tolerances():
     for kw, match in ((dict(atol=0.0), "atol must be"), (dict(scale=-1.0), "scale must be")):
         with pytest.raises(InputError, match=match):
             rollout(cubic, x0, duration=1.0, dt=0.1, goal=GOAL, **kw)
+
+
+def sliding(X, goal):
+    """A field that switches across x2 = 0 (both sides point at the surface): the trajectory slides along
+    it to the goal, x1 decaying like exp(-t / 10); an adaptive integrator crawls on the switch."""
+    d = X - goal
+    return np.column_stack([-0.1 * d[:, 0], -np.sign(d[:, 1]) * (1.0 + np.abs(d[:, 0]))])
+
+
+def test_a_discontinuous_field_is_stopped_early_and_said_so():
+    """Round 3 left a rollout from 1e6 data scales crawling along a switching surface (> 30,000 field
+    calls, then max_rollout_calls); the jumps of the field are counted and stop it within a few thousand."""
+    with pytest.raises(WorkLimitError, match=r"the field is discontinuous there: 1000 times its direction turned .* "
+                                             r"Try: a start nearer the data; or a model that is smooth off the data, "
+                                             r"gating='tempered'") as info:
+        rollout(sliding, GOAL + np.array([50.0, 3.0]), duration=20.0, dt=0.1, goal=GOAL)
+    assert info.value.calls < 5_000
+
+
+def test_a_posterior_model_far_from_its_data_stops_with_the_reason(linear_demos):
+    model = sd.CDSP(n_components=3, field_degree=3, warp="none").fit(linear_demos)
+    x0 = model.goal_ + 1e6 * model.scale_ * np.array([np.cos(5.11), np.sin(5.11)])
+    with pytest.raises(WorkLimitError, match="the field is discontinuous there") as info:
+        model.rollout(x0, 60.0, dt=0.1)
+    assert info.value.calls < 5_000                   # before: 100,001 calls (60,000 in 39 s measured)
+    tempered = sd.CDSP(n_components=3, field_degree=3, warp="none", gating="tempered").fit(linear_demos)
+    end = tempered.rollout(x0, 60.0, dt=0.1).pos[-1]
+    assert np.linalg.norm(end - tempered.goal_) < 1e-6 * tempered.scale_
+
+
+def test_smooth_fields_never_jump():
+    for field, x0 in ((cubic, GOAL + 30.0), (lambda X, g: (X - g) @ np.array([[-1.0, 4.0], [-4.0, -1.0]]).T, GOAL + 5.0)):
+        traj = rollout(field, x0, duration=10.0, dt=0.01, goal=GOAL, rtol=1e-10)
+        assert np.all(np.isfinite(traj.pos))

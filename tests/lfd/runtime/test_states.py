@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from sosdyn.errors import InputError
-from sosdyn.lfd.runtime.states import as_states, limit_speed
+from sosdyn.lfd.runtime.states import (SPEED_KNEE, as_states, limit_speed, limit_speed_one, saturated_speed,
+                                         saturated_speeds, speed_factor)
 
 BAD = [
     (["a", "b"], "text|not numbers"),
@@ -48,5 +49,52 @@ def test_integers_and_lists_are_still_states(field_model):
 
 def test_limit_speed_scales_only_fast_rows():
     V = np.array([[3.0, 4.0], [0.3, 0.4], [0.0, 0.0]])
-    np.testing.assert_allclose(limit_speed(V, 1.0), [[0.6, 0.8], [0.3, 0.4], [0.0, 0.0]])
+    # |v| = 5: rho = 5, y = 9, sigma = 0.5 + 0.5 / (1 + 9^-4)^(1/4) (closed form)
+    sigma = 0.5 + 0.5 / (1 + 9.0 ** -4) ** 0.25
+    np.testing.assert_allclose(limit_speed(V, 1.0), [[0.6 * sigma, 0.8 * sigma], [0.3, 0.4], [0.0, 0.0]], rtol=1e-15)
     assert limit_speed(V, None) is V
+
+
+def test_the_speed_limit_is_smooth_bounded_and_identity_below_its_knee():
+    """sigma(rho) = rho below SPEED_KNEE, increasing, below 1, and C^1 at least: the old
+    min(1, v / |xdot|) had a kink at rho = 1 (sigma' jumped from 1 to 0) that stalled integrators."""
+    rho = np.linspace(0.0, 6.0, 600_001)
+    sigma = saturated_speeds(rho)
+    h = rho[1] - rho[0]
+    below = rho <= SPEED_KNEE
+    np.testing.assert_array_equal(sigma[below], rho[below])
+    assert np.all(np.diff(sigma) > 0) and sigma.max() < 1.0
+    slope = np.diff(sigma) / h
+    assert np.abs(np.diff(slope)).max() < 1e-4                     # no jump in sigma' anywhere (the kink: 1)
+    assert np.abs(np.diff(slope, 2) / h).max() < 1e-1             # nor in sigma'' (C^2 and more)
+    assert [saturated_speed(float(r)) for r in rho[::5000]] == pytest.approx(sigma[::5000], rel=1e-15)
+    assert saturated_speed(np.inf) == 1.0 and saturated_speeds(np.array([np.inf]))[0] == 1.0
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e100, 1e155, 1e200, 1e300])
+def test_the_speed_limit_does_not_overflow_far_away(scale):
+    """|xdot|^2 overflowed from |xdot| ~ 1e154 and the limited field was exactly 0 (a rest point off
+    the goal); scaled before squaring, the limited velocity keeps its direction at speed ~ max_speed."""
+    V = np.array([[3.0, -4.0], [1.0, 1e-3]]) * scale
+    for v_max in (1e-3, 0.4):
+        L = limit_speed(V, v_max)
+        one = np.array([limit_speed_one(v.tolist(), v_max) for v in V])
+        speeds = np.linalg.norm(L, axis=1)
+        assert np.all(np.isfinite(L)) and np.all(speeds > SPEED_KNEE * v_max)
+        assert np.all(speeds <= v_max * (1 + 1e-15))
+        np.testing.assert_allclose(L / speeds[:, None], V / np.linalg.norm(V / scale, axis=1)[:, None] / scale,
+                                   rtol=1e-15)
+        np.testing.assert_allclose(one, L, rtol=1e-15)
+        np.testing.assert_allclose(V * speed_factor(V, v_max), L, rtol=1e-14)
+
+
+def test_limit_speed_has_no_kink():
+    """The limited speed as a function of the free speed s has a continuous slope: the former
+    min(s, v) jumped from slope 1 to 0 at s = v, a kink on which an integrator crawled (issue 35:
+    51,852 field calls where a limit 0.1 % lower took 1,409)."""
+    u = np.array([0.6, -0.8])
+    s = np.linspace(0.0, 4.0, 40_001)
+    speed = np.linalg.norm(limit_speed(s[:, None] * u, 1.0), axis=1)
+    slope = np.diff(speed) / np.diff(s)
+    assert np.abs(np.diff(slope)).max() < 1e-3                    # the kink: a jump of 1
+    assert speed.max() < 1.0 and np.all(np.diff(speed) > 0)       # below the limit, increasing

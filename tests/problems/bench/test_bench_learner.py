@@ -13,6 +13,7 @@ from problems.bench.timing import timing  # noqa: E402
 from sosdyn.lfd.fit.warp import AUTO_WARPS  # noqa: E402
 
 
+@pytest.mark.slow      # experiment-sized: make test-slow
 def test_bench_learner_quick(tmp_path, times_ok):
     assert learner.main(["--quick", "--out", str(tmp_path)]) == 0
     for name in ("fits.json", "scaling.json", "backends.json", "profiles.json", "bench.json", "summary.md"):

@@ -1,9 +1,12 @@
 """Smoke test of the single-state predict benchmark (problems.bench.predict)."""
 import json
 
+import pytest
+
 from problems.bench import predict
 
 
+@pytest.mark.slow      # experiment-sized: make test-slow
 def test_quick_run_writes_timings_and_equality(tmp_path, times_ok, capsys):
     assert predict.main(["--quick", "--out", str(tmp_path)]) == 0
     data = json.loads((tmp_path / "predict.json").read_text())

@@ -10,6 +10,7 @@ from problems.bench import drake_problems, sparse_problems
 from problems.bench import sos as bench_sos
 
 
+@pytest.mark.slow      # experiment-sized: make test-slow
 def test_bench_sos_quick(tmp_path, times_ok):
     assert bench_sos.main(["--quick", "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "sos.json").read_text())
