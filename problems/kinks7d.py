@@ -4,7 +4,8 @@ The synthetic 7-D task of :mod:`problems.demo7d` (5 noisy demonstrations, 100 Hz
 ``CDSP(random_state=0, warp="none", gating="tempered")`` (K = 8) and by ``CDSP(random_state=0,
 gating="tempered")`` (the default's warp choice). Each model is evaluated twice: with its tempered
 weights (:mod:`sosdyn.lfd.fit.gmm`) and with the plain posterior (``bound`` None: the default
-``gating="posterior"``, whose fit is the same, bit for bit). Rollouts are sampled every 2 ms; |xddot| by second differences:
+``gating="posterior"``, the default before issue 34, whose fit is the same, bit for bit; the default
+``"smooth"`` is measured by tests/test_cli_joints.py and docs/findings.md). Rollouts are sampled every 2 ms; |xddot| by second differences:
 
 * from the demonstrations' own starts (5), 6 s each, with the RMSE against the demonstrations
   (rollouts sampled at the demonstrations' 100 Hz, as ``demo7d`` scores them);

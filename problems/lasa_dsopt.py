@@ -43,6 +43,8 @@ CACHE_VERSION = 2
 #: Variant name -> CDSP keyword arguments (random_state is set per seed).
 VARIANTS = {
     "CDSP default": {}, "CDSP plain": PLAIN,           # CDSP(), and its core alone (no warp, no corrective refits)
+    "CDSP posterior gating": {"gating": "posterior"},  # CDSP() with the gating it had before issue 34 (the posterior)
+    "CDSP tempered gating": {"gating": "tempered"},
     "CDSP paper": PRESETS["paper"],
     "CDSP-ICA": PRESETS["ica"],
     "CDSP-ICA g0.02": dict(PRESETS["ica"], gamma=0.02),
@@ -94,7 +96,7 @@ def job_key(shape: str, kwargs: dict, split: str) -> str:
     """The cache key: protocol version, shape, CDSP settings and, for a split other than the
     standard one, its demo indices (so the standard split's earlier entries stay valid)."""
     key = {"version": CACHE_VERSION, "shape": shape,
-           "settings": dict(corrective.key_params(kwargs), **warp.key_extra(kwargs))}
+           "settings": warp.cdsp_key(kwargs)}
     if split != STANDARD:
         key["split"] = [list(i) for i in dsopt.SPLITS[split]]
     return key_hash(key)

@@ -18,7 +18,9 @@ computed by the former separate estimator (the warp in data coordinates) are not
 from __future__ import annotations
 
 from sosdyn.lfd.fit.params import PLAIN
-from sosdyn.lfd.fit.warp import AUTO_WARPS, WARP_DEFAULTS
+from sosdyn.lfd.fit.warp import AUTO_WARPS, ESCALATE, ESCALATE_WARPS, WARP_DEFAULTS
+
+from . import lasa_corrective as corrective
 
 WARP_KEY_VERSION = 2            # 2: the warp inside CDSP, in its normalised coordinates z
 D075, D1 = AUTO_WARPS["60 maps, decay 0.75"], AUTO_WARPS["60 maps, decay 1"]
@@ -44,8 +46,15 @@ SELECTIONS = {"CDSP warped selected": ("CDSP plain", "CDSP plain warped 60 d0.75
 
 def key_extra(kwargs: dict) -> dict:
     """What a variant's cache key adds to its CDSP parameters: the warp's key version for a warp dict;
-    for warp="auto" (the default) its candidates, AUTO_WARPS, so a change of them refits."""
+    for warp="auto" (the default) its candidates, AUTO_WARPS, and the escalation (ESCALATE,
+    ESCALATE_WARPS), so a change of them refits."""
     warp = kwargs.get("warp", "auto")
     if isinstance(warp, dict):
         return {"warp_key_version": WARP_KEY_VERSION}
-    return {"auto_warps": AUTO_WARPS} if warp == "auto" else {}
+    return {"auto_warps": AUTO_WARPS, "escalate": [ESCALATE, ESCALATE_WARPS]} if warp == "auto" else {}
+
+
+def cdsp_key(kwargs: dict) -> dict:
+    """The settings part of a cache key for ``sd.CDSP(**kwargs)``: every parameter, defaults resolved
+    (:func:`problems.lasa_corrective.key_params`), and :func:`key_extra` (a changed default refits)."""
+    return dict(corrective.key_params(kwargs), **key_extra(kwargs))

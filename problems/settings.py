@@ -71,7 +71,8 @@ def _cdsp(metric_degree=0, field_degree=1, solver_method="alternating", metric="
     def settings(shp: Shape, quick: bool) -> dict:
         out = dict(n_components=shp.K, metric_degree=metric_degree, field_degree=field_degree,
                    gamma=GAMMA, metric=metric, solver_method=solver_method, max_iter=20, metric_prox=0.0,
-                   corrective_rounds=0, warp="none", random_state=SEED)   # the paper's fit: no refits, no warp
+                   corrective_rounds=0, warp="none", random_state=SEED,   # the paper's fit: no refits, no warp,
+                   gating="posterior", speed_floor="none")                 # its weights, no speed floor
         if quick:
             out.update(max_samples=400, max_iter=4, verify_samples=2000)
         return out

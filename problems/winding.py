@@ -2,12 +2,12 @@
 
 The protocol is :mod:`sosdyn.evaluation.realdata`'s (first ceil(4N/7) = 4 of the 7 demos train, the rest
 test; preprocessing chosen on the training demos; explicit Euler at 0.01 s from each test demo's 20th
-kept sample), with every reproduction read at its test demo's own period (linear interpolation in time)
-before the cumulative DTW, so the curves compared are sampled alike (issue 36 item 1; arrival, excursion
+kept sample; every reproduction read at its test demo's own period before the cumulative DTW,
+:func:`sosdyn.evaluation.realdata.at_period`, so the curves compared are sampled alike; arrival, excursion
 and final error are read from the whole 0.01 s rollout). Copy: the nearest training demo's DTWD.
 
 Methods: ``CDSP before`` is the default as it was before issue 36 (``warp="auto"`` choosing among the
-plain fit and the two radial warps by the same rule, :func:`before`); ``CDSP default`` is ``sd.CDSP()``
+plain fit and the two radial warps by the same rule, :func:`before`; the posterior gating, no speed floor); ``CDSP default`` is ``sd.CDSP()``
 (random_state 0); ``CDSP isotonic + twist`` is one fixed warp: the isotonic target matched to every demo,
 then a twist about the goal of shear bound K = 3 (docs/theory.md). One JSON per (shape, method) is
 cached in ``<out>/cache``; ``<out>`` = ``reports/winding``: ``results.json``, ``index.html`` and one
@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 import sosdyn as sd
-from sosdyn.evaluation import dsopt, realdata
-from sosdyn.evaluation.metrics import dtwd
+from sosdyn.errors import SolverError
+from sosdyn.evaluation import realdata
 from sosdyn.lfd.data.datasets import WINDING_SHAPES
 from sosdyn.lfd.fit.pipeline import block_field, candidate_fits
 from sosdyn.lfd.fit.rounds import warp_choice
@@ -35,15 +35,17 @@ from sosdyn.report.figures.style import METHOD_COLORS, data_bounds, new_figure, 
 
 from .jobs import parallel_map
 from .jsonio import write_json
+from .lasa_warp import cdsp_key
 from .real_data import QUICK, cached_job, parser
 from .real_data_report import fmt
 from .settings import REPORTS
 
 OUT = REPORTS / "winding"
-CACHE_VERSION = 1
+CACHE_VERSION = 2              # 2: CDSP before with the posterior gating and no speed floor
 SETS = tuple(f"winding/{s}" for s in WINDING_SHAPES)
 TWIST = {"n_maps": 60, "decay": 1.0, "target": "isotonic", "match": "each", "twist": 3.0}
-METHODS = {"CDSP before": {}, "CDSP default": {}, "CDSP isotonic + twist": {"warp": TWIST}}
+METHODS = {"CDSP before": {"gating": "posterior", "speed_floor": "none"}, "CDSP default": {},
+           "CDSP isotonic + twist": {"warp": TWIST}}
 COLORS = {"CDSP before": "#E69F00", "CDSP default": METHOD_COLORS["cdsp"], "CDSP isotonic + twist": "#CC79A7"}
 BEFORE_WARPS = {k: AUTO_WARPS[k] for k in ("60 maps, decay 0.75", "60 maps, decay 1")}
 TARGET_RATIO, TARGET_EXCURSION, TARGET_ARRIVAL = 3.0, 0.25, 2.0
@@ -63,7 +65,7 @@ def before(train, settings: dict) -> sd.CDSP:
     params = dict(model.get_params(), random_state=settings["random_state"])
     kept, scores = warp_choice(candidate_fits(train, {"none": None, **BEFORE_WARPS}, params, None), train,
                                block_field)
-    model.__dict__.update(vars(kept), warp_scores_=scores)
+    model.__dict__.update(vars(kept), warp_scores_=scores, floor_=None)
     return model
 
 
@@ -74,38 +76,21 @@ def fitter(method: str, quick: bool):
     return lambda train: sd.CDSP(**settings).fit(train)
 
 
-def at_period(path: np.ndarray, demo) -> np.ndarray:
-    """The rollout ``path`` (sampled every dsopt.DT from t = 0) read every mean sample step of ``demo``."""
-    period = float(demo.t[-1] - demo.t[0]) / (len(demo.t) - 1)
-    t = np.arange(len(path)) * dsopt.DT
-    tq = np.arange(0.0, t[-1] + 1e-12, period)
-    return np.column_stack([np.interp(tq, t, path[:, k]) for k in range(path.shape[1])])
-
-
 def evaluate(fit_fn, demos) -> dict:
-    """The protocol (module docstring) on one set: per-test rows and their summary, as
-    :func:`sosdyn.evaluation.realdata.evaluate_set` but with the DTWD of each reproduction read at its
-    test demo's period; the kept warp candidate and each candidate's training deviation."""
-    train, recorded, test, report = realdata.prepare(demos)
-    t0 = time.perf_counter()
-    model = fit_fn(train)
-    fit_s = time.perf_counter() - t0
-    paths = realdata.reproduce(model.predict, recorded, test)
-    rows = realdata.test_scores(paths, recorded, test, model.goal_, realdata.excursion_bounds(model, recorded, test))
-    for r, p, d in zip(rows, paths, test):
-        r["dtwd"] = dtwd(at_period(p, d), d.pos).total
-    scores = getattr(model, "warp_scores_", {})
-    dtwd_mean, copy_mean = float(np.mean([r["dtwd"] for r in rows])), float(np.mean([r["copy"] for r in rows]))
-    return {"tests": rows, "dtwd_mean": dtwd_mean, "copy_mean": copy_mean, "ratio": dtwd_mean / copy_mean,
-            "excursion": max(r["excursion"] for r in rows), "arrival_ratio": max(r["arrival_ratio"] for r in rows),
-            "final_error": max(r["final_error"] for r in rows), "certified": bool(model.certified_), "fit_s": fit_s,
-            "kept": min(scores, key=scores.get) if scores else None, "warp_scores": scores,
-            "preprocess": report.lines(demos.units), "paths": [realdata.thin(p) for p in paths]}
+    """The protocol (module docstring) on one set: :func:`sosdyn.evaluation.realdata.evaluate_set`
+    (reproductions read at the test demos' period) with the kept warp candidate and each candidate's
+    training deviation."""
+    fitted = []
+    out = realdata.evaluate_set(lambda train: fitted.append(fit_fn(train)) or fitted[-1], demos)
+    if out["failure"]:
+        raise SolverError(out["failure"])       # an entry with "error" (problems.real_data.cached_job)
+    scores = getattr(fitted[-1], "warp_scores_", {})
+    return dict(out, kept=min(scores, key=scores.get) if scores else None, warp_scores=scores)
 
 
 def run_job(name: str, method: str, quick: bool, cache_dir: Path, force: bool) -> dict:
-    key = {"version": CACHE_VERSION, "set": name, "method": METHODS[method], "quick": quick,
-           "auto_warps": AUTO_WARPS if method == "CDSP default" else None}
+    key = {"version": CACHE_VERSION, "set": name, "method": cdsp_key(dict(METHODS[method], **(QUICK if quick else {}))),
+           "quick": quick}
     return cached_job(cache_dir, name, method, quick, key, force, lambda: evaluate(fitter(method, quick),
                                                                                    sd.load_dataset(name)))
 

@@ -29,7 +29,8 @@ class ResourceLimitError(InputError):
     """A request whose estimated size (bytes, steps, Gram entries) is over a limit.
 
     Raised before the work starts; the limit is raised with :func:`sosdyn.limits.set_limits`
-    (or the ``limits`` context manager) when the machine can afford it.
+    (or the ``limits`` context manager), or for the ``sosdyn`` command with the environment variable
+    ``SOSDYN_<NAME>`` (:func:`sosdyn.limits.env_name`), when the machine can afford it.
     """
 
 

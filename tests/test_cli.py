@@ -159,10 +159,10 @@ def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
     monkeypatch.setattr("sosdyn.cli.fit.family_for", lambda data, order=1: FakeCDSP)
     code, out, err = run(capsys, "fit", str(demo_file), "--out", str(tmp_path / "m.json"),
                          "--components", "3", "--solver-method", "ica", "--seed", "7", "--max-iter", "9",
-                         "--gating", "tempered")
+                         "--gating", "tempered", "--speed-floor", "2.5")
     assert code == 0, err
     assert made["kwargs"] == {"n_components": 3, "solver_method": "ica", "random_state": 7, "max_iter": 9,
-                              "gating": "tempered"}
+                              "gating": "tempered", "speed_floor": 2.5}
     assert [d.source for d in made["demos"]] == [demo_file.name]
     assert (tmp_path / "m.json").exists() and "saved" in out
 
@@ -170,6 +170,12 @@ def test_fit_passes_only_given_options(capsys, monkeypatch, tmp_path):
 def test_fit_rejects_unknown_method(capsys, tmp_path):
     code, _, err = run(capsys, "fit", "x.csv", "--method", "newton")
     assert code == 2 and "newton" in err
+
+
+@pytest.mark.parametrize("value", ["fast", "0", "-1", "nan"])
+def test_fit_rejects_a_bad_speed_floor(capsys, value):
+    code, _, err = run(capsys, "fit", "x.csv", "--speed-floor", value)
+    assert code == 2 and "--speed-floor" in err
 
 
 def test_rollout_writes_csv(capsys, monkeypatch, tmp_path):

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import importlib.util
+import shutil
+import subprocess
 
 import numpy as np
 import pytest
@@ -64,6 +66,28 @@ def test_export_cpp_writes_a_header(capsys, saved, tmp_path):
     assert code == 0, err
     text = target.read_text()
     assert "#pragma once" in text and "constexpr int N = 3;" in text
+
+
+def test_export_cpp_namespace_is_chosen_and_checked(capsys, saved, tmp_path):
+    """--namespace names the C++ namespace (the header compiles and is called through it); a C++ keyword,
+    a non-identifier, or --namespace with --to python is refused with nothing written."""
+    target = tmp_path / "field.hpp"
+    code, _, err = run(capsys, "export", saved[3][0], "--to", "cpp", "--namespace", "arm_ctl", "--out", target)
+    assert code == 0, err
+    text = target.read_text()
+    assert "namespace arm_ctl {" in text and "cdsp_model" not in text
+    if shutil.which("g++"):
+        (tmp_path / "main.cpp").write_text('#include "field.hpp"\nint main() { double x[3] = {1, 2, 3}, v[3]; '
+                                           "return arm_ctl::predict(x, v) ? 0 : 1; }\n")
+        subprocess.run(["g++", "-std=c++17", "-Wall", "-Werror", "-o", str(tmp_path / "main"), str(tmp_path / "main.cpp")],
+                       check=True, capture_output=True)
+        assert subprocess.run([str(tmp_path / "main")]).returncode == 0
+    for name, fragment in (("class", "a C++ keyword"), ("9lives", "not an ASCII C++ identifier")):
+        code, _, err = run(capsys, "export", saved[3][0], "--to", "cpp", "--namespace", name, "--out", tmp_path / "x.hpp")
+        assert_one_error_line(code, err, f"namespace '{name}' is {fragment}", need_try=True)
+    code, _, err = run(capsys, "export", saved[3][0], "--to", "python", "--namespace", "arm_ctl", "--out", tmp_path / "x.py")
+    assert_one_error_line(code, err, "--namespace names the C++ namespace", "--to cpp", need_try=True)
+    assert not (tmp_path / "x.hpp").exists() and not (tmp_path / "x.py").exists()
 
 
 def test_export_refuses_to_overwrite_its_input(capsys, saved):

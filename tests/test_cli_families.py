@@ -141,7 +141,14 @@ def test_options_of_other_families_are_refused_by_name(second_order_file, capsys
     code, _, err = run(capsys, "fit", logs, "--order", "2", "--preset", "ica", "--out", tmp_path / "m.json")
     assert_one_error_line(code, err, "SecondOrderCDSP has none", need_try=True)
     code, _, err = run(capsys, "fit", logs, "--order", "2", "--components", "3", "--out", tmp_path / "m.json")
-    assert_one_error_line(code, err, "n_components applies to field='mixture' only", need_try=True)
+    assert_one_error_line(code, err, "--components applies to a SecondOrderCDSP model with --field mixture only, not "
+                          "with the default --field tracking. Try: add --field mixture, or drop --components.")
+    code, _, err = run(capsys, "fit", logs, "--order", "2", "--field", "tracking", "--max-iter", "3",
+                       "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "--max-iter applies to a SecondOrderCDSP model with --field mixture only, not "
+                          "with --field tracking.", "Try: add --field mixture")
+    code, _, err = run(capsys, "fit", logs, "--solver-method", "energy", "--out", tmp_path / "m.json")
+    assert_one_error_line(code, err, "solver_method must be one of ('alternating', 'ica'), got 'energy'", need_try=True)
     code, _, err = run(capsys, "fit", logs, "--field", "mixture", "--out", tmp_path / "m.json")
     assert_one_error_line(code, err, "--field does not apply to a CDSP model (SecondOrderCDSP takes it)",
                           need_try=True)
@@ -149,13 +156,22 @@ def test_options_of_other_families_are_refused_by_name(second_order_file, capsys
 
 
 def test_fit_order_2_field_mixture(capsys, tmp_path):
-    """``--field mixture`` gives the mixture of linear fields, with its options."""
+    """``--field mixture`` gives the mixture of linear fields, with its options: the components, the
+    iteration cap (its notice read from the second-order rows) and the solver method (second order's own
+    "energy" included)."""
     logs = crossing_log(tmp_path / "e")
     code, out, err = run(capsys, "fit", logs, "--order", "2", "--field", "mixture", "--components", "3",
-                         "--max-iter", "3", "--out", tmp_path / "m.json")
+                         "--max-iter", "1", "--solver-method", "energy", "--out", tmp_path / "m.json")
     assert code == 0, err
     loaded = sd.load_model(tmp_path / "m.json")
     assert loaded.field == "mixture" and loaded.C_.shape[0] == 3 and loaded.certified_
+    assert loaded.solver_method == "energy" and loaded.max_iter == 1
+    steps = re.findall(r"^step (\d+) \((\w+)\): cost (\S+)", out, re.M)       # the progress lines
+    assert [s[:2] for s in steps] == [("1", "start"), ("2", "energy")]
+    old, new = float(steps[0][2]), float(steps[1][2])
+    cap = re.search(r"iteration cap: the fit: stopped at max_iter=1 with relative change (\S+) > tol=0.0001 "
+                    r"\(more iterations: --max-iter\)", out)
+    assert cap and float(cap[1]) == pytest.approx((old - new) / new, rel=1e-2)      # printed to 3 and 6 digits
 
 
 def test_first_order_fit_of_crossings_points_to_order_2(capsys, tmp_path):

@@ -13,7 +13,8 @@ from scipy.linalg import expm
 from cli_support import assert_one_error_line, run
 
 import sosdyn as sd
-from sosdyn.cli.fit import iteration_cap, progress_line
+from sosdyn.cli.fit import progress_line
+from sosdyn.lfd.fit.learner import capped
 from sosdyn.lfd.fit.warp import AUTO_WARPS
 
 DT = 0.02
@@ -275,11 +276,22 @@ def test_iteration_cap_is_reported_only_when_hit(linear_demos_2d):
     rows = [{"step": "dynamics (M = I)", "cost": 10.0}]
     for old, new in ((10.0, 8.0), (8.0, 7.0)):
         rows += [{"step": "ica", "cost": old}, {"step": "dynamics", "cost": new}]
-    assert iteration_cap(rows, 2, 1e-4) == "stopped at max_iter=2 with relative change 1.25e-01 > tol=0.0001"
-    assert iteration_cap(rows, 3, 1e-4) is None                        # the cap was not reached
-    assert iteration_cap(rows, 2, 0.2) is None                         # the last change met the tolerance
-    capped = sd.CDSP(n_components=2, warp="none", max_iter=1, tol=1e-12).fit(linear_demos_2d)
-    assert iteration_cap(capped.history_, 1, 1e-12).startswith("stopped at max_iter=1 with relative change")
+    assert capped(rows, 2, 1e-4) == "stopped at max_iter=2 with relative change 1.25e-01 > tol=0.0001"
+    assert capped(rows, 3, 1e-4) is None                        # the cap was not reached
+    assert capped(rows, 2, 0.2) is None                         # the last change met the tolerance
+    model = sd.CDSP(n_components=2, warp="none", max_iter=1, tol=1e-12).fit(linear_demos_2d)
+    assert model.iteration_cap(model.history_).startswith("stopped at max_iter=1 with relative change")
+    assert sd.PoseCDSP(max_iter=2).iteration_cap(rows) == capped(rows, 2, 1e-4)     # the chart model's rule
+
+
+def test_second_order_iteration_cap_reads_its_own_rows():
+    """A "start" row, then one row per iteration (cost after it); the loop's test is relative to the new cost."""
+    rows = [{"step": "start", "cost": 10.0}, {"step": "ica", "cost": 8.0}, {"step": "ica", "cost": 7.0}]
+    model = sd.SecondOrderCDSP(field="mixture", max_iter=2)
+    assert model.iteration_cap(rows) == "stopped at max_iter=2 with relative change 1.43e-01 > tol=0.0001"
+    assert sd.SecondOrderCDSP(field="mixture", max_iter=3).iteration_cap(rows) is None      # stopped before the cap
+    assert sd.SecondOrderCDSP(field="mixture", max_iter=2, tol=0.2).iteration_cap(rows) is None
+    assert sd.SecondOrderCDSP().iteration_cap([]) is None                                 # tracking: no iterations
 
 
 def test_fit_says_which_warp_was_kept_and_why(capsys, tmp_path):

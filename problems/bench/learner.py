@@ -43,7 +43,7 @@ from sosdyn.report.figures import save_figure, scaling_plot
 
 from ..settings import BENCH, PAPER_SHAPES
 from .learner_report import summary_markdown
-from . import default_overhead, predict, scaling_n
+from . import default_overhead, dtw, predict, scaling_n
 from .profiling import profile_call
 from .synthetic import demos as synth
 from .timing import environment, fmt_s, median, now, timing, write_json
@@ -325,6 +325,12 @@ def run_profiles(fits, targets, backends, quick, scaling=None, overhead=None):
     return profiles
 
 
+def last_runs(out_dir: Path) -> dict:
+    """The one-state evaluator's and DTW's results (``predict``, ``dtw``) from their files, when written."""
+    return {name: json.loads((out_dir / f"{name}.json").read_text()) for name in ("predict", "dtw")
+            if (out_dir / f"{name}.json").exists()}
+
+
 def rebuild_summary(out_dir: Path) -> None:
     """summary.md again from the JSON files of the last runs (e.g. after ``scaling_n`` alone)."""
     read = lambda name: json.loads((out_dir / name).read_text())  # noqa: E731
@@ -336,6 +342,7 @@ def rebuild_summary(out_dir: Path) -> None:
         res["sos_summary"] = read("sos.json").get("summary")
     if (out_dir / "overhead.json").exists():
         res["overhead"] = read("overhead.json")
+    res.update(last_runs(out_dir))
     (out_dir / "summary.md").write_text(summary_markdown(res, out_dir))
     log(f"rebuilt {out_dir}/summary.md from the JSON files")
 
@@ -344,7 +351,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog="python -m problems bench")
     ap.add_argument("--quick", action="store_true", help="tiny sizes (smoke test)")
     ap.add_argument("--out", default=str(BENCH))
-    ap.add_argument("--skip", default="", help="comma list of parts to skip: shapes,sweeps,scaling_n,backends,profiles,predict,overhead")
+    ap.add_argument("--skip", default="", help="comma list of parts to skip: shapes,sweeps,scaling_n,backends,profiles,predict,dtw,overhead")
     ap.add_argument("--summary", action="store_true", help="only rebuild summary.md from the JSON files of the last runs")
     args = ap.parse_args(argv)
     out_dir = Path(args.out)
@@ -380,6 +387,9 @@ def main(argv=None):
     keep("profiles", "profiles.json", {"profiles": res["profiles"]})
     if "predict" not in skip:          # the one-state evaluator against model.predict (predict.json)
         predict.main(["--out", str(out_dir)] + (["--quick"] if args.quick else ["--cubic"]))
+    if "dtw" not in skip:              # the DTW distance of the evaluation (dtw.json)
+        dtw.main(["--out", str(out_dir)] + (["--quick"] if args.quick else []))
+    res.update(last_runs(out_dir))
     sos_json = out_dir / "sos.json"
     if sos_json.exists():
         res["sos_summary"] = json.loads(sos_json.read_text()).get("summary")

@@ -60,6 +60,7 @@ def summary_markdown(res, out_dir) -> str:
                  verdict(targets["resolve"]["met"]),
                  f"max {fmt_s(targets['resolve']['max_overhead_update_solve'])}; whole step minus solver "
                  f"(incl. contraction-matrix arithmetic) {fmt_s(targets['resolve']['max_overhead_full_step'])}"])
+    rows += evaluator_rows(res.get("predict"), res.get("dtw"))
     if sos:
         rows.append(["SOS: build + canonicalise ≤ 10 % of solve (solves ≥ 1 s)", verdict(sos["build_share"]["met"]),
                      ", ".join(f"{x['name']} {100 * x['share']:.2f} %" for x in sos["build_share"]["problems"])])
@@ -121,6 +122,24 @@ def summary_markdown(res, out_dir) -> str:
             L += ["## SOS layer (`make bench-sos`, full tables in [sos.md](sos.md))", "", head[1].strip(), ""]
     L.append(f"_Elapsed: {res.get('elapsed_s', 0):.0f} s._")
     return "\n".join(L) + "\n"
+
+
+def evaluator_rows(pred: dict | None, dtw: dict | None) -> list[list[str]]:
+    """Target rows of the one-state evaluator (``predict.json``) and of the DTW distance (``dtw.json``)."""
+    rows = []
+    if pred:
+        per = [f"degree {r['field_degree']}, {r['warp_bumps']} bumps: {fmt_s(r['predictor_s'])} "
+               f"({fmt_ratio(r['speedup'])} predict)" for r in pred["rows"]]
+        rows.append([f"predictor() ≤ {fmt_s(pred['target_s'])} per state (K = 8, 2-D)",
+                     verdict(all(r["within_target"] for r in pred["rows"])), "; ".join(per)])
+        if "speedup_target" in pred:
+            rows.append([f"predictor() ≥ {pred['speedup_target']:g}× faster than predict(x[None]) on one state",
+                         verdict(all(r["speedup_met"] for r in pred["rows"])),
+                         f"min {fmt_ratio(min(r['speedup'] for r in pred['rows']))}"])
+    if dtw:
+        rows.append([", ".join(f"DTW {r['points'][0]} × {r['points'][1]} ≤ {fmt_s(r['target_s'])}" for r in dtw["rows"]),
+                     verdict(dtw["met"]), ", ".join(fmt_s(r["median_s"]) for r in dtw["rows"])])
+    return rows
 
 
 def blockers_markdown(scaling) -> str:

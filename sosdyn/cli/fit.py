@@ -15,7 +15,9 @@ with no role is refused, never dropped).
 Before the fit the demonstrations are prepared by the family (``--smooth``, ``--trim-rest``,
 ``--align-ends``: the model's ``prepare``; pose demonstrations take none) and crossings are
 reported when the family cannot follow them. An option the family has no parameter for is refused,
-naming the family that takes it. Progress: one plain line per
+naming the family that takes it; an option whose parameter applies only with another's value
+(``only_with``: the second-order mixture's --components, --max-iter, --solver-method) is refused
+without it, naming the option to add. Progress: one plain line per
 convex step on stdout (step, cost, seconds of the step and since the start) when stdout is not a
 terminal, a live status line when it is; nothing with ``--quiet``. After the fit: the
 certificate, right under it a caution when reproductions do not reach the goal within twice their
@@ -26,6 +28,7 @@ how the model reproduces each demonstration (with the time each takes to reach t
 from __future__ import annotations
 
 import enum
+import math
 import time
 from pathlib import Path
 from typing import Annotated
@@ -36,11 +39,11 @@ from rich.markup import escape
 from ..errors import InputError
 from ..lfd.model.cdsp import DEFAULTS
 from ..lfd.data.demonstrations import GOAL_TOL_FRACTION, units_problem
-from ..lfd.fit.learner import COST_FLOOR, stalled
 from ..lfd.data.pose import GOAL_TOL_DEG
-from ..lfd.fit.params import GATINGS, MAX_CORRECTIVE_ROUNDS, PRESETS, WARPS
+from ..lfd.fit.params import FLOORS, GATINGS, MAX_CORRECTIVE_ROUNDS, METHODS, PRESETS, WARPS
+from ..lfd.fit.second_order import METHODS as SECOND_ORDER_METHODS
+from ..lfd.fit.second_order.params import FIELDS as SECOND_ORDER_FIELDS
 from ..lfd.model.base import FAMILIES, family_for
-from ..lfd.model.second_order import FIELDS as SECOND_ORDER_FIELDS
 from .base import ColumnsOption, State, TimeUnitsOption, app, err, info, out, positive, read_options
 from .fitdata import DATASET_PREFIX, load_dataset_input, parse_align, parse_smooth, prepare, print_arrival, print_score
 from .paths import LASA_PREFIX, check_folder, check_output, demo_inputs
@@ -48,11 +51,7 @@ from .paths import LASA_PREFIX, check_folder, check_output, demo_inputs
 Preset = enum.Enum("Preset", {name: name for name in PRESETS}, type=str)
 
 
-class SolverMethod(str, enum.Enum):
-    alternating = "alternating"
-    ica = "ica"
-
-
+SolverMethod = enum.Enum("SolverMethod", {m: m for m in dict.fromkeys(METHODS + SECOND_ORDER_METHODS)}, type=str)
 Warp = enum.Enum("Warp", {name: name for name in WARPS}, type=str)
 Gating = enum.Enum("Gating", {name: name for name in GATINGS}, type=str)
 SecondOrderField = enum.Enum("SecondOrderField", {name: name for name in SECOND_ORDER_FIELDS}, type=str)
@@ -61,7 +60,7 @@ SecondOrderField = enum.Enum("SecondOrderField", {name: name for name in SECOND_
 OPTIONS = {"n_components": "--components", "metric_degree": "--metric-degree", "field_degree": "--field-degree",
            "gamma": "--gamma", "solver": "--solver", "solver_method": "--solver-method", "random_state": "--seed",
            "corrective_rounds": "--corrective-rounds", "warp": "--warp", "max_iter": "--max-iter",
-           "gating": "--gating", "goal_tol_deg": "--goal-tol-deg", "field": "--field"}
+           "gating": "--gating", "speed_floor": "--speed-floor", "goal_tol_deg": "--goal-tol-deg", "field": "--field"}
 
 
 class Switch(str, enum.Enum):
@@ -73,26 +72,11 @@ def progress_line(row: dict, step_s: float, total_s: float) -> str:
     """One convex step of a fit: ``step 3 (metric): cost 12.5 (0.21 s; 1.4 s since start)``,
     prefixed by ``warp 60 maps, decay 1, `` for a candidate of warp="auto" and ``corrective
     round 1, `` during a refit on corrective data. ``step_s``: since the previous line."""
-    head = (f"warp {row['warp']}, " if row.get("warp") else "") + \
+    head = (f"{row['block']} block, " if row.get("block") else "") + \
+        (f"warp {row['warp']}, " if row.get("warp") else "") + \
         (f"corrective round {row['round']}, " if row.get("round") else "")
     return (f"{head}step {row['iteration'] + 1} ({row['step']}): cost {row['cost']:.6g} "
             f"({step_s:.2f} s; {total_s:.1f} s since start)")
-
-
-def iteration_cap(rows: list[dict], max_iter: int, tol: float) -> str | None:
-    """``stopped at max_iter=20 with relative change 3.1e-04 > tol=0.0001`` when the rows of one
-    fit (one candidate / round) used all ``max_iter`` iterations (ica or metric steps) and the
-    last one still changed the cost by more than ``tol`` (the learner's stopping test,
-    :func:`~sosdyn.lfd.fit.learner.stalled`); None otherwise."""
-    iterations = sum(r["step"] in ("ica", "metric") for r in rows)
-    costs = [r["cost"] for r in rows if r["step"].startswith("dynamics")]
-    if iterations < max_iter or len(costs) < 2 or not rows[-1]["step"].startswith("dynamics"):
-        return None
-    old, new = costs[-2], costs[-1]
-    if stalled(old, new, tol):
-        return None
-    change = (old - new) / max(old, COST_FLOOR)
-    return f"stopped at max_iter={max_iter} with relative change {change:.2e} > tol={tol:g}"
 
 
 class FitProgress:
@@ -122,27 +106,29 @@ class FitProgress:
         now = time.perf_counter()
         line = progress_line(row, now - self._last, now - self.start)
         self._last = now
-        self.rows.setdefault((row.get("warp"), row.get("round")), []).append(row)
+        self.rows.setdefault((row.get("block"), row.get("warp"), row.get("round")), []).append(row)
         if self._status is not None:
             self._status.update(f"{self.message}: {line}")
         elif not State.quiet:
             out.print(line, highlight=False, soft_wrap=True)
 
-    def caps(self, max_iter: int, tol: float) -> list[str]:
-        """One line per fit (candidate / round) that hit the iteration cap."""
+    def caps(self, model) -> list[str]:
+        """One line per fit (candidate / round) that hit the iteration cap (``model.iteration_cap``)."""
         lines = []
-        for (warp, round_), rows in self.rows.items():
-            cap = iteration_cap(rows, max_iter, tol)
+        for (block, warp, round_), rows in self.rows.items():
+            cap = model.iteration_cap(rows)
             if cap:
-                who = " ".join(filter(None, (warp and f"warp {warp}", round_ and f"corrective round {round_}")))
+                who = " ".join(filter(None, (block and f"{block} block", warp and f"warp {warp}",
+                                             round_ and f"corrective round {round_}")))
                 lines.append(f"{who or 'the fit'}: {cap} (more iterations: --max-iter)")
         return lines
 
 
 def check_options(family, given: dict) -> None:
     """InputError naming the options (:data:`OPTIONS`) whose parameter ``family`` does not have, and
-    the families that have it."""
-    params = set(family().get_params())
+    the families that have it; or an option whose parameter applies only when another has a value
+    (``family.only_with``) given without it, naming the option that sets it."""
+    params = family().get_params()
     bad = [name for name in given if name not in params]
     if bad:
         owners = sorted({cls.__name__ for cls in FAMILIES.values() for name in bad if name in cls().get_params()})
@@ -150,6 +136,12 @@ def check_options(family, given: dict) -> None:
         raise InputError(f"{listed} {'does' if len(bad) == 1 else 'do'} not apply to a {family.__name__} model"
                          f"{' (' + ' and '.join(owners) + ' take' + ('s' if len(owners) == 1 else '') + ' it)' if owners else ''}"
                          f". Try: drop {'it' if len(bad) == 1 else 'them'}.")
+    for name in given:
+        other, value = family.only_with.get(name, (None, None))
+        if other is not None and given.get(other, params[other]) != value:
+            now = f"{OPTIONS[other]} {given[other]}" if other in given else f"the default {OPTIONS[other]} {params[other]}"
+            raise InputError(f"{OPTIONS[name]} applies to a {family.__name__} model with {OPTIONS[other]} {value} "
+                             f"only, not with {now}. Try: add {OPTIONS[other]} {value}, or drop {OPTIONS[name]}.")
 
 
 def _units(value: str | None) -> str | None:
@@ -169,6 +161,19 @@ def open_degrees(value: float | None) -> float | None:
 
 def _default(name: str) -> str:
     return f"{DEFAULTS[name]}, or the preset's"
+
+
+def parse_floor(value: str | None) -> str | float | None:
+    """``--speed-floor``: auto, none, or a rate > 0 (1/s)."""
+    if value is None or value in FLOORS:
+        return value
+    try:
+        rate = float(value)
+    except ValueError:
+        raise typer.BadParameter(f"must be auto, none or a rate > 0 (1/s), got {value!r}.") from None
+    if not (math.isfinite(rate) and rate > 0):
+        raise typer.BadParameter(f"the rate must be a finite number > 0 (1/s), got {value!r}.")
+    return rate
 
 
 @app.command()
@@ -196,7 +201,8 @@ def fit(
     solver: Annotated[str | None, typer.Option(help="Conic solver, e.g. CLARABEL or SCS.",
                                                show_default=str(DEFAULTS["solver"]))] = None,
     solver_method: Annotated[SolverMethod | None, typer.Option(
-        "--solver-method", "--method", help="How the bilinear program is solved (CDSP's solver_method).",
+        "--solver-method", "--method", help="How the bilinear program is solved: ica (joint convex steps) or "
+                                            "alternating; a second-order mixture (--field mixture) also energy.",
         show_default=_default("solver_method"))] = None,
     corrective_rounds: Annotated[int | None, typer.Option(
         min=0, max=MAX_CORRECTIVE_ROUNDS, help="Refits on corrective data from the model's own rollouts of the demonstrations (0 = plain "
@@ -211,8 +217,15 @@ def fit(
         "--max-iter", min=0, help="Iteration cap of the alternation (each fit, candidate or round).",
         show_default=f"{DEFAULTS['max_iter']}, or the preset's (second order: 50)")] = None,
     gating: Annotated[Gating | None, typer.Option(
-        help="The mixture weights h_k: posterior, or tempered (the posterior at the data, turning smoothly off "
-             "it: smoother motions away from the demonstrations).", show_default=_default("gating"))] = None,
+        help="The mixture weights h_k: posterior; tempered (the posterior at the data, turning smoothly off it); "
+             "smooth (the posterior at the data, fading to constant weights far off it: the smoothest motions away "
+             "from the demonstrations).", show_default=_default("gating"))] = None,
+    speed_floor: Annotated[str | None, typer.Option(
+        "--speed-floor", callback=parse_floor, metavar="auto|none|RATE",
+        help="A time change of the field (same paths, same certificate): at least RATE (1/s) x the distance to the "
+             "goal, at most 10x the field's speed; auto = the least that makes the reproductions of the "
+             "demonstrations arrive within 1.5x their duration (none if they do).",
+        show_default=_default("speed_floor"))] = None,
     dt: Annotated[float | None, typer.Option(
         callback=positive, help="Sampling step (s) of files without a time column: sample k is at k*dt.",
         show_default="none: the files' time column")] = None,
@@ -278,8 +291,8 @@ def fit(
     options = {"n_components": components, "metric_degree": metric_degree, "field_degree": field_degree,
                "gamma": gamma, "solver": solver, "solver_method": solver_method and solver_method.value,
                "random_state": seed, "corrective_rounds": corrective_rounds, "warp": warp and warp.value,
-               "max_iter": max_iter, "gating": gating and gating.value, "goal_tol_deg": goal_tol_deg,
-               "field": field and field.value}
+               "max_iter": max_iter, "gating": gating and gating.value, "speed_floor": speed_floor,
+               "goal_tol_deg": goal_tol_deg, "field": field and field.value}
     given = {k: v for k, v in options.items() if v is not None}
     check_options(family, given)
     data = prepare(family, data, smooth, trim_rest is Switch.on, align_ends)
@@ -298,6 +311,6 @@ def fit(
     print_arrival(rows, params.get("gamma"))
     for line in lines[1:]:
         info(escape(line))
-    for line in progress.caps(params["max_iter"], params["tol"]):
+    for line in progress.caps(model):
         info(f"[yellow]iteration cap[/]: {escape(line)}")
     print_score(rows, data)

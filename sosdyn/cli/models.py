@@ -143,6 +143,9 @@ def export_model(
         "--max-speed", callback=positive, help="Largest speed (units/s) of the exported field: the velocity is "
                                                "scaled down, same direction, path and goal.", show_default="none")] = None,
     max_angular_speed: MaxAngularSpeedOption = None,
+    namespace: Annotated[str | None, typer.Option(
+        "--namespace", help="--to cpp: the C++ namespace of the evaluator (a C++ identifier, not a keyword).",
+        show_default="the model's: cdsp_model, pose_model or second_order_model")] = None,
 ) -> None:
     """Write a standalone evaluator of a saved model (Python + numpy, or C++17).
 
@@ -151,18 +154,21 @@ def export_model(
     can move at run time. A pose model adds `predict_pose(x, quat, goal=None) -> (v, omega)`
     (Python: numpy + scipy) or `pose_model_pose::predict_pose(x, quat, v, omega, goal)` (C++); a
     second-order model gives `acceleration(X, V, goal=None)` or
-    `second_order_model::acceleration(x, v, a, goal)` (C++)."""
+    `second_order_model::acceleration(x, v, a, goal)` (C++). --namespace renames the C++ namespace."""
     import sosdyn as sd
 
     from ..lfd.model.fileformat import replace_atomically
 
+    if namespace is not None and target is not ExportTarget.cpp:
+        raise InputError("--namespace names the C++ namespace; a Python module has none. Try: drop it, or --to cpp.")
     existing(model_path, "model file")
     check_output(out_path, [model_path], "model file")
     check_folder(out_path.parent)
     model = sd.load_model(model_path)
     method = "to_python" if target.value == "python" else "to_cpp"
     extra = family_keywords(model, method, {"max_angular_speed": ("--max-angular-speed", max_angular_speed)})
-    source = model.export(target.value, max_speed=max_speed, **extra)
+    source = model.export(target.value, max_speed=max_speed, **extra,
+                          **({} if namespace is None else {"namespace": namespace}))
     replace_atomically(out_path, source.encode("utf-8"))
     info(f"[green]wrote[/] {escape(str(out_path))}  ({target.value}, {len(source.splitlines())} lines)")
 

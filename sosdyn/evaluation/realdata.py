@@ -11,16 +11,26 @@ Per set of N demonstrations (in the set's order):
    dt = 0.01 s) from each test demo's 20th kept sample, with the stop rule scaled to the
    data: rest when every velocity component stays below ``VEL_TOL_FRACTION * diag / T_med``
    (diag: the training box's diagonal, T_med: the median training duration; on LASA this is
-   ds-opt's 0.1 mm/s), at most ``max(30 s, HORIZON x the longest test duration)``.
-4. Scores per test demo: DTWD to the whole kept demo (:func:`~sosdyn.evaluation.metrics.dtwd`);
-   copy = min over training demos of their DTWD to it (:func:`~sosdyn.evaluation.dsopt.nearest_demo_score`);
+   ds-opt's 0.1 mm/s), at most ``max(30 s, HORIZON x the longest test duration)``. A
+   time-indexed model (``time_indexed`` True: a DMP, no field) runs its own rollout from the start
+   for that horizon at dt, cut by the same rest rule (:func:`rest_cut`).
+4. Scores per test demo: DTWD to the whole kept demo (:func:`~sosdyn.evaluation.metrics.dtwd`) of
+   the reproduction **read at the demo's period** (:func:`at_period`: linear interpolation in time
+   at the kept demo's mean sample step), so the two curves are sampled alike: the cumulative DTW
+   adds one term per point, and a rollout at 0.01 s against demos kept at 2/60 s (robottasks) or
+   0.02 s would count 3.3x or 2x the points of the demo it is compared with (ds-opt's LASA
+   protocol needs no reading: its rollout step, 0.01 s, is LASA's kept period, 0.009 s);
+   copy = min over training demos of their DTWD to it (:func:`~sosdyn.evaluation.dsopt.nearest_demo_score`;
+   demos of one recording share the period);
    arrival = the first time within 1 % of diag of the model's goal, over the demo's remaining
    duration from the start sample (inf: never); excursion = farthest point outside the training
    box / diag (:func:`sosdyn.lfd.rollout.quality.excursion`); start excursion = the start's own;
-   certified excursion bound = the largest excursion of the box that the certificate keeps the
-   trajectory in (:func:`sosdyn.lfd.model.reach.reach_box`, docs/theory.md; None without a
-   certified constant metric); final error = distance from the reproduction's end to the demo's
-   end / diag.
+   excursion beyond the start = farthest point outside the training box widened to hold the
+   start, / diag (what a rollout adds to where it starts); certified excursion bound = the largest
+   excursion of the box that the certificate keeps the trajectory in
+   (:func:`sosdyn.lfd.model.reach.reach_box`, docs/theory.md; None without a certified constant
+   metric); final error = distance from the reproduction's end to the demo's end / diag.
+   Arrival, excursions and final error read the whole rollout (every dt).
 """
 
 from __future__ import annotations
@@ -98,6 +108,40 @@ def reproduce(field: Callable, train, test) -> list[np.ndarray]:
     return dsopt.euler_reproduce(field, dsopt.start_points(test), vel_tol=vel_tol, max_steps=max_steps)
 
 
+def rest_cut(path: np.ndarray, vel_tol: float, dt: float = dsopt.DT, window: int = dsopt.WINDOW) -> np.ndarray:
+    """``path`` (rows every ``dt``) up to the first row i >= ``window`` at which every component of
+    the finite-difference velocity (x_{j+1} - x_j) / dt stayed below ``vel_tol`` for j = i-window+1..i
+    (the Euler stop rule of :func:`~sosdyn.lfd.rollout.euler_until_rest` read off the positions);
+    the whole path if it never rests."""
+    calm = (np.abs(np.diff(path, axis=0)) / dt < vel_tol).all(axis=1).astype(int)
+    if len(calm) < window:
+        return path
+    run = np.convolve(calm, np.ones(window, dtype=int), mode="valid")        # calm steps in each window
+    at = np.flatnonzero(run == window)
+    return path if not at.size else path[:at[0] + window]
+
+
+def reproduce_model(model, train, test) -> list[np.ndarray]:
+    """Protocol step 3 for a fitted model: :func:`reproduce` of its field ``predict``, or for a
+    time-indexed model (``time_indexed``: a DMP) its ``rollout`` from each start at dt for the
+    horizon, cut at rest (:func:`rest_cut`)."""
+    if not getattr(model, "time_indexed", False):
+        return reproduce(model.predict, train, test)
+    vel_tol, max_steps = stop_rule(train, test)
+    return [rest_cut(model.rollout(x0, (max_steps - 1) * dsopt.DT, dt=dsopt.DT).pos, vel_tol)
+            for x0 in dsopt.start_points(test)]
+
+
+def at_period(path: np.ndarray, demo, dt: float = dsopt.DT) -> np.ndarray:
+    """The reproduction ``path`` (row k at time k ``dt``) read every mean sample step of ``demo``
+    (its kept samples' (t_last - t_first) / (T - 1)), from 0 to the path's end, by linear
+    interpolation in time: the curve at the demo's period, for the cumulative DTW (module docstring)."""
+    period = float(demo.t[-1] - demo.t[0]) / (len(demo.t) - 1)
+    t = np.arange(len(path)) * dt
+    tq = np.arange(0.0, t[-1] + 1e-9 * period, period)
+    return np.column_stack([np.interp(tq, t, path[:, k]) for k in range(path.shape[1])])
+
+
 def excursion_bounds(model, train, test) -> list:
     """Per test start (the 20th kept sample): the certified excursion bound, the largest
     excursion outside ``train``'s box of any state in ``model``'s reach box from it
@@ -110,16 +154,23 @@ def excursion_bounds(model, train, test) -> list:
     return [float(b) for b in box_excursion(*reach, lo, hi)]
 
 
-def test_scores(paths, train, test, goal, bounds=None) -> list[dict]:
-    """Protocol step 4: one row per test demo, DTWD, copy, the start's own excursion and the
-    certified bound (``bounds``, :func:`excursion_bounds`; None) added to
-    :func:`sosdyn.evaluation.dsopt.reproduction_quality`'s arrival, excursion and final error."""
+def test_scores(paths, train, test, goal, bounds=None, alike: bool = True) -> list[dict]:
+    """Protocol step 4: one row per test demo, DTWD (of the path read at the demo's period,
+    :func:`at_period`; as integrated for ``alike`` False, ds-opt's LASA protocol), copy, the
+    start's own excursion, the excursion beyond the start and the certified bound (``bounds``,
+    :func:`excursion_bounds`; None) added to :func:`sosdyn.evaluation.dsopt.reproduction_quality`'s
+    arrival, excursion and final error."""
     rows = dsopt.reproduction_quality(paths, train, test, goal)
-    lo, hi, _ = box(train)
+    lo, hi, diag = box(train)
     bounds = [None] * len(test) if bounds is None else bounds
-    return [dict(r, dtwd=dtwd(path, d.pos).total, copy=min(dtwd(tr.pos, d.pos).total for tr in train),
-                 start_excursion=excursion(x0[None], lo, hi), excursion_bound=b, n_points=len(path))
-            for r, path, d, x0, b in zip(rows, paths, test, dsopt.start_points(test), bounds)]
+    out = []
+    for r, path, d, x0, b in zip(rows, paths, test, dsopt.start_points(test), bounds):
+        wide_lo, wide_hi = np.minimum(lo, x0), np.maximum(hi, x0)
+        beyond = excursion(path, wide_lo, wide_hi) * float(np.linalg.norm(wide_hi - wide_lo)) / diag
+        out.append(dict(r, dtwd=dtwd(at_period(path, d) if alike else path, d.pos).total,
+                        copy=min(dtwd(tr.pos, d.pos).total for tr in train), start_excursion=excursion(x0[None], lo, hi),
+                        excursion_beyond_start=beyond, excursion_bound=b, n_points=len(path)))
+    return out
 
 
 def thin(path: np.ndarray, n: int = PATH_POINTS) -> np.ndarray:
@@ -129,9 +180,10 @@ def thin(path: np.ndarray, n: int = PATH_POINTS) -> np.ndarray:
 
 def evaluate_set(fit_fn: Callable, demos) -> dict:
     """The whole protocol on one set: ``fit_fn(train)`` returns a model with ``predict`` (and
-    ``goal_``; else the training goal is used). Returns the per-test rows (``tests``), their
+    ``goal_``; else the training goal is used), or a time-indexed one with ``rollout``
+    (:func:`reproduce_model`). Returns the per-test rows (``tests``), their
     means (``dtwd_mean``, ``copy_mean``, ``ratio`` = dtwd_mean / copy_mean), the worst
-    ``excursion``, ``start_excursion``, ``excursion_bound`` (None without one), ``arrival_ratio``
+    ``excursion``, ``start_excursion``, ``excursion_beyond_start``, ``excursion_bound`` (None without one), ``arrival_ratio``
     and ``final_error``, ``fit_s``, ``certified`` (None for a
     model without a certificate), the preprocessing summary, the reproductions (thinned) and,
     for a diverging reproduction, ``failure`` (then no scores)."""
@@ -144,7 +196,7 @@ def evaluate_set(fit_fn: Callable, demos) -> dict:
            "certified": getattr(model, "certified_", None), "preprocess": report.lines(demos.units),
            "smoothing_window": report.window, "failure": None}
     try:
-        paths = reproduce(model.predict, recorded, test)
+        paths = reproduce_model(model, recorded, test)
     except SolverError as exc:
         return dict(out, failure=str(exc))
     rows = test_scores(paths, recorded, test, goal, excursion_bounds(model, recorded, test))
@@ -152,5 +204,6 @@ def evaluate_set(fit_fn: Callable, demos) -> dict:
     dtwd_mean, copy_mean = float(np.mean([r["dtwd"] for r in rows])), float(np.mean([r["copy"] for r in rows]))
     return dict(out, tests=rows, dtwd_mean=dtwd_mean, copy_mean=copy_mean, ratio=dtwd_mean / copy_mean,
                 excursion=max(r["excursion"] for r in rows), start_excursion=max(r["start_excursion"] for r in rows),
+                excursion_beyond_start=max(r["excursion_beyond_start"] for r in rows),
                 excursion_bound=None if None in bounds else max(bounds), arrival_ratio=max(r["arrival_ratio"] for r in rows),
                 final_error=max(r["final_error"] for r in rows), paths=[thin(p) for p in paths])

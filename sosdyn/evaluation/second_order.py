@@ -26,7 +26,9 @@ semi-implicit Euler
 written as explicit Euler on z = (x, v) with z' = (v + dt a, a), so the same integrator and stop
 rule apply: it stops once every component of both v + dt a and a stayed below vel_tol for the
 window (at rest, the acceleration vanishes with the velocity). Scores per test demo
-(:func:`sosdyn.evaluation.realdata.test_scores`): DTWD to the whole kept demo, copy (the
+(:func:`sosdyn.evaluation.realdata.test_scores`): DTWD to the whole kept demo (on ``"realdata"``
+of the reproduction read at the demo's period, :func:`sosdyn.evaluation.realdata.at_period`, so the
+curves compared are sampled alike; on ``"dsopt"`` as integrated, ds-opt's protocol), copy (the
 nearest training demo's DTWD to it), arrival / duration, excursion, final error.
 """
 from __future__ import annotations
@@ -166,7 +168,7 @@ def evaluate(fit_fn: Callable, demos, order: int, data_path: str, grid=None, spl
         paths = reproduce(model.predict if order == 1 else model, order, recorded, test, data_path, window)
     except SolverError as exc:
         return dict(out, failure=str(exc))
-    rows = realdata.test_scores(paths, recorded, test, goal)
+    rows = realdata.test_scores(paths, recorded, test, goal, alike=data_path == "realdata")
     return dict(out, tests=rows, **summary(rows), reproduce_s=time.perf_counter() - t0,
                 paths=[realdata.thin(p) for p in paths])
 

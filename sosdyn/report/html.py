@@ -73,7 +73,7 @@ from markupsafe import Markup, escape
 
 from ..errors import InputError, SosdynError
 from ..files import replace_atomically
-from ..limits import format_bytes, get_limits
+from ..limits import format_bytes, get_limits, raise_hint
 from .results import check_results, load_results
 
 __all__ = ["REPORT_FILES", "build_report", "check_results", "load_results", "render_html", "render_pdf"]
@@ -315,7 +315,7 @@ def _check_figure_size(name: str, path: Path) -> None:
     if size > limit:
         raise InputError(f"figure {name!r}: {path} is {format_bytes(size)}, over max_file_bytes = "
                          f"{format_bytes(limit)}; a report embeds its figures whole. Try: a smaller figure "
-                         "(a lower dpi), or sosdyn.set_limits(max_file_bytes=...) if it is meant to be embedded.")
+                         f"(a lower dpi), or if it is meant to be embedded raise the limit with {raise_hint('max_file_bytes')}.")
 
 
 def _figures(section: Mapping, base_dir: Path, trusted: bool = False) -> list[dict]:

@@ -1,11 +1,9 @@
 """Accuracy metrics against known answers."""
 
-import time
-
 import numpy as np
 import pytest
 
-from sosdyn.errors import InputError, ResourceLimitError
+from sosdyn.errors import InputError, ResourceLimitError, SosdynError
 from sosdyn.evaluation.metrics import dtwd, edot, goal_error, quadrilateral_areas, sea, velocity_rmse
 from sosdyn.limits import limits
 from sosdyn.lfd.data.demonstrations import Demonstrations
@@ -50,12 +48,24 @@ def test_dtwd_is_cumulative_euclidean_not_root_of_squares():
     assert dtwd(a, b).total == pytest.approx(10.0)  # 5 + 5, not sqrt(25 + 25)
 
 
-def test_dtwd_is_fast_on_1000_points():
-    a, b = curve(1000, 5), curve(1000, 6)
-    dtwd(a, b)
-    start = time.perf_counter()
-    dtwd(a, b)
-    assert time.perf_counter() - start < 0.5
+def test_dtwd_runs_the_c_routine_once_never_the_python_loop(monkeypatch, reference_dtw):
+    """What makes DTW fast (its timings are benchmark targets: problems.bench.dtw, `make bench`): one
+    call of dtaidistance's C routine per distance, never its pure-Python double loop."""
+    from dtaidistance import dtw
+
+    calls, c_routine = [], dtw.dtw_cc.warping_paths_ndim
+    monkeypatch.setattr(dtw.dtw_cc, "warping_paths_ndim", lambda *a, **k: calls.append(1) or c_routine(*a, **k))
+    monkeypatch.setattr(dtw, "warping_paths", lambda *a, **k: pytest.fail("the pure-Python DTW ran"))
+    a, b = curve(300, 5), curve(200, 6)
+    assert dtwd(a, b).total == pytest.approx(reference_dtw(a, b).total, rel=1e-12) and calls == [1]
+
+
+def test_dtwd_without_the_c_extension_is_refused(monkeypatch):
+    from dtaidistance import dtw
+
+    monkeypatch.setattr(dtw, "try_import_c", lambda *a, **k: False)
+    with pytest.raises(SosdynError, match="without its C extension.*pip install --force-reinstall"):
+        dtwd(curve(10, 0), curve(10, 1))
 
 
 def test_dtwd_accepts_trajectories_and_demos(exp_demos, exp_goal):
@@ -101,14 +111,6 @@ def test_dtw_matches_double_loop(N, M, n, reference_dtw):
     expected = reference_dtw(a, b).total
     assert total(a, b) == pytest.approx(expected, rel=1e-12)
     assert total(b, a) == pytest.approx(expected, rel=1e-12)
-
-
-def test_dtw_3000_by_500_is_fast():
-    rng = np.random.default_rng(0)
-    a, b = np.cumsum(rng.standard_normal((3000, 2)), 0), np.cumsum(rng.standard_normal((500, 2)), 0)
-    t0 = time.perf_counter()
-    total(a, b)
-    assert time.perf_counter() - t0 < 1.0      # about 0.02 s measured
 
 
 def test_dtw_cost_matrix_is_checked_against_max_bytes():

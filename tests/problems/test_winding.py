@@ -5,23 +5,7 @@ from __future__ import annotations
 import json
 import math
 
-import numpy as np
-
 from problems import winding
-from sosdyn.evaluation.metrics import dtwd
-from sosdyn.lfd.data.demonstrations import Demonstration
-
-
-def test_a_rollout_read_at_the_demos_period_scores_as_the_demo_itself():
-    """The same curve sampled every 0.01 s (the rollout) and every 0.02 s (the demo): read at the demo's
-    period it is the demo's own samples, so its DTWD to the demo is 0 (dense, it would count every
-    extra point)."""
-    t = np.arange(0, 2.0001, 0.01)
-    path = np.column_stack([np.cos(t), np.sin(2 * t)])
-    demo = Demonstration.from_positions(t[::2], path[::2])
-    read = winding.at_period(path, demo)
-    assert read.shape == demo.pos.shape and np.abs(read - demo.pos).max() < 1e-12
-    assert dtwd(read, demo.pos).total < 1e-9 < dtwd(path, demo.pos).total
 
 
 def test_quick_run_writes_results_page_and_figures(tmp_path):

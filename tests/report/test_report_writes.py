@@ -42,6 +42,7 @@ def test_a_huge_figure_is_refused_before_it_is_read(tmp_path, results_factory):
         f.truncate(3 * 2**29)
     results = results_factory(figures={"big": {"png": "figures/big.png", "caption": "c"}})
     with pytest.raises(InputError, match=r"figure 'big': .*big.png is 1.5 GiB, over max_file_bytes = 64.0 MiB"
-                                         r".* Try: a smaller figure"):
+                                         r".* Try: a smaller figure .* sosdyn.set_limits\(max_file_bytes=...\) "
+                                         r"\(the sosdyn command: SOSDYN_MAX_FILE_BYTES=... in the environment\)"):
         H.render_html(results, tmp_path / "out", base_dir=tmp_path)
     assert not (tmp_path / "out").exists()

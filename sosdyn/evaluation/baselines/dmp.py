@@ -49,6 +49,7 @@ class DMP(MotionModel):
     """
 
     name = "DMP"
+    time_indexed = True     # no field: evaluations run its own rollout (sosdyn.evaluation.realdata)
 
     def __init__(self, n_weights_per_dim=25, alpha_y=25.0, beta_y=6.25, regularization=0.0):
         self.n_weights_per_dim = n_weights_per_dim

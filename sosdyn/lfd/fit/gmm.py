@@ -11,8 +11,21 @@ Mahalanobis distances d_k^2(x) = |L_k^-1 (x - mu_k)|^2 and tau(x) = max(1, min_k
 the same numbers, bit for bit, where min_k d_k^2 <= c (tau = 1: every training point, by the
 choice of c in :func:`gate_bound`), and off the data a softmax of c (d_k / d_min)^2 that turns
 with the direction of x rather than jumping from 0 to 1 across a Voronoi face of the thin
-Gaussians (docs/findings.md, 7-D kinks). The certificate does not involve the weights (it holds
-for any h in the simplex along any trajectory; docs/theory.md), so it holds for either gating.
+Gaussians (docs/findings.md, 7-D kinks). That softmax keeps its sharpness c in the ratios at every
+distance: far off, the weights still switch between cones. The *smooth* gating (``fade`` F, the
+default of CDSP with F = FADE) keeps those weights up to tau = F and beyond flattens the whole
+tempered log-likelihood by tau / F:
+
+    l_k(x) = log pi_k + (t_k(x) - log pi_k) / max(1, tau(x) / F),   t_k = c_k - d_k^2 / (2 tau)
+
+(t_k the tempered log-joint above, c_k its log normaliser): the tempered numbers, bit for bit, where
+tau <= F (the posterior's where tau = 1), and h -> pi (constant weights: one linear field) as
+|x| -> inf, since t_k - log pi_k stays bounded while tau grows like |x|^2. F = 3 (FADE): on the 7-joint
+reach of docs/findings.md every joint's acceleration stays within a Panda's limits from starts
+0.2-0.3 rad off (the tempered weights exceed them up to 3.7 fold), and LASA's held-out starts, at
+tau <= 5, keep their reproductions (fading from tau = 1 on, as tau^2, cost 6 % on the swapped split).
+The certificate does not involve the weights (it holds for any h in the simplex along any trajectory;
+docs/theory.md), so it holds for every gating.
 """
 from __future__ import annotations
 
@@ -26,6 +39,7 @@ from sosdyn.errors import InputError
 MAX_BIC_COMPONENTS = 10         # n_components="bic" tries K = 1..10
 MIN_SAMPLES_PER_COMPONENT = 5   # and needs at least 5 samples per Gaussian
 GATE_QUANTILE = 0.999           # the gating's bound is at least the chi^2_n quantile of this level
+FADE = 3.0                      # the smooth gating fades to pi beyond tau = FADE (module docstring)
 
 
 def check_joint_gmm(gmm, n: int) -> None:
@@ -84,14 +98,16 @@ def gmr_cost(gmm, Z, Zdot) -> float:
 class PositionMixture:
     """pi_k, mu_k,x, S_k,xx of the position marginal and the gating's bound c: all h_k(x) needs.
 
-    ``bound`` None: the plain posterior; a number c > 0: tempered where min_k d_k^2 > c (module
-    docstring). Treat it as immutable: the Cholesky factors are computed once, on first use.
+    ``bound`` None: the plain posterior; a number c > 0: tempered where min_k d_k^2 > c, and with a
+    ``fade`` F (None: none) faded to pi beyond tau = F (module docstring). Treat it as immutable: the
+    Cholesky factors are computed once, on first use.
     """
 
     weights: np.ndarray       # (K,)
     means: np.ndarray         # (K, n)
     covariances: np.ndarray   # (K, n, n)
     bound: float | None = None
+    fade: float | None = None
 
     @classmethod
     def from_joint(cls, gmm, n: int) -> "PositionMixture":
@@ -114,8 +130,8 @@ class PositionMixture:
         return self._cache
 
     def log_joint(self, X: np.ndarray) -> np.ndarray:
-        """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K); with a ``bound`` the
-        quadratic forms divided by tau(x) (module docstring; q / 1.0 = q exactly where tau = 1).
+        """log pi_k + log N(x; mu_k, S_k) at the rows of X: shape (m, K); with a ``bound`` tempered
+        by tau(x) (:func:`gated`; module docstring; the same numbers exactly where tau = 1).
 
         Far from the data the quadratic form overflows and an entry is -inf (NaN when
         ``x - mu_k`` itself overflows, or every form overflows under a bound); :meth:`responsibilities`
@@ -124,13 +140,17 @@ class PositionMixture:
         inv, lognorm = self.factors()
         with np.errstate(over="ignore", invalid="ignore"):
             z = np.einsum("kij,mkj->mki", inv, X[:, None, :] - self.means[None])
-            return lognorm[None, :] - 0.5 * tempered(np.einsum("mki,mki->mk", z, z), self.bound)
+            return gated(np.einsum("mki,mki->mk", z, z), lognorm[None, :], np.log(self.weights)[None, :], self.bound,
+                         self.fade)
 
     def far_weights(self, X: np.ndarray) -> np.ndarray:
         """h at rows of X where :meth:`log_joint` has no finite entry or a NaN (the forms overflow):
         without a bound one-hot on the component of least Mahalanobis distance (the softmax's limit),
         with a bound c the exact tempered weights softmax_k(c_k - c/2 (d_k / d_min)^2), the distance
-        ratios from :meth:`log_mahalanobis` (finite for any finite x)."""
+        ratios from :meth:`log_mahalanobis` (finite for any finite x); with a fade, pi (the limit:
+        tau overflows too)."""
+        if self.bound is not None and self.fade is not None:
+            return np.repeat(self.weights[None, :], len(X), axis=0)
         logd = self.log_mahalanobis(X)
         if self.bound is None:
             return np.eye(self.n_components)[np.argmin(logd, axis=1)]
@@ -162,16 +182,22 @@ class PositionMixture:
         return responsibilities_of([self], [X])[0]
 
 
-def tempered(q: np.ndarray, bound) -> np.ndarray:
-    """The quadratic forms q (m, K) divided by tau = max(1, min_k q_k / bound) row by row (module
-    docstring; q / 1.0 = q exactly where tau = 1); ``bound`` None (as they are), a number, or a
-    column (m, 1) of per-row bounds (inf: not tempered). A row with a form that is not finite
-    becomes NaN (its weights are :meth:`PositionMixture.far_weights`, exact there)."""
+def gated(q: np.ndarray, lognorm: np.ndarray, logw: np.ndarray, bound, fade) -> np.ndarray:
+    """The log-joints l (m, K) from the quadratic forms q (m, K), the log normalisers c_k and log pi_k
+    (rows (1, K) or (m, K)): the posterior's c_k - q_k / 2 without a ``bound``; with one, row by row
+    (module docstring) tempered, t_k = c_k - q_k / (2 tau) with tau = max(1, min_k q_k / bound), and with
+    a ``fade`` F where tau > F, log pi_k + (t_k - log pi_k) F / tau. ``bound`` None, a number, or a column
+    (m, 1) of per-row bounds (inf: not tempered); ``fade`` None, a number, or a column of them (inf: no
+    fade). A tempered row with a form that is not finite becomes NaN (its weights are
+    :meth:`PositionMixture.far_weights`, exact there)."""
     if bound is None:
-        return q
+        return lognorm - 0.5 * q
     with np.errstate(over="ignore", invalid="ignore"):
-        return np.where(np.isfinite(q).all(axis=1, keepdims=True) | ~np.isfinite(bound),
-                        q / np.maximum(1.0, q.min(axis=1, keepdims=True) / bound), np.nan)
+        tau = np.maximum(1.0, q.min(axis=1, keepdims=True) / bound)
+        out = lognorm - 0.5 * (q / tau)                 # q / 1.0 = q: the posterior's numbers where tau = 1
+        if fade is not None:
+            out = np.where(tau <= fade, out, logw + (out - logw) / (tau / fade))
+        return np.where(np.isfinite(q).all(axis=1, keepdims=True) | ~np.isfinite(bound), out, np.nan)
 
 
 def gate_bound(mixture: PositionMixture, U: np.ndarray, quantile: float = GATE_QUANTILE) -> float:
@@ -184,9 +210,10 @@ def gate_bound(mixture: PositionMixture, U: np.ndarray, quantile: float = GATE_Q
     return float(max(chi2_quantile, np.einsum("mki,mki->mk", z, z).min(axis=1).max()))
 
 
-def with_bound(mixture: PositionMixture, bound: float | None) -> PositionMixture:
-    """``mixture`` with the gating's bound ``bound`` (a new object: factors are recomputed once)."""
-    return PositionMixture(mixture.weights, mixture.means, mixture.covariances, bound)
+def with_bound(mixture: PositionMixture, bound: float | None, fade: float | None = None) -> PositionMixture:
+    """``mixture`` with the gating's bound ``bound`` and ``fade`` (a new object: factors are recomputed
+    once)."""
+    return PositionMixture(mixture.weights, mixture.means, mixture.covariances, bound, fade)
 
 
 def responsibilities_of(mixtures: list, blocks: list) -> list[np.ndarray]:
@@ -212,13 +239,16 @@ def block_log_joint(mixtures: list, rows: int):
     mixture's factors; the same numbers as block by block, checked in the tests)."""
     each = lambda a: np.repeat(np.array([a(mix) for mix in mixtures]), rows, axis=0)   # noqa: E731
     inv, means, lognorm = each(lambda m: m.factors()[0]), each(lambda m: m.means), each(lambda m: m.factors()[1])
+    logw = each(lambda m: np.log(m.weights))
     bound = None if all(m.bound is None for m in mixtures) else \
         each(lambda m: np.inf if m.bound is None else m.bound)[:, None]     # tempered rows (module docstring)
+    fade = None if all(m.fade is None for m in mixtures) else \
+        each(lambda m: np.inf if m.fade is None else m.fade)[:, None]
 
     def log_joint(X):
         with np.errstate(over="ignore", invalid="ignore"):
             z = np.einsum("mkij,mkj->mki", inv, X[:, None, :] - means)
-            return lognorm - 0.5 * tempered(np.einsum("mki,mki->mk", z, z), bound)
+            return gated(np.einsum("mki,mki->mk", z, z), lognorm, logw, bound, fade)
     return log_joint
 
 

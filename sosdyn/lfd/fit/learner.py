@@ -158,6 +158,23 @@ def stalled(old: float, new: float, tol: float) -> bool:
     return old - new <= tol * max(old, COST_FLOOR)
 
 
+def cap_note(max_iter: int, change: float, tol: float) -> str:
+    """The sentence of a fit stopped by its iteration cap (every family's ``iteration_cap``)."""
+    return f"stopped at max_iter={max_iter} with relative change {change:.2e} > tol={tol:g}"
+
+
+def capped(rows: list[dict], max_iter: int, tol: float) -> str | None:
+    """:func:`cap_note` when the history rows of one fit (one warp candidate or corrective round) used
+    all ``max_iter`` iterations (ica or metric steps) and the last one still changed the cost by more
+    than ``tol`` (:func:`stalled`); None otherwise."""
+    iterations = sum(r["step"] in ("ica", "metric") for r in rows)
+    costs = [r["cost"] for r in rows if r["step"].startswith("dynamics")]
+    if iterations < max_iter or len(costs) < 2 or not rows[-1]["step"].startswith("dynamics"):
+        return None
+    old, new = costs[-2], costs[-1]
+    return None if stalled(old, new, tol) else cap_note(max_iter, (old - new) / max(old, COST_FLOOR), tol)
+
+
 def embed(coef, exps_from, exps_to):
     """Coefficients over ``exps_from`` (last axis) re-indexed over the larger monomial set ``exps_to``."""
     out = np.zeros(coef.shape[:-1] + (exps_to.shape[0],))

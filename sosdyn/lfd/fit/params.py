@@ -25,20 +25,21 @@ MAX_CORRECTIVE_ROUNDS = 10      # corrective refits of one fit (each a whole CDS
 PARAMS = ("n_components", "metric_degree", "field_degree", "gamma", "metric", "solver",
           "solver_method", "max_iter", "tol", "eps", "margin", "metric_prox", "refine_gmm", "max_samples",
           "random_state", "verify_samples", "allow_uncertified", "corrective_rounds", "corrective_tau",
-          "corrective_min_dist", "warp", "gating")                    # what get_params and a file hold
-GATINGS = ("posterior", "tempered")     # the mixture weights: plain, or tempered off the data (.gmm)
+          "corrective_min_dist", "warp", "gating", "speed_floor")     # what get_params and a file hold
+GATINGS = ("posterior", "tempered", "smooth")   # the mixture weights: plain, or tempered off the data (.gmm)
 WARPS = ("auto", "none")        # warp: one of these, or a dict of WARP_DEFAULTS' keys (one fixed warp)
+FLOORS = ("auto", "none")       # speed_floor: one of these, or a rate kappa > 0 (1/s) (.floor)
 MAX_POINTS = 10_000
 CORRECTIVE_OFF = {"corrective_rounds": 0}     # no corrective refits
-PLAIN = {**CORRECTIVE_OFF, "warp": "none"}    # one plain fit: no corrective refits, no warp
+PLAIN = {**CORRECTIVE_OFF, "warp": "none", "speed_floor": "none"}    # one plain fit: no refits, warp or floor
 #: Named configurations (``CDSP.preset(name)``): the parameters each sets, the rest default.
 #: "paper": the paper's formulation as first implemented (K = 6 linear sub-systems, constant
 #: metric, plain alternation with the max-margin metric step) -- the reproduction's base;
 #: "ica": the same model learned by the inner convex approximation (CDSP() is "ica" with K = 8
 #: and warp="auto", :mod:`.warp`);
 #: "cubic": cubic sub-systems, degree-2 metric M(z), started from "ica", proximal alternation.
-#: Every preset is one plain fit (PLAIN: no warp, no corrective refits; the configurations as
-#: measured alone); ``CDSP.preset(name, warp="auto")`` adds the default's choice of warp.
+#: Every preset is one plain fit (PLAIN: no warp, no corrective refits, no speed floor; the configurations
+#: as measured alone); ``CDSP.preset(name, warp="auto")`` adds the default's choice of warp.
 PRESETS = {
     "paper": {"n_components": 6, "metric_degree": 0, "field_degree": 1, "gamma": 0.1,
               "solver_method": "alternating", "metric_prox": 0.0, **PLAIN},
@@ -50,7 +51,7 @@ PRESETS = {
 #: Parameters added after earlier model files were written, with the value those fits used
 #: (tau and min_dist are unused at 0 rounds; recorded as the defaults).
 LEGACY_PARAMS = {"metric_prox": 0.0, "corrective_rounds": 0, "corrective_tau": TAU, "corrective_min_dist": MIN_DIST,
-                 "warp": "none", "gating": "posterior"}
+                 "warp": "none", "gating": "posterior", "speed_floor": "none"}
 
 
 def check_params(p: Mapping, defaults: Mapping) -> None:
@@ -101,6 +102,10 @@ def check_params(p: Mapping, defaults: Mapping) -> None:
             fail(name, "a finite number >= 0")
     choice("metric", METRICS)
     choice("gating", GATINGS)
+    if not (isinstance(p["speed_floor"], str) and p["speed_floor"] in FLOORS):
+        if isinstance(p["speed_floor"], (str, bool, np.bool_)) or not isinstance(p["speed_floor"], Real) \
+                or not np.isfinite(p["speed_floor"]) or p["speed_floor"] <= 0:
+            fail("speed_floor", f"one of {FLOORS} or a rate > 0 (1/s)")
     choice("solver_method", METHODS)
     if not isinstance(p["solver"], str) or not p["solver"]:
         fail("solver", f"the name of a conic solver, e.g. one of {SOLVERS}")

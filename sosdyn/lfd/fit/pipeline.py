@@ -20,7 +20,11 @@ learned attributes):
    rollouts in one Euler loop (:func:`block_field`: every candidate's bumps per row, its weights
    in one log-sum-exp; each candidate stops by its own rest test), the same numbers as one loop
    per candidate. ``timings_`` of an "auto" fit add ``candidates_s`` (warps and core fits) and
-   ``choice_s`` (the rollouts).
+   ``choice_s`` (the rollouts);
+4. **speed floor** (:mod:`.floor`, parameter ``speed_floor``): a time change sigma(x) in [1, BOOST] of
+   the kept field, chosen ("auto") as the least that makes the training reproductions arrive in time
+   (``floor_``: None or {"rate": kappa, "boost": BOOST}; ``floor_arrivals_``: each candidate's worst
+   training arrival ratio).
 
 Every candidate and every corrective round uses the one integer seed resolved from
 ``random_state`` at the start; progress rows are tagged with the candidate (``warp``) and the
@@ -40,7 +44,8 @@ from ..data.demonstrations import Demonstrations, sample_step
 from .certificate import CertificateReport, certify, check_certificate, collapse_diagnostic, extract_certificate
 from .contraction import eval_fields, field_exponents, metric_exponents
 from .corrective import score_steps
-from .gmm import (MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, fit_joint_gmm, gate_bound, gmr_cost,
+from .floor import BOOST, floor_choice, floor_steps, floored
+from .gmm import (FADE, MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, fit_joint_gmm, gate_bound, gmr_cost,
                   responsibilities_of, weights_from, with_bound)
 from .learner import History, Settings, learn, subsample
 from .params import resolve_seed, warp_settings
@@ -57,7 +62,8 @@ class Fit:
 
     def field(self, X, goal):
         """xdot at the rows of X for ``goal`` (:func:`field_at`)."""
-        return field_at(X, goal, self.scale_, self.mixture_, self.C_, self.field_exps_, self.warp_)
+        return field_at(X, goal, self.scale_, self.mixture_, self.C_, self.field_exps_, self.warp_,
+                        getattr(self, "floor_", None))
 
 
 def fit(demos: Demonstrations, params: dict, progress=None, t_start: float | None = None) -> Fit:
@@ -65,9 +71,13 @@ def fit(demos: Demonstrations, params: dict, progress=None, t_start: float | Non
     t_start = time.perf_counter() if t_start is None else t_start
     params = dict(params, random_state=resolve_seed(params["random_state"]))
     if params["warp"] != "auto":
+        if params["speed_floor"] == "auto":
+            floor_steps(demos)          # the floor's choosing rollouts' size, checked before any fit
         core = fit_core(demos, warp_maps(demos, warp_settings(params["warp"])), params, progress, t_start)
-        return Fit(**vars(core), warp_scores_={})
+        return with_floor(Fit(**vars(core), warp_scores_={}), demos, params["speed_floor"])
     score_steps(demos)                  # the scoring rollouts' size, checked before any fit
+    if params["speed_floor"] == "auto":
+        floor_steps(demos)
     spent = {"candidates_s": 0.0, "choice_s": 0.0}
 
     def timed(key, step, *args):
@@ -81,8 +91,22 @@ def fit(demos: Demonstrations, params: dict, progress=None, t_start: float | Non
     if min(v for name, v in scores.items() if fits[name] is kept) > ESCALATE * diagonal(demos):
         fits.update(timed("candidates_s", candidate_fits, demos, ESCALATE_WARPS, params, progress))
         kept, scores = timed("choice_s", warp_choice, fits, demos, block_field)
-    return Fit(**dict(vars(kept), warp_scores_=scores, timings_=dict(
-        kept.timings_, total_s=time.perf_counter() - t_start, **spent)))
+    out = with_floor(Fit(**dict(vars(kept), warp_scores_=scores)), demos, params["speed_floor"])
+    out.timings_ = dict(kept.timings_, total_s=time.perf_counter() - t_start, **spent)
+    return out
+
+
+def with_floor(fitted: Fit, demos: Demonstrations, setting) -> Fit:
+    """``fitted`` with its speed floor (:mod:`.floor`): none for "none", the rate ``setting`` for a
+    number, or for "auto" :func:`~.floor.floor_choice` on the training demonstrations."""
+    arrivals = {}
+    if setting == "auto":
+        rate, arrivals = floor_choice(lambda X: fitted.field(X, fitted.goal_), fitted.goal_, demos)
+    else:
+        rate = None if setting == "none" else float(setting)
+    fitted.floor_ = None if rate is None else {"rate": rate, "boost": BOOST}
+    fitted.floor_arrivals_ = arrivals
+    return fitted
 
 
 def diagonal(demos: Demonstrations) -> float:
@@ -153,8 +177,8 @@ def fit_plain(demos: Demonstrations, maps, params: dict, progress, t_start: floa
 
     t0 = time.perf_counter()
     C, W, mixture_ = learn(U, Udot, mixture, s, history)
-    if params["gating"] == "tempered":                               # tempered off the training points
-        mixture_ = with_bound(mixture_, gate_bound(mixture_, U))
+    if params["gating"] != "posterior":                             # tempered off the training points
+        mixture_ = with_bound(mixture_, gate_bound(mixture_, U), FADE if params["gating"] == "smooth" else None)
     timings["learn_s"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -239,17 +263,19 @@ def block_core(models: list, rows: int):
     return core
 
 
-def field_at(X, goal, scale, mixture, C, fexps, warp):
+def field_at(X, goal, scale, mixture, C, fexps, warp, floor=None):
     """xdot at the rows of X for ``goal`` (the field translated to it): s f(z), or through the warp
-    s J_phi(z)^{-1} f(phi(z)), z = (x - goal) / s."""
+    s J_phi(z)^{-1} f(phi(z)), z = (x - goal) / s; with a speed ``floor`` ({"rate", "boost"}) times
+    sigma(x) (:func:`~.floor.floored`)."""
     Z = (X - goal) / scale
     core = lambda U: core_field(U, mixture, C, fexps)       # noqa: E731
-    return (core(Z) if warp is None else pulled_back(Z, warp, core)) * scale
+    V = (core(Z) if warp is None else pulled_back(Z, warp, core)) * scale
+    return V if floor is None else floored(X - goal, V, floor["rate"], floor["boost"])
 
 
 def block_field(fits: list):
-    """``field(X, live)``: fit b's field (:func:`field_at`, at its own goal) on the b-th block of
-    equal consecutive rows of X, for b in ``live``; the blocks' warps evaluated together
+    """``field(X, live)``: fit b's field (:func:`field_at`, at its own goal and speed floor) on the b-th
+    block of equal consecutive rows of X, for b in ``live``; the blocks' warps evaluated together
     (:func:`~.composite.block_pull`, prepared once per set of live blocks):
     the same numbers as each fit's field on its block."""
     stacked = {}                    # per set of live blocks: (goal, scale, pull-back or None, core) of their rows
@@ -267,7 +293,13 @@ def block_field(fits: list):
         rows = len(X) // len(live)
         goal, scale, pull, core = rows_of(live, rows, X.shape[1])
         Z = (X - goal) / scale
-        return (core(Z) if pull is None else pull(Z, core)) * scale
+        V = (core(Z) if pull is None else pull(Z, core)) * scale
+        floors = [getattr(fits[b], "floor_", None) for b in live]
+        if all(f is None for f in floors):
+            return V
+        rate = np.repeat([0.0 if f is None else f["rate"] for f in floors], rows)[:, None]
+        boost = np.repeat([1.0 if f is None else f["boost"] for f in floors], rows)[:, None]
+        return floored(X - goal, V, rate, boost)
     return field
 
 
@@ -286,5 +318,5 @@ def tagged(progress, **tag):
     return None if progress is None else (lambda row: progress(dict(row, **tag)))
 
 
-__all__ = ["Fit", "block_field", "candidate_fits", "check_fit", "core_field", "core_fields", "field_at", "fit", "fit_core", "fit_plain",
+__all__ = ["Fit", "block_field", "with_floor", "candidate_fits", "check_fit", "core_field", "core_fields", "field_at", "fit", "fit_core", "fit_plain",
            "scaled_data", "tagged", "warp_maps", "warped_data"]

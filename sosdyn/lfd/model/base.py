@@ -23,8 +23,10 @@ InputError saying what they are for):
     layout() -> the names of a start state's, a push's, a goal's and a rollout row's numbers
     reproductions(demos=None, duration=None) -> what a figure of the model shows
     summary() -> lines about the certificate and the fit, for people
+    iteration_cap(rows) -> a sentence when the history rows of one fit show it stopped at max_iter
 
-and the attributes ``name``, ``certified_``, ``verification_``, ``history_``, ``units_``, ``columns_``.
+and the attributes ``name``, ``certified_``, ``verification_``, ``history_``, ``units_``, ``columns_``,
+``only_with`` (the parameters that apply only when another parameter has a given value).
 """
 from __future__ import annotations
 
@@ -85,6 +87,9 @@ class MotionModel(ABC):
     file_version: ClassVar[int]
     #: Can it follow demonstrations that cross themselves (a state that carries more than the position)?
     follows_crossings: ClassVar[bool] = False
+    #: Parameters that apply only when another parameter has a value, {name: (other, value)}: set to
+    #: anything but its default otherwise, the model refuses it (a caller can name the remedy first).
+    only_with: ClassVar[dict[str, tuple[str, object]]] = {}
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -124,6 +129,12 @@ class MotionModel(ABC):
     @abstractmethod
     def summary(self) -> list[str]:
         """Lines about the fitted model for people: the certificate's numbers first."""
+
+    @abstractmethod
+    def iteration_cap(self, rows: list[dict]) -> str | None:
+        """``stopped at max_iter=20 with relative change 3.1e-04 > tol=0.0001`` when ``rows``, the history
+        rows of one fit as ``progress`` receives them (one warp candidate or corrective round), show that
+        it used all ``max_iter`` iterations with the cost still changing by more than ``tol``; None otherwise."""
 
     # ------------------------------------------------------------------ motion
     @abstractmethod

@@ -36,7 +36,7 @@ from ..fit.certificate import DEFAULT_SAMPLES, CertificateReport
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
 from ..data.demonstrations import check_demonstrations
 from ..data.pose import PoseDemonstrations
-from ..fit.learner import Settings, reuse_steps
+from ..fit.learner import Settings, capped, reuse_steps
 from ..fit.params import LEGACY_PARAMS, MAX_SEED, PARAMS, check_params, check_solver, preset_params, resolve_seed
 from ..fit.composite import maps_of, twist_of
 from ..fit.pipeline import check_fit, field_at
@@ -90,11 +90,21 @@ class CDSP(MotionModel):
       diffeomorphism of Gaussian bumps fixing the goal (``sosdyn.lfd.fit.warp``); a dict (keys of
       ``WARP_DEFAULTS``) is one fixed warp; "auto" fits no warp and each ``AUTO_WARPS`` candidate
       and keeps the one whose rollouts from the training demos' starts deviate least from them.
-    - ``gating`` ("posterior" or "tempered"): the weights h_k; "tempered" divides the quadratic
-      forms by max(1, min_k d_k^2 / c) (c = max(chi^2_n(0.999), the training points' largest
-      min_k d_k^2), so the weights are the posterior, bit for bit, at every training point and turn
-      smoothly off the data instead of switching between thin Gaussians: the 7-D reproductions'
-      kinks (``sosdyn.lfd.fit.gmm``; docs/findings.md). The certificate holds for either.
+    - ``gating`` ("smooth", "tempered" or "posterior"): the weights h_k. "posterior": the GMM's
+      posterior. "tempered" divides the quadratic forms by tau = max(1, min_k d_k^2 / c) (c =
+      max(chi^2_n(0.999), the training points' largest min_k d_k^2)), so the weights are the
+      posterior, bit for bit, at every training point and turn smoothly off the data instead of
+      switching between thin Gaussians: the 7-D reproductions' kinks (``sosdyn.lfd.fit.gmm``;
+      docs/findings.md). "smooth" (the default) keeps those weights up to tau = 3 and beyond fades
+      them to the mixing weights pi (one linear field far off the data): smooth joint motions from
+      starts off the demonstrations. The fit is the same for all three; the certificate holds for
+      every gating.
+    - ``speed_floor`` ("auto", "none" or a rate kappa > 0, 1/s): the field times sigma(x) =
+      min(10, max(1, kappa |x - x*| / |f(x)|)), a time change (same paths; the certificate holds at
+      rate >= gamma, ``sosdyn.lfd.fit.floor``); "auto" uses the least kappa (none, or a quantile of the
+      training samples' relative speeds |xdot| / |x - x*|) with which the reproductions of the training
+      demonstrations reach the goal within 1.5x their duration: where demonstrations go in and out the
+      averaged field crawls (16 of the 63 real pourings did not arrive in 2x their duration).
 
     Warp (z = (x - x*)/s): the core f is fitted on (phi(z_i), J_phi(z_i) zdot_i) and certified in
     u as always; the model is zdot = J_phi(z)^{-1} f(phi(z)). Since du = J_phi dz, the x-system is
@@ -111,8 +121,8 @@ class CDSP(MotionModel):
     inside the warps did not help (1257 vs 1258). K = 8 and K = 10 had the lowest training means
     of the single plain configurations (1511, 1508 mm; K = 8 is faster).
     Presets (``CDSP.preset(name, **overrides)``, :data:`~sosdyn.lfd.fit.params.PRESETS`) are one plain
-    fit each (warp="none", corrective_rounds=0): ``"paper"`` the paper's alternating formulation
-    (the reproduction ``python -m problems run`` sets its parameters explicitly); ``"ica"`` the
+    fit each (warp="none", corrective_rounds=0, speed_floor="none"): ``"paper"`` the paper's alternating
+    formulation (the reproduction ``python -m problems run`` sets its parameters explicitly); ``"ica"`` the
     same linear model by the inner convex approximation, K = 6; ``"cubic"`` cubic sub-systems and
     a degree-2 metric. A choice per data set among configurations from the training demonstrations
     alone: :func:`sosdyn.evaluation.dsopt.select_fit` (the "CDSP selected" variants).
@@ -136,7 +146,7 @@ class CDSP(MotionModel):
                  margin=1e-4, metric_prox=METRIC_PROX, refine_gmm=False, max_samples=3000, random_state=0,
                  verify_samples=DEFAULT_SAMPLES, allow_uncertified=False, progress=None,
                  corrective_rounds=ROUNDS, corrective_tau=TAU, corrective_min_dist=MIN_DIST, warp="auto",
-                 gating="posterior"):
+                 gating="smooth", speed_floor="auto"):
         self.n_components = n_components
         self.metric_degree = metric_degree
         self.field_degree = field_degree
@@ -160,6 +170,7 @@ class CDSP(MotionModel):
         self.corrective_min_dist = corrective_min_dist
         self.warp = warp
         self.gating = gating
+        self.speed_floor = speed_floor
 
     @classmethod
     def preset(cls, name: str, **overrides) -> CDSP:
@@ -213,7 +224,7 @@ class CDSP(MotionModel):
 
     def field(self, X, goal):
         """xdot at the rows of X for the goal ``goal`` (:func:`~sosdyn.lfd.fit.pipeline.field_at`)."""
-        return field_at(X, goal, self.scale_, self.mixture_, self.C_, self.field_exps_, self.warp_)
+        return field_at(X, goal, self.scale_, self.mixture_, self.C_, self.field_exps_, self.warp_, self.floor_)
 
     def predict(self, X):
         """Velocities (m, n) at the states X (m, n), in the data's units."""
@@ -237,7 +248,7 @@ class CDSP(MotionModel):
         self._check_fitted()
         return StatePredictor(self.goal_, self.scale_, self.mixture_, self.C_, self.field_exps_,
                               None if self.warp_ is None else maps_of(self.warp_), max_speed,
-                              twist_of(self.warp_))
+                              twist_of(self.warp_), self.floor_)
 
     def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None, **other):
         """Integrate from x0; pushes [(t, dx)] and goal changes [(t, g)] as in sosdyn.lfd.rollout.
@@ -351,7 +362,14 @@ class CDSP(MotionModel):
             listed = "; ".join(f"{name} {score:.4g}" for name, score in scores.items())
             lines.append(f"warp candidates, training deviation (lower is better): {listed} -> kept "
                          f"{min(scores, key=scores.get)} (the lowest)")
+        if self.floor_ is not None:
+            lines.append(f"speed floor: at least {self.floor_['rate']:.3g}/s x the distance to the goal, at most "
+                         f"{self.floor_['boost']:g}x the field's speed (a time change: same paths, same certificate)")
         return lines
+
+    def iteration_cap(self, rows: list[dict]) -> str | None:
+        """The fit's rows against ``max_iter`` and ``tol`` (:func:`~sosdyn.lfd.fit.learner.capped`)."""
+        return capped(rows, self.max_iter, self.tol)
 
     @property
     def n_iter_(self) -> int:

@@ -53,7 +53,7 @@ SECOND_ORDER_OWN = {"mixture": ("weights", "means", "covariances"),
 OPTIONAL_STATE = ("units", "columns")     # absent in files older than them: "" and unnamed
 STATE_FIELDS = ("dim_", "goal_", "scale_", "dt_", "units_", "columns_", "n_components_", "gmr_cost_", "C_", "W_",
                 "field_exps_", "metric_exps_", "mixture_", "certificate_", "history_", "metric_collapse_",
-                "timings_", "warp_")
+                "timings_", "warp_", "floor_")
 WARP_KEYS = ("centers", "vectors", "sigmas")          # warp_: null, or these arrays (z-units) and an optional twist
 
 
@@ -168,7 +168,7 @@ def state_record(state: dict) -> dict:
     """``state`` (STATE_FIELDS) as file content: the mixture as its three arrays."""
     m = state["mixture_"]
     return dict(state, mixture_={"weights": m.weights, "means": m.means, "covariances": m.covariances,
-                                 "bound": m.bound})
+                                 "bound": m.bound, "fade": m.fade})
 
 
 def validate_state(st: dict, n_components, field_degree: int, metric_degree: int, eps: float) -> dict:
@@ -207,8 +207,21 @@ def validate_state(st: dict, n_components, field_degree: int, metric_degree: int
     if not (collapse is None or isinstance(collapse, dict)):
         raise ModelFileError("malformed: state.metric_collapse_ must be null or an object")
     out["warp_"] = _warp(st.get("warp_"), n)              # absent in files older than the warp: none
+    out["floor_"] = _floor(st.get("floor_"))              # absent in files older than the speed floor: none
     check_fields(st, STATE_FIELDS, "state")
     return out
+
+
+def _floor(f) -> dict | None:
+    """None, or the speed floor {"rate": kappa > 0 (1/s), "boost": B >= 1} (:mod:`~sosdyn.lfd.fit.floor`)."""
+    if f is None:
+        return None
+    if not isinstance(f, dict) or set(f) != {"rate", "boost"}:
+        raise ModelFileError('malformed: state.floor_ must be null or an object with exactly "rate" and "boost"')
+    rate, boost = positive(f["rate"], "state.floor_.rate"), positive(f["boost"], "state.floor_.boost")
+    if boost < 1:
+        raise ModelFileError(f"malformed: state.floor_.boost must be >= 1 (the floor never slows the field), got {boost!r}")
+    return {"rate": rate, "boost": boost}
 
 
 def _warp(w, n) -> dict | None:
@@ -259,7 +272,8 @@ def _exponents(st, name, n, count, expected):
 def _mixture(mx, K, n, where: str = "state.mixture_") -> PositionMixture:
     """Weights > 0 summing to 1, means (K, n), covariances (K, n, n) symmetric positive definite,
     the gating's bound null or a positive number (absent in files older than it: null, the plain
-    posterior, so such a model evaluates as it did)."""
+    posterior, so such a model evaluates as it did) and its fade null or a positive number (absent in
+    files older than it: null, no fade)."""
     w = array(need(mx, "weights", where), f"{where}.weights", (K,))
     means = array(need(mx, "means", where), f"{where}.means", (K, n))
     cov = array(need(mx, "covariances", where), f"{where}.covariances", (K, n, n))
@@ -275,9 +289,10 @@ def _mixture(mx, K, n, where: str = "state.mixture_") -> PositionMixture:
         except np.linalg.LinAlgError:
             raise ModelFileError(f"malformed: {where}.covariances[{k}] is not positive definite "
                                  "(no Cholesky factor)") from None
-    bound = mx.get("bound")
-    check_fields(mx, ("weights", "means", "covariances", "bound"), where)
-    return PositionMixture(w, means, cov, None if bound is None else positive(bound, f"{where}.bound"))
+    bound, fade = mx.get("bound"), mx.get("fade")
+    check_fields(mx, ("weights", "means", "covariances", "bound", "fade"), where)
+    return PositionMixture(w, means, cov, None if bound is None else positive(bound, f"{where}.bound"),
+                           None if fade is None else positive(fade, f"{where}.fade"))
 
 
 def _certificate(cert, K, eps) -> dict:

@@ -163,7 +163,7 @@ class PoseCDSP(MotionModel):
             if rate is not None:
                 data = isotropic_demonstrations(3, rate, goals[block], data.units, data.name)
             model = CDSP(**{**params[block], **({"n_components": 1} if rate else {})},
-                         progress=self.progress).fit(data)
+                         progress=self.progress and tagged(self.progress, block)).fit(data)
             if rate is not None or block == "orientation":
                 model.goal_ = goals[block]    # exactly (aligned ends, or symmetric synthetic ones: at round-off)
             setattr(self, f"{block}_", model)
@@ -425,6 +425,16 @@ class PoseCDSP(MotionModel):
         self.refuse(other, "to_cpp")
         self._check_fitted()
         return pose_to_cpp(self, "pose_model" if namespace is None else namespace, max_speed, max_angular_speed)
+
+    def iteration_cap(self, rows: list[dict]) -> str | None:
+        """As a CDSP's (:meth:`CDSP.iteration_cap`) for one block's fit: :meth:`fit` tags each row with its
+        ``block``, and both blocks share ``max_iter`` and ``tol``."""
+        return CDSP(**self.cdsp_params).iteration_cap(rows)
+
+
+def tagged(progress, block: str):
+    """``progress`` called with each history row and its ``block`` ("position" or "orientation")."""
+    return lambda row: progress({**row, "block": block})
 
 
 def check_orientation_block(orientation: CDSP, position: CDSP) -> None:

@@ -13,7 +13,7 @@ Two fields (``field``), scaled units e = ((x - g)/s, v T/s) (:mod:`sosdyn.lfd.fi
   constant M > 0 with F_k^T M + M F_k <= -2 gamma' M for every k (gamma' = gamma T); the tank stays 0.
 
 Both are checked independently (:mod:`sosdyn.lfd.fit.second_order.certificate`) before a model is
-returned (docs/theory.md, "Second order"). The field depends on v, so two branches may cross at one x.
+returned (docs/theory.md, "Second order"); the fit path is :mod:`sosdyn.lfd.fit.second_order.pipeline`. The field depends on v, so two branches may cross at one x.
 
 Speed limit (``rollout(max_speed=...)``): the whole field (v, a, db/dt) scaled by the speed limit's
 factor lambda(|v| / v_max) > 0 (:func:`~sosdyn.lfd.runtime.states.speed_factor`) is a time change of
@@ -30,33 +30,27 @@ from numbers import Integral
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from sosdyn.errors import InputError, ModelFileError, NotCertifiedError, NotFittedError
-from ..data.demonstrations import check_demonstrations, sample_step
+from sosdyn.errors import InputError, ModelFileError, NotFittedError
+from ..data.demonstrations import check_demonstrations
 from ..data.pose import PoseDemonstrations
 from ..fit.certificate import DEFAULT_SAMPLES
-from ..fit.params import MAX_SEED, check_params, check_solver, resolve_seed
-from ..fit.second_order import (METHODS, acceleration_at, check_second_order, energy_violations, excursion_bound,
-                                fit_gating, fit_second_order, scaled_samples)
-from ..fit.second_order.tank import (TankField, check_tank, derivatives_at, fit_tank_field, initial_tank,
-                                     scaled_states, tank_summary)
+from ..fit.params import MAX_SEED, resolve_seed
+from ..fit.second_order import acceleration_at, excursion_bound
+from ..fit.second_order.certificate import mixture_summary
+from ..fit.second_order.learner import capped
+from ..fit.second_order.params import ONLY_WITH, PARAMS, TRACKING_PARAMS, check_params
+from ..fit.second_order.pipeline import check_field, fit as fit_path
+from ..fit.second_order.tank import TankField, derivatives_at, initial_tank, scaled_states, tank_summary
 from ..fit.second_order.tracking import kernel_widths
 from ..rollout import Trajectory
 from ..rollout import rollout as integrate
-from ..rollout.events import is_positive_number, lifted
+from ..rollout.events import lifted
 from ..rollout.quality import HORIZON, reproduction_table
 from ..runtime.second_order import SecondOrderPredictor, TankPredictor, to_cpp, to_python
 from ..runtime.states import as_levels, as_state, as_states, check_max_speed, speed_factor
 from .base import Layout, MotionModel, Reproductions
 from .cdsp import DEFAULTS as FIRST_ORDER_DEFAULTS
 from .content import SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION, check_param_names, need, second_order_state
-
-MAX_COPIES = 20                 # perturbed copies per sample (each multiplies the data term's rows)
-PARAMS = ("n_components", "gamma", "margin", "max_iter", "tol", "metric_prox", "method", "tracking_copies",
-          "tracking_sigma", "tracking_rate", "max_samples", "random_state", "verify_samples", "solver", "field",
-          "position_width", "velocity_width", "tank_factor")
-FIELDS = ("tracking", "mixture")
-TRACKING_PARAMS = ("field", "position_width", "velocity_width", "tank_factor")
-MIXTURE_PARAMS = ("n_components", "max_iter", "tol", "metric_prox", "method", "tracking_copies", "tracking_sigma")
 
 
 class SecondOrderCDSP(MotionModel):
@@ -72,10 +66,11 @@ class SecondOrderCDSP(MotionModel):
     this times the largest tank a training demo needs). Mixture only: ``n_components`` (int or
     "bic": Gaussians of the gating GMM on (x, v)), ``max_iter`` / ``tol`` (alternations, relative
     cost decrease), ``metric_prox`` (proximal weight of the metric step; the joint step uses 1 %
-    of it), ``method`` ("ica": joint convex steps in (C, M), or "alternating": metric / field
-    steps), ``tracking_copies`` / ``tracking_sigma`` (perturbed copies of each sample and their
-    spread, labelled a - w^2 dx - 2 w dv: :func:`~sosdyn.lfd.fit.second_order.tracking_samples`;
-    0 copies: the demos alone).
+    of it), ``solver_method`` ("ica": joint convex steps in (C, M); "alternating" or "energy": metric /
+    field steps, :func:`~sosdyn.lfd.fit.second_order.fit_second_order`), ``tracking_copies`` /
+    ``tracking_sigma`` (perturbed copies of each sample and their spread, labelled a - w^2 dx - 2 w dv:
+    :func:`~sosdyn.lfd.fit.second_order.tracking_samples`; 0 copies: the demos alone). The names, which
+    field each applies to and the checks: :mod:`sosdyn.lfd.fit.second_order.params`.
 
     **Learned**: ``goal_``, ``dim_``, ``dt_``, ``units_``, ``columns_`` (as the data's), ``length_scale_`` (s), ``time_scale_`` (T),
     ``mixture_`` (the gating on e; None for tracking), ``tank_`` (the tracking field,
@@ -93,9 +88,10 @@ class SecondOrderCDSP(MotionModel):
     name = "CDSP-2"
     file_format, file_version = SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION
     follows_crossings = True
+    only_with = ONLY_WITH
 
     def __init__(self, n_components=8, gamma=0.1, margin=1e-4, max_iter=50, tol=1e-4, metric_prox=1e-2,
-                 method="ica", tracking_copies=2, tracking_sigma=0.1, tracking_rate=3.0, max_samples=3000,
+                 solver_method="ica", tracking_copies=2, tracking_sigma=0.1, tracking_rate=3.0, max_samples=3000,
                  random_state=0, verify_samples=DEFAULT_SAMPLES, solver="CLARABEL", field="tracking",
                  position_width=0.03, velocity_width=0.3, tank_factor=1.25, progress=None):
         self.n_components = n_components
@@ -104,7 +100,7 @@ class SecondOrderCDSP(MotionModel):
         self.max_iter = max_iter
         self.tol = tol
         self.metric_prox = metric_prox
-        self.method = method
+        self.solver_method = solver_method
         self.tracking_copies = tracking_copies
         self.tracking_sigma = tracking_sigma
         self.tracking_rate = tracking_rate
@@ -129,28 +125,8 @@ class SecondOrderCDSP(MotionModel):
         return f"SecondOrderCDSP({', '.join(changed)})"
 
     def check_params(self) -> None:
-        """Types and ranges (the first-order checks of the shared parameters; InputError with a hint)."""
-        check_params({**FIRST_ORDER_DEFAULTS, **self.get_params()}, {**FIRST_ORDER_DEFAULTS, **DEFAULTS})
-        check_solver(self.solver)
-        if not isinstance(self.method, str) or self.method not in METHODS:
-            raise InputError(f"method must be one of {METHODS}, got {self.method!r}. Try: the default, method='ica'.")
-        c = self.tracking_copies
-        if isinstance(c, (bool, np.bool_)) or not isinstance(c, Integral) or not 0 <= c <= MAX_COPIES:
-            raise InputError(f"tracking_copies must be an integer in [0, {MAX_COPIES}], got {c!r}. "
-                             "Try: the default, 2.")
-        if not isinstance(self.field, str) or self.field not in FIELDS:
-            raise InputError(f"field must be one of {FIELDS}, got {self.field!r:.40}. Try: the default, "
-                             "field='tracking'.")
-        other = [k for k in (MIXTURE_PARAMS if self.field == "tracking" else TRACKING_PARAMS[1:])
-                 if not (getattr(self, k) is DEFAULTS[k] or getattr(self, k) == DEFAULTS[k])]
-        if other:
-            owner = "mixture" if self.field == "tracking" else "tracking"
-            raise InputError(f"{other[0]} applies to field='{owner}' only, not to field={self.field!r}. Try: "
-                             f"field='{owner}', or drop {other[0]}.")
-        for name in ("tracking_sigma", "tracking_rate", "position_width", "velocity_width", "tank_factor"):
-            if not is_positive_number(getattr(self, name)):
-                raise InputError(f"{name} must be a finite number > 0, got {getattr(self, name)!r}. "
-                                 f"Try: the default, {DEFAULTS[name]}.")
+        """Types and ranges (:func:`~sosdyn.lfd.fit.second_order.params.check_params`; InputError with a hint)."""
+        check_params(self.get_params(), DEFAULTS, FIRST_ORDER_DEFAULTS)
 
     # ------------------------------------------------------------------ fitting
     def fit(self, demos):
@@ -167,36 +143,7 @@ class SecondOrderCDSP(MotionModel):
             raise InputError("these are pose demonstrations; SecondOrderCDSP learns positions. "
                              "Try: sosdyn.PoseCDSP for poses, or Demonstrations of positions.")
         demos = check_demonstrations(demos)
-        seed = resolve_seed(self.random_state)
-        if self.field == "tracking":
-            scaled = scaled_samples(demos, 1, self.max_samples)
-            tank, self.tank_needs_ = fit_tank_field(
-                demos, scaled, float(self.gamma) * scaled.time, float(self.tracking_rate),
-                (float(self.position_width), float(self.velocity_width)), float(self.margin), float(self.tank_factor),
-                self.solver)
-            report = check_tank(tank, self.gamma, self.verify_samples, seed)
-            mixture, C, margin, self.history_, self.chosen_iter_ = None, tank.C0[None], -max(report.lmi_max_eigs), [], 0
-        else:
-            K = 1 if self.n_components == "bic" else int(self.n_components)
-            scaled = scaled_samples(demos, K, self.max_samples)
-            mixture, tank = fit_gating(scaled.E, self.n_components, seed), None
-            result = fit_second_order(scaled, mixture, float(self.gamma), float(self.margin), int(self.max_iter),
-                                      float(self.tol), float(self.metric_prox), self.method, self.solver,
-                                      self.progress, tracking=(int(self.tracking_copies), float(self.tracking_sigma),
-                                                               float(self.tracking_rate), seed))
-            report = check_second_order(result.C, result.M, self.gamma, scaled.time, mixture, self.verify_samples, seed)
-            C, margin, self.history_, self.chosen_iter_ = result.C, result.margin, result.history, result.chosen
-        if not report.passed:
-            raise NotCertifiedError(f"the second-order certificate failed its independent check: {report}",
-                                    status="not_certified", hint="a smaller gamma or a larger margin")
-        n = demos.dim
-        self.seed_, self.dim_, self.goal_, self.dt_ = seed, n, scaled.goal, sample_step(demos)
-        self.units_, self.columns_ = demos.units, demos.columns
-        self.length_scale_, self.time_scale_, self.window_ = scaled.length, scaled.time, scaled.window
-        self.mixture_, self.tank_, self.C_, self.M_, self.margin_ = mixture, tank, C, report.M, margin
-        self.verification_, self.certified_ = report, True
-        self.energy_violations_ = energy_violations(report.M, report.gamma_scaled, scaled.E,
-                                                    np.hstack([scaled.E[:, n:], scaled.Ea]))
+        self.__dict__.update(fit_path(demos, self.get_params(), resolve_seed(self.random_state), self.progress))
         self.fit_seconds_ = time.perf_counter() - start
         return self
 
@@ -338,9 +285,7 @@ class SecondOrderCDSP(MotionModel):
                                  or not 0 <= seed <= MAX_SEED):
             raise InputError(f"seed must be None or an integer in [0, {MAX_SEED}], got {seed!r}")
         n_samples, seed = self.verify_samples if n_samples is None else n_samples, self.seed_ if seed is None else seed
-        if self.tank_ is not None:
-            return check_tank(self.tank_, self.gamma, n_samples, seed)
-        return check_second_order(self.C_, self.M_, self.gamma, self.time_scale_, self.mixture_, n_samples, seed)
+        return check_field(self.tank_, self.mixture_, self.C_, self.M_, self.gamma, self.time_scale_, n_samples, seed)
 
     def score(self, demos) -> list[dict]:
         """Per demonstration, its reproduction from its first position and velocity by semi-implicit
@@ -377,6 +322,8 @@ class SecondOrderCDSP(MotionModel):
         params = need(content, "params", "", dict)
         params = {**{k: "mixture" if k == "field" else DEFAULTS[k] for k in TRACKING_PARAMS if k not in params},
                   **params}                       # files older than the tracking field hold mixtures
+        if "method" in params and "solver_method" not in params:    # files older than the first-order name
+            params["solver_method"] = params.pop("method")
         check_param_names(params, PARAMS)
         model = cls(**params)
         try:
@@ -414,17 +361,13 @@ class SecondOrderCDSP(MotionModel):
 
     def summary(self) -> list[str]:
         """The certificate's numbers and how often the demonstrations themselves break its decrease."""
-        r = self.verification_
-        worst = min((m if m is not None else -np.inf) for m in r.proven_margins)
         if self.tank_ is not None:
-            return tank_summary(r, self.tank_.beta, getattr(self, "tank_needs_", None))
-        lines = [f"metric M and {len(r.proven_margins)} LMIs proven in exact arithmetic (min margin {worst:.2e}), "
-                 f"max sampled decrease rate {r.max_sampled_rate:.2e} over {r.n_samples} states x 2 gatings"]
-        v = getattr(self, "energy_violations_", None)
-        if v:
-            lines.append(f"the demonstrations decay slower than certified at {v['slower_than_certified']:.0%} of "
-                         f"{v['samples']} samples and gain M-energy at {v['energy_gain']:.0%}")
-        return lines
+            return tank_summary(self.verification_, self.tank_.beta, getattr(self, "tank_needs_", None))
+        return mixture_summary(self.verification_, getattr(self, "energy_violations_", None))
 
+    def iteration_cap(self, rows: list[dict]) -> str | None:
+        """The mixture's fit loop against ``max_iter`` and ``tol`` (:func:`~sosdyn.lfd.fit.second_order.learner.capped`;
+        the tracking field does not iterate)."""
+        return capped(rows, self.max_iter, self.tol)
 
 DEFAULTS = {name: p.default for name, p in inspect.signature(SecondOrderCDSP).parameters.items()}

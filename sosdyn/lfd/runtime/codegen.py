@@ -108,27 +108,36 @@ _INV = np.linalg.inv(_CHOL)
 _LOGNORM = (np.log(WEIGHTS) - np.log(np.diagonal(_CHOL, axis1=1, axis2=2)).sum(axis=1)
             - 0.5 * MEANS.shape[1] * np.log(2 * np.pi))
 '''
-#: The generated Python's h_k(z) (:mod:`~sosdyn.lfd.fit.gmm`; BOUND the gating bound c or None).
+#: The generated Python's h_k(z) (:mod:`~sosdyn.lfd.fit.gmm`; BOUND the gating bound c or None, FADE its
+#: fade or None: :func:`gating_py` writes both).
 RESPONSIBILITIES_PY = '''def softmax(lj):
     top = lj.max(axis=1, keepdims=True)
     return np.exp(lj - (top + np.log(np.exp(lj - top).sum(axis=1, keepdims=True))))
 
 
 def responsibilities(Z):
-    """h_k(z), (N, K): softmax of log pi_k + log N(z; mu_k, S_k), the quadratic forms q_k divided
-    by tau = max(1, min_k q_k / BOUND) (BOUND None: tau = 1); where a form overflows, one-hot on the
-    nearest component (Mahalanobis), or with a BOUND the softmax of the exact tempered terms."""
+    """h_k(z), (N, K): softmax of l_k = log pi_k + log N(z; mu_k, S_k) = c_k - q_k / 2, tempered with
+    tau = max(1, min_k q_k / BOUND) (BOUND None: not tempered): l_k = c_k - q_k / (2 tau), and with a
+    FADE where tau > FADE l_k <- log pi_k + (l_k - log pi_k) FADE / tau; where a form overflows, one-hot on
+    the nearest component (Mahalanobis), with a BOUND the softmax of the exact tempered terms, with a
+    FADE pi."""
     with np.errstate(over="ignore", invalid="ignore"):
         d = np.einsum("kij,mkj->mki", _INV, Z[:, None, :] - MEANS[None])
         q = np.einsum("mki,mki->mk", d, d)
-        if BOUND is not None:
-            q = np.where(np.isfinite(q).all(axis=1, keepdims=True),
-                         q / np.maximum(1.0, q.min(axis=1, keepdims=True) / BOUND), np.nan)
         lj = _LOGNORM[None, :] - 0.5 * q
+        if BOUND is not None:
+            tau = np.maximum(1.0, q.min(axis=1, keepdims=True) / BOUND)
+            lj = _LOGNORM[None, :] - 0.5 * (q / tau)
+            if FADE is not None:
+                lw = np.log(WEIGHTS)[None, :]
+                lj = np.where(tau <= FADE, lj, lw + (lj - lw) / (tau / FADE))
+            lj = np.where(np.isfinite(q).all(axis=1, keepdims=True), lj, np.nan)
     far = ~np.isfinite(lj).any(axis=1) | np.isnan(lj).any(axis=1)
     lj[far] = 0.0
     h = softmax(lj)
-    if far.any():
+    if far.any() and BOUND is not None and FADE is not None:
+        h[far] = WEIGHTS
+    elif far.any():
         Zf = Z[far]
         c = np.maximum(np.abs(Zf).max(axis=1), 1.0)[:, None, None]
         d = np.einsum("kij,mkj->mki", _INV, Zf[:, None, :] / c - MEANS[None] / c)
@@ -137,5 +146,11 @@ def responsibilities(Z):
         h[far] = np.eye(WEIGHTS.size)[np.argmin(logdist, axis=1)] if BOUND is None else softmax(
             _LOGNORM[None, :] - 0.5 * BOUND * np.exp(2.0 * (logdist - logdist.min(axis=1, keepdims=True))))
     return h
-
 '''
+
+
+def gating_py(mixture) -> str:
+    """The generated Python's BOUND and FADE lines (:data:`RESPONSIBILITIES_PY`) of ``mixture``."""
+    return (f"BOUND = {None if mixture.bound is None else float(mixture.bound)!r}     # the gating's bound c "
+            f"(None: not tempered)\nFADE = {None if mixture.fade is None else float(mixture.fade)!r}     # beyond "
+            "tau = FADE the weights fade to pi (None: no fade)\n")

@@ -126,6 +126,18 @@ inline bool solve(double* A, double* b) {{
   for (int i = 0; i < N; ++i) finite = finite && std::isfinite(xdot[i]);
 """
     limit = "" if max_speed is None else "  if (finite) limit_speed(xdot, N, max_speed);\n"
+    floor = "" if model.floor_ is None else f"""  // the speed floor: xdot scaled by min(boost, max(1, rate |x - g| / |xdot|))
+  double dmax = 0.0, vmax = 0.0, d2 = 0.0, v2 = 0.0;     // norms scaled by the largest entry: no overflow
+  for (int i = 0; i < N; ++i) {{ dmax = std::fmax(dmax, std::fabs(x[i] - g[i])); vmax = std::fmax(vmax, std::fabs(xdot[i])); }}
+  for (int i = 0; i < N; ++i) {{
+    if (dmax > 0.0) d2 += ((x[i] - g[i]) / dmax) * ((x[i] - g[i]) / dmax);
+    if (vmax > 0.0) v2 += (xdot[i] / vmax) * (xdot[i] / vmax);
+  }}
+  const double want = {float(model.floor_["rate"])!r} * dmax * std::sqrt(d2), speed = vmax * std::sqrt(v2);
+  const double boost = {float(model.floor_["boost"])!r};
+  const double sigma = speed > 0.0 ? std::fmin(boost, std::fmax(1.0, want / speed)) : (want > 0.0 ? boost : 1.0);
+  for (int i = 0; i < N; ++i) xdot[i] *= sigma;
+"""
     speed_def = "" if max_speed is None else (
         f"// the largest |xdot| (units/s): the speed limit below\n"
         f"constexpr double max_speed = {max_speed!r};\n")
@@ -177,7 +189,7 @@ inline bool predict(const double* x, double* xdot, const double* goal = nullptr)
     xdot[i] = v * scale;
     finite = finite && std::isfinite(xdot[i]);
   }}
-{from_u}{limit}  return finite;
+{from_u}{floor}{limit}  return finite;
 }}
 
 }}  // namespace {namespace}
@@ -194,8 +206,12 @@ def cpp_mixture(mixture) -> str:
 constexpr std::array<double, K * N * N> inv_chol = {{{_flat(inv)}}};
 // log pi_k - log det L_k - N/2 log(2 pi)
 constexpr std::array<double, K> log_norm = {{{_flat(lognorm)}}};
-// the gating's bound c (0: not tempered): where min_k q_k > c the forms are divided by min_k q_k / c
+// the gating's bound c (0: not tempered): where min_k q_k > c, tau = min_k q_k / c and the forms are
+// divided by tau; its fade F (0: none): where tau > F, l_k - log pi_k is divided by tau / F (weights -> pi)
 constexpr double bound = {0.0 if mixture.bound is None else float(mixture.bound)!r};
+constexpr double fade = {0.0 if mixture.bound is None or mixture.fade is None else float(mixture.fade)!r};
+// log pi_k
+constexpr std::array<double, K> log_weights = {{{_flat(np.log(mixture.weights))}}};
 
 // Squared norm of L_k^-1 (z / c - mu_k / c).
 inline double whitened_sq(int k, const double* z, double c) {{
@@ -219,10 +235,11 @@ inline void softmax(double* l) {{
   for (int k = 0; k < K; ++k) l[k] = std::exp(l[k] - lse);
 }}
 
-// h_k(z): softmax of log pi_k + log N(z; mu_k, S_k), the quadratic forms q_k divided by
-// tau = max(1, min_k q_k / bound) (tempered: bound > 0; bound = 0: not tempered); where a form
-// is not finite, one-hot on the nearest component (Mahalanobis), or tempered the softmax of
-// log_norm_k - bound/2 (d_k / d_min)^2.
+// h_k(z): softmax of l_k = log pi_k + log N(z; mu_k, S_k), the quadratic forms q_k divided by
+// tau = max(1, min_k q_k / bound) (tempered: bound > 0; bound = 0: not tempered), and where
+// tau > fade > 0, l_k <- log pi_k + (l_k - log pi_k) fade / tau; where a form is not finite, one-hot on
+// the nearest component (Mahalanobis), tempered the softmax of log_norm_k - bound/2 (d_k / d_min)^2,
+// with a fade pi.
 inline void responsibilities(const double* z, double* h) {{
   std::array<double, K> q{{}};
   bool finite = true;
@@ -234,8 +251,15 @@ inline void responsibilities(const double* z, double* h) {{
   }}
   if (finite) {{
     const double tau = (bound > 0.0 && qmin > bound) ? qmin / bound : 1.0;
-    for (int k = 0; k < K; ++k) h[k] = log_norm[k] - 0.5 * (tau == 1.0 ? q[k] : q[k] / tau);
+    for (int k = 0; k < K; ++k) {{
+      h[k] = log_norm[k] - 0.5 * (tau == 1.0 ? q[k] : q[k] / tau);
+      if (fade > 0.0 && tau > fade) h[k] = log_weights[k] + (h[k] - log_weights[k]) / (tau / fade);
+    }}
     softmax(h);
+    return;
+  }}
+  if (fade > 0.0) {{
+    for (int k = 0; k < K; ++k) h[k] = std::exp(log_weights[k]);
     return;
   }}
   double c = 1.0;

@@ -30,8 +30,10 @@ the C++ namespace an ASCII identifier.
 
 Run-time goal: ``predict(X, goal=None)`` / ``predict(x, xdot, goal = nullptr)`` evaluate the
 field with the goal moved to ``goal`` (z = (x - goal) / s; the goal-shifted model translated,
-as a rollout's goal change does). Speed limit (``max_speed``, written into the code): the functions
-of :mod:`.states` (source embedded), the same smooth positive factor as every other path.
+as a rollout's goal change does). Speed floor (the model's ``floor_``, :mod:`~sosdyn.lfd.fit.floor`):
+xdot scaled by min(B, max(1, kappa |x - goal| / |xdot|)). Speed limit (``max_speed``, written into the
+code, applied after the floor): the functions of :mod:`.states` (source embedded), the same smooth
+positive factor as every other path.
 """
 from __future__ import annotations
 
@@ -39,8 +41,8 @@ import inspect
 
 import numpy as np
 
-from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _twist, _warp
-from .predictor import (_monomial, field2, fieldn, gating, tables, twist_back, twist_forward, twist_tables, warp_back,
+from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _twist, _warp, gating_py
+from .predictor import (_monomial, field2, fieldn, floor_factor, gating, tables, twist_back, twist_forward, twist_tables, warp_back,
                         warp_back2, warp_forward, warp_forward2, warp_tables)
 from .states import (SPEED_KNEE, check_max_speed, joint_ratio, limit_speed, limit_speed_one, saturated_speed,
                      saturated_speeds, saturation_factor, speed_ratio)
@@ -121,12 +123,13 @@ GOAL = np.array({_literal(model.goal_)})
 SCALE = {float(model.scale_)!r}
 MAX_SPEED = {max_speed!r}     # None, or the largest |xdot| (units/s): the speed limit below
 SPEED_KNEE = {SPEED_KNEE!r}    # velocities slower than SPEED_KNEE * MAX_SPEED are not changed
+# None, or the speed floor (RATE 1/s, BOOST): xdot scaled by min(BOOST, max(1, RATE |x - goal| / |xdot|))
+FLOOR = {None if model.floor_ is None else (float(model.floor_["rate"]), float(model.floor_["boost"]))!r}
 # the mixture of h_k(z), in z coordinates: weights pi_k, means mu_k, covariances S_k
 WEIGHTS = np.array({_literal(mix.weights)})
 MEANS = np.array({_literal(mix.means)})
 COVARIANCES = np.array({_literal(mix.covariances)})
-BOUND = {None if mix.bound is None else float(mix.bound)!r}     # the gating's bound c (None: not tempered)
-EXPONENTS = np.array({_literal(model.field_exps_)}, dtype=np.int64)
+{gating_py(mix)}EXPONENTS = np.array({_literal(model.field_exps_)}, dtype=np.int64)
 COEFFICIENTS = np.array({_literal(model.C_)})     # (K, n, m): f_k,i(z) = sum_j C[k, i, j] z^e_j
 
 DIM = GOAL.size
@@ -167,6 +170,12 @@ def predict(X, goal=None):
     if bad.size:
         raise ValueError(f"X row {{bad[0]}} is so far from the data (scale {{SCALE:.3g}}) that the field "
                          "overflows float. Try: states within a few orders of magnitude of the data.")
+    if FLOOR is not None:
+        speed = np.hypot.reduce(V, axis=1, keepdims=True)
+        want = FLOOR[0] * np.hypot.reduce(X - goal, axis=1, keepdims=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            V = V * np.where(speed > 0, np.minimum(FLOOR[1], np.maximum(1.0, want / speed)),
+                             np.where(want > 0, FLOOR[1], 1.0))
     if MAX_SPEED is not None:
         V = limit_speed(V, MAX_SPEED)
     return V[0] if single else V
@@ -184,7 +193,7 @@ def _one_state(model, mix, warp, twist, max_speed) -> str:
     their tables (literals: ``repr`` of floats round-trips), ``one_state(x)`` -> xdot or None
     where the batch path must decide (a form overflows, or the velocity is not finite)."""
     n = model.dim_
-    funcs = [gating, _monomial, field2 if n == 2 else fieldn]
+    funcs = [gating, _monomial, field2 if n == 2 else fieldn, floor_factor]
     if warp is not None:
         funcs += [warp_forward2, warp_back2] if n == 2 else [warp_forward, warp_back]
     if twist is not None:
@@ -221,6 +230,9 @@ def one_state(x, goal):
     v = [SCALE * a for a in v]
     if not math.isfinite(sum(v)):
         return None
+    if FLOOR is not None:
+        f = floor_factor((x - goal).tolist(), v, *FLOOR)
+        v = [f * a for a in v]
     if MAX_SPEED is not None:
         v = limit_speed_one(v, MAX_SPEED)
     return np.array(v)

@@ -8,6 +8,7 @@ computes the same numbers with everything that does not depend on x precomputed 
     d = A z - b,     A = [L_1^-1; ...; L_K^-1]  (K n x n),   b_k = L_k^-1 mu_k     (S_k = L_k L_k^T)
     q_k = |d_k|^2,  tau = max(1, min_k q_k / c) (1 without a gating bound c; :mod:`sosdyn.lfd.fit.gmm`)
     l_k = c_k - 1/2 q_k / tau,    c_k = log pi_k - sum_i log L_k,ii - n/2 log 2 pi
+    (with a fade F where tau > F: l_k <- log pi_k + (l_k - log pi_k) F / tau)
     h = exp(l - max l) / sum exp(l - max l)
     xdot = s * (h^T C) z^E,      C reshaped to (K, n m),  z^E the m monomial values of z
 
@@ -67,12 +68,13 @@ class StatePredictor:
 
     Built from a fitted model's arrays (:meth:`sosdyn.lfd.model.cdsp.CDSP.predictor` does this):
     goal x* (n,), scale s, the position mixture, coefficients C (K, n, m), exponents E (m, n),
-    the warp (centers, vectors, sigmas) in z-units or None, the speed limit or None, and the twist
-    after the warp's bumps (plane, amplitudes, widths; z-units) or None.
+    the warp (centers, vectors, sigmas) in z-units or None, the speed limit or None, the twist
+    after the warp's bumps (plane, amplitudes, widths; z-units) or None, and the speed floor
+    ({"rate", "boost"}, :mod:`~sosdyn.lfd.fit.floor`) or None (applied before the speed limit).
     """
 
     def __init__(self, goal: np.ndarray, scale: float, mixture: PositionMixture, C: np.ndarray,
-                 exps: np.ndarray, warp=None, max_speed: float | None = None, twist=None):
+                 exps: np.ndarray, warp=None, max_speed: float | None = None, twist=None, floor=None):
         n = C.shape[1]
         self.dim, self._shape = n, (n,)
         self._goal = np.array(goal, dtype=float)
@@ -84,6 +86,7 @@ class StatePredictor:
         self._forward, self._back = (warp_forward2, warp_back2) if n == 2 else (warp_forward, warp_back)
         self.max_speed = check_max_speed(max_speed)
         self._field = field2 if n == 2 else fieldn
+        self._floor = None if floor is None else (float(floor["rate"]), float(floor["boost"]))
 
     def __call__(self, x, goal=None) -> np.ndarray:
         """xdot (n,) at the state x (n,), in the data's units, for the goal ``goal`` (None: the
@@ -109,6 +112,9 @@ class StatePredictor:
             raise InputError(f"x = {x} is so far from the data (scale {self._scale:.3g}) that the field "
                              "overflows float. Try: states within a few orders of magnitude of the "
                              "demonstrations.")
+        if self._floor is not None:
+            f = floor_factor((x - goal).tolist(), v, *self._floor)
+            v = [f * a for a in v]
         if self.max_speed is not None:
             v = limit_speed_one(v, self.max_speed)
         return np.array(v)
@@ -124,12 +130,15 @@ class StatePredictor:
 
 def tables(mixture: PositionMixture, C: np.ndarray, exps: np.ndarray) -> tuple:
     """The plain-float tables of :func:`field2` / :func:`fieldn`: (per component (L_k^-1 rows
-    flattened, b_k, c_k), the gating bound c or None, C^T (n m, K), n, m, E rows, whether z^E = z)."""
+    flattened, b_k, c_k), the gating (None, or its bound c, its fade F or None and log pi_k), C^T (n m, K),
+    n, m, E rows, whether z^E = z)."""
     inv, lognorm = mixture.factors()
     K, n, m = C.shape
     b = np.einsum("kij,kj->ki", inv, mixture.means)
     mix = tuple((*map(float, inv[k].ravel()), *map(float, b[k]), float(lognorm[k])) for k in range(K))
-    return (mix, None if mixture.bound is None else float(mixture.bound),
+    gate = None if mixture.bound is None else (float(mixture.bound), None if mixture.fade is None else
+                                               float(mixture.fade), tuple(map(float, np.log(mixture.weights))))
+    return (mix, gate,
             tuple(tuple(map(float, r)) for r in C.reshape(K, n * m).T), n, m,
             tuple(tuple(int(e) for e in r) for r in exps), bool(np.array_equal(exps, np.eye(n))))
 
@@ -141,17 +150,21 @@ def warp_tables(centers, vectors, sigmas) -> tuple:
                   math.exp(-float(np.dot(c, c)) / float(s) ** 2)) for c, v, s in zip(centers, vectors, sigmas))
 
 
-def gating(mix: tuple, bound, lj: list, z: list, far) -> list:
-    """h from l_k = c_k - q_k / 2 (module docstring): softmax(l), tempered where min q > bound
-    (q_k = 2 (c_k - l_k), l_k <- c_k - (q_k / tau) / 2, tau = min q / bound); ``far(z)`` where an
-    l_k is not finite (a quadratic form overflowed)."""
+def gating(mix: tuple, gate, lj: list, z: list, far) -> list:
+    """h from l_k = c_k - q_k / 2 (module docstring): softmax(l), tempered where min q > bound for
+    ``gate`` = (bound, fade, log pi) (q_k = 2 (c_k - l_k), tau = min q / bound, l_k <- c_k - (q_k / tau) / 2;
+    with a fade where tau > fade, l_k <- log pi_k + (l_k - log pi_k) fade / tau); ``far(z)`` where an l_k
+    is not finite (a quadratic form overflowed)."""
     if not math.isfinite(sum(lj)):
         return far(z)
-    if bound is not None:
+    if gate is not None:
+        bound, fade, logw = gate
         q = [2.0 * (r[-1] - a) for r, a in zip(mix, lj)]
         if min(q) > bound:                              # tempered off the data
             tau = min(q) / bound
             lj = [r[-1] - 0.5 * (a / tau) for r, a in zip(mix, q)]
+            if fade is not None and tau > fade:         # and faded to pi farther off
+                lj = [w + (a - w) / (tau / fade) for w, a in zip(logw, lj)]
     top = max(lj)
     e = [math.exp(a - top) for a in lj]
     t = sum(e)
@@ -160,13 +173,13 @@ def gating(mix: tuple, bound, lj: list, z: list, far) -> list:
 
 def field2(T: tuple, z: list, far) -> list:
     """:func:`fieldn` for n = 2, unrolled."""
-    mix, bound, Ct, _, m, et, linear = T
+    mix, gate, Ct, _, m, et, linear = T
     z0, z1 = z
     lj = []
     for a00, a01, a10, a11, b0, b1, c in mix:
         d0, d1 = a00 * z0 + a01 * z1 - b0, a10 * z0 + a11 * z1 - b1
         lj.append(c - 0.5 * (d0 * d0 + d1 * d1))
-    h = gating(mix, bound, lj, z, far)
+    h = gating(mix, gate, lj, z, far)
     g = [sum(map(mul, col, h)) for col in Ct]               # h^T C, (2 m,)
     try:
         if linear:
@@ -179,19 +192,28 @@ def field2(T: tuple, z: list, far) -> list:
 
 def fieldn(T: tuple, z: list, far) -> list:
     """(h(z)^T C) z^E in plain floats for the tables T (:func:`tables`; module docstring), h tempered
-    by the bound; ``far(z)`` gives h where a quadratic form overflows."""
-    mix, bound, Ct, n, m, et, linear = T
+    by the gating; ``far(z)`` gives h where a quadratic form overflows."""
+    mix, gate, Ct, n, m, et, linear = T
     lj = []
     for r in mix:
         d = [sum(map(mul, r[i * n:(i + 1) * n], z)) - r[n * n + i] for i in range(n)]
         lj.append(r[-1] - 0.5 * sum(map(mul, d, d)))
-    h = gating(mix, bound, lj, z, far)
+    h = gating(mix, gate, lj, z, far)
     g = [sum(map(mul, col, h)) for col in Ct]               # h^T C, (n m,)
     try:
         mono = z if linear else [_monomial(z, e) for e in et]
         return [sum(map(mul, g[i * m:(i + 1) * m], mono)) for i in range(n)]
     except OverflowError:
         return [math.inf] * n
+
+
+def floor_factor(d: list, v: list, rate: float, boost: float) -> float:
+    """sigma = min(boost, max(1, rate |d| / |v|)) for d = x - x* and v = f(x) (data units; the speed
+    floor, :func:`~sosdyn.lfd.fit.floor.floored`): 1 at the goal, boost where v = 0 elsewhere."""
+    want, speed = rate * math.hypot(*d), math.hypot(*v)       # hypot: no overflow where |v|^2 would
+    if speed > 0:
+        return min(boost, max(1.0, want / speed))
+    return boost if want > 0 else 1.0
 
 
 def _monomial(z: list, e: tuple) -> float:

@@ -26,7 +26,8 @@ from sosdyn.errors import NotFittedError
 from ..fit.gmm import PositionMixture
 from ..fit.second_order import acceleration_at
 from ..fit.second_order.tank import TankField, derivatives_at, initial_tank, scaled_states
-from .codegen import MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _flat, _literal, check_namespace, cpp_string, cpp_strings
+from .codegen import (MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _flat, _literal, check_namespace, cpp_string, cpp_strings,
+                      gating_py)
 from .export_cpp import cpp_mixture
 from .second_order_tank import tank_cpp, tank_python
 from .states import as_state
@@ -110,8 +111,7 @@ TIME = {float(model.time_scale_)!r}    # T
 WEIGHTS = np.array({_literal(mix.weights)})
 MEANS = np.array({_literal(mix.means)})
 COVARIANCES = np.array({_literal(mix.covariances)})
-BOUND = {None if mix.bound is None else float(mix.bound)!r}     # the gating's bound c (None: not tempered)
-FIELDS = np.array({_literal(model.C_)})     # (K, n, 2n): C_k = [A_k, B_k], scaled units
+{gating_py(mix)}FIELDS = np.array({_literal(model.C_)})     # (K, n, 2n): C_k = [A_k, B_k], scaled units
 DIM = GOAL.size
 {MIXTURE_PY}
 

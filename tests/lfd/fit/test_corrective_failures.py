@@ -58,4 +58,8 @@ def test_too_long_demos_for_the_auto_scoring_are_refused_with_cdsp_remedies(line
     assert "max_steps" not in text.replace("max_rollout_steps", "")
     monkeypatch.undo()
     with sd.limits(max_rollout_steps=500):
-        assert sd.CDSP(**dict(SMALL, warp="auto")).fit(linear_demos.subsample(2)).certified_   # 4 x 101
+        assert sd.CDSP(**dict(SMALL, warp="auto", speed_floor="none")).fit(linear_demos.subsample(2)).certified_  # 4 x 101
+        with pytest.raises(sd.ResourceLimitError, match=r"speed_floor='auto' \(4 demonstrations x 152 steps.*"
+                           r"speed_floor='none' or a rate"):
+            sd.CDSP(**dict(SMALL, warp="auto")).fit(linear_demos.subsample(2))    # 1.5 x 100 steps + 2
+        assert sd.CDSP(**dict(SMALL, warp="auto")).fit(linear_demos.subsample(3)).certified_   # 4 x 101 floor steps

@@ -108,9 +108,10 @@ def test_presets_set_their_parameters_and_paper_is_the_former_default():
     paper = sd.CDSP.preset("paper").get_params()
     assert (paper["solver_method"], paper["metric_prox"], paper["n_components"]) == ("alternating", 0.0, 6)
     assert (paper["field_degree"], paper["metric_degree"], paper["gamma"]) == (1, 0, 0.1)
-    assert (paper["corrective_rounds"], paper["warp"]) == (0, "none")     # the paper's fit: no refits, no warp
+    assert (paper["corrective_rounds"], paper["warp"], paper["speed_floor"]) == (0, "none", "none")  # no refits, warp, floor
     default = sd.CDSP().get_params()                            # "ica", K = 8, warp "auto"
-    assert {k: default[k] for k in PRESETS["ica"]} == dict(PRESETS["ica"], n_components=8, warp="auto")
+    assert {k: default[k] for k in PRESETS["ica"]} == dict(PRESETS["ica"], n_components=8, warp="auto",
+                                                           speed_floor="auto")
     assert (default["corrective_tau"], default["corrective_min_dist"]) == (0.5, 0.02)
     cubic = sd.CDSP.preset("cubic", n_components=4).get_params()
     assert (cubic["field_degree"], cubic["metric_degree"], cubic["n_components"]) == (3, 2, 4)

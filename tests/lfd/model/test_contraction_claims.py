@@ -7,13 +7,16 @@ import pytest
 from sosdyn.lfd.fit.composite import jacobian
 from sosdyn.lfd.model.cdsp import CDSP
 
-SMALL = {"n_components": 3, "max_samples": 300, "verify_samples": 500}
+# Without the speed floor (a time change: the pairs' mutual distance at equal times changes with it; with
+# the floor the unwarped pair's growth is 1.43x, the warped one has none).
+SMALL = {"n_components": 3, "max_samples": 300, "verify_samples": 500, "speed_floor": "none"}
 # Per warp setting: the start pair, 1 % of the data box's diagonal apart, of largest separation among
 # 40 random pairs in the box (seed 0), its measured growth (at t = 1.97 s / 0.62 s; the red team's
-# pair: 3.67x / 2.08x; the warped pair's is 1.95x at 0.63 s with gating="tempered": it starts off the
-# data) and the rollouts' duration.
+# pair: 3.67x / 2.08x; the warped pair's is 2.15x with gating="posterior", 1.95x at 0.63 s with the
+# tempered weights of gating="tempered" and of the default "smooth", which it never leaves: it starts off
+# the data) and the rollouts' duration.
 PAIRS = {"none": ((0.7401241, 0.57046346), (0.74114245, 0.61203197), 6.86, 4.0),
-         "warped": ((-1.7782165, 1.67654057), (-1.76642324, 1.63666706), 2.15, 1.5)}
+         "warped": ((-1.7782165, 1.67654057), (-1.76642324, 1.63666706), 1.95, 1.5)}
 
 
 def certificate_coordinates(model, X):
@@ -44,7 +47,7 @@ def test_every_trajectory_approaches_the_goal_at_the_certified_rate(measured):
 
 
 def test_nearby_trajectories_need_not_approach_each_other(measured):
-    """The mutual M-distance grows to 6.86x (no warp) / 2.15x (warp) its start: no contraction of
+    """The mutual M-distance grows to 6.86x (no warp) / 1.95x (warp) its start: no contraction of
     the model itself. It stays below the triangle bound through the goal."""
     model, t, to_goal, apart, growth = measured
     assert apart.max() / apart[0] == pytest.approx(growth, rel=0.01)

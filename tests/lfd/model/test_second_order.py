@@ -138,6 +138,20 @@ def test_model_file_round_trip(linear_model, tmp_path):
         sd.load_model(path)
 
 
+def test_a_file_that_names_the_solver_method_method_loads(linear_model, tmp_path):
+    """Files written before the parameter took the first-order name ``solver_method`` call it ``method``."""
+    from sosdyn.lfd.model.fileformat import write_model_file
+    doc = json.loads(linear_model.save(tmp_path / "m.json").read_text())
+    doc["params"]["method"] = doc["params"].pop("solver_method")
+    path = write_model_file({k: doc[k] for k in ("format", "version", "params", "state")}, tmp_path / "old.json")
+    loaded = sd.load_model(path)
+    assert loaded.get_params() == dict(linear_model.get_params(), random_state=linear_model.seed_)
+    doc["params"]["solver_method"] = "ica"                       # both names: not a file sosdyn wrote
+    path = write_model_file({k: doc[k] for k in ("format", "version", "params", "state")}, tmp_path / "both.json")
+    with pytest.raises(ModelFileError, match="unknown \\['method'\\]"):
+        sd.load_model(path)
+
+
 def test_excursion_bound_and_energy_measure():
     assert excursion_bound(np.eye(4), np.array([3.0, 4.0, 0.0, 0.0])) == pytest.approx(5.0)
     E = np.array([[1.0, 0.0, 1.0, 0.0], [1.0, 0.0, -1.0, 0.0]])     # moving away, moving back
@@ -146,7 +160,7 @@ def test_excursion_bound_and_energy_measure():
     assert out == {"samples": 2, "slower_than_certified": 0.5, "energy_gain": 0.5}
 
 
-@pytest.mark.parametrize("params", [dict(gamma=-1.0), dict(field="mixture", method="newton"),
+@pytest.mark.parametrize("params", [dict(gamma=-1.0), dict(field="mixture", solver_method="newton"),
                                     dict(field="mixture", tracking_copies=1.5), dict(field="mixture", tracking_sigma=0.0),
                                     dict(field="mixture", n_components=0), dict(solver=""), dict(field="spline"),
                                     dict(position_width=0.0), dict(tank_factor=-1.0), dict(n_components=3),

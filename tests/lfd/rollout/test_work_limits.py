@@ -30,15 +30,21 @@ def test_a_rollout_over_its_call_budget_says_how_far_it_got():
     assert "sosdyn.set_limits(max_rollout_calls=" in str(exc)
 
 
-def test_a_rollout_over_its_time_budget_stops_within_it():
+def test_a_rollout_over_its_time_budget_stops_within_it(monkeypatch):
+    """On a fake clock where each field evaluation costs 1/64 s: with max_rollout_seconds = 1 the 65th
+    evaluation is the first to end past the budget, and the next call stops the rollout before
+    evaluating (66 calls counted, 65 evaluated), far from done (rtol 1e-12 over 1e6 s)."""
+    step = 1 / 64                               # exact in binary: the clock reads 1.0 after 64 evaluations
+    clock = [0.0]
+    monkeypatch.setattr(time, "perf_counter", lambda: clock[0])
+
     def slow(X, goal):
-        time.sleep(0.01)
+        clock[0] += step
         return -(X - goal)
 
-    t0 = time.perf_counter()
-    with sd.limits(max_rollout_seconds=1), pytest.raises(WorkLimitError, match="max_rollout_seconds = 1"):
+    with sd.limits(max_rollout_seconds=1), pytest.raises(WorkLimitError, match="max_rollout_seconds = 1") as info:
         rollout(slow, GOAL + 1.0, duration=1e6, dt=1e3, goal=GOAL, integrator="RK45", rtol=1e-12)
-    assert time.perf_counter() - t0 < 2.0
+    assert clock[0] == info.value.seconds == 65 * step and info.value.calls == 66 and info.value.t < 1e6
 
 
 def test_the_default_budget_lets_ordinary_rollouts_through():
@@ -90,14 +96,15 @@ def test_a_discontinuous_field_is_stopped_early_and_said_so():
 
 
 def test_a_posterior_model_far_from_its_data_stops_with_the_reason(linear_demos):
-    model = sd.CDSP(n_components=3, field_degree=3, warp="none").fit(linear_demos)
+    model = sd.CDSP(n_components=3, field_degree=3, warp="none", gating="posterior").fit(linear_demos)
     x0 = model.goal_ + 1e6 * model.scale_ * np.array([np.cos(5.11), np.sin(5.11)])
     with pytest.raises(WorkLimitError, match="the field is discontinuous there") as info:
         model.rollout(x0, 60.0, dt=0.1)
     assert info.value.calls < 5_000                   # before: 100,001 calls (60,000 in 39 s measured)
-    tempered = sd.CDSP(n_components=3, field_degree=3, warp="none", gating="tempered").fit(linear_demos)
-    end = tempered.rollout(x0, 60.0, dt=0.1).pos[-1]
-    assert np.linalg.norm(end - tempered.goal_) < 1e-6 * tempered.scale_
+    for gating in ("tempered", "smooth"):             # smooth: the default
+        tempered = sd.CDSP(n_components=3, field_degree=3, warp="none", gating=gating).fit(linear_demos)
+        end = tempered.rollout(x0, 60.0, dt=0.1).pos[-1]
+        assert np.linalg.norm(end - tempered.goal_) < 1e-6 * tempered.scale_, gating
 
 
 def test_smooth_fields_never_jump():

@@ -143,3 +143,15 @@ def energy_violations(M, gamma_scaled, E, Edot, floor=1e-9) -> dict:
     return {"samples": int(live.sum()),
             "slower_than_certified": float(np.mean(dV[live] > -2.0 * gamma_scaled * V[live])),
             "energy_gain": float(np.mean(dV[live] > 0.0))}
+
+
+def mixture_summary(report: SecondOrderCertificate, violations: dict | None) -> list[str]:
+    """A mixture's certificate for people: its exact LMIs and sampled decrease, and (``violations``,
+    :func:`energy_violations`) how often the training demonstrations break the certified decrease."""
+    worst = min((m if m is not None else -np.inf) for m in report.proven_margins)
+    lines = [f"metric M and {len(report.proven_margins)} LMIs proven in exact arithmetic (min margin {worst:.2e}), "
+             f"max sampled decrease rate {report.max_sampled_rate:.2e} over {report.n_samples} states x 2 gatings"]
+    if violations:
+        lines.append(f"the demonstrations decay slower than certified at {violations['slower_than_certified']:.0%} "
+                     f"of {violations['samples']} samples and gain M-energy at {violations['energy_gain']:.0%}")
+    return lines

@@ -25,6 +25,7 @@ import numpy as np
 from sosdyn.poly import PolyMatrix
 from sosdyn.sos import SOSProgram, svec_to_matrix
 from ..gmm import PositionMixture
+from ..learner import cap_note
 from .core import (METRIC_EPS, Scaled, companion, decision_companion, energy_metric_step, field_step, lmi,
                            metric_step,
                            nominal_fields, tracking_samples, training_deviation)
@@ -90,6 +91,22 @@ class SecondOrderFit:
 METHODS = ("ica", "alternating", "energy")
 ENERGY_ROWS = 500               # demo samples in the energy metric step
 ALPHA_MIN = 1e-3                # Young's weight a stays in [1e-3, 1e3]
+COST_FLOOR = 1e-12              # the stopping test's relative tolerance never divides by less
+
+
+def converged(old: float, new: float, tol: float) -> bool:
+    """The fit loop's stopping test: the cost fell by at most ``tol`` relative to the new cost."""
+    return old - new <= tol * max(new, COST_FLOOR)
+
+
+def capped(rows: list[dict], max_iter: int, tol: float) -> str | None:
+    """:func:`~sosdyn.lfd.fit.learner.cap_note` when the history rows of a fit (a "start" row, then one
+    per iteration) show all ``max_iter`` iterations run and the last still changing the cost by more
+    than ``tol`` (:func:`converged`); None otherwise (fewer iterations, or none: the tracking field)."""
+    if len(rows) < 2 or len(rows) - 1 < max_iter:
+        return None
+    old, new = rows[-2]["cost"], rows[-1]["cost"]
+    return None if converged(old, new, tol) else cap_note(max_iter, (old - new) / max(new, COST_FLOOR), tol)
 
 
 def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, margin: float, max_iter: int,
@@ -145,12 +162,12 @@ def fit_second_order(scaled: Scaled, mixture: PositionMixture, gamma: float, mar
         C_new, new = field_step(data, M1, g, min(margin, t), solver)
         if new > cost:          # round-off: the current fields stay (they are feasible under M1)
             break
-        C, M, cost, gain = C_new, M1, new, cost - new
+        C, M, old, cost = C_new, M1, cost, new
         dev = training_deviation(C, mixture, scaled)
         log({"step": method, "cost": new, "margin": t, "cond_M": float(np.linalg.cond(M1)), "deviation": dev})
         if dev < best[0]:
             best = (dev, C, M, len(history) - 1)
-        if gain <= tol * max(cost, 1e-12):
+        if converged(old, cost, tol):
             break
     dev, C, M, chosen = best
     return SecondOrderFit(scaled, mixture, C, M, lmi_margin(C, M, g), history, chosen)

@@ -1,0 +1,114 @@
+"""The speed floor of a fitted field: a time change that keeps the certificate (issue 36.5).
+
+Where demonstrations go in and out near the goal (the real pourings: down to the glass, up while
+pouring, down to the goal) the averaged field nearly cancels, and reproductions crawl there: 16 of
+the 63 pourings did not reach the goal in twice their demonstration's duration. The floor speeds
+such places up without moving a single path:
+
+    xdot = sigma(x) f(x),   sigma(x) = min(BOOST, max(1, kappa |x - x*| / |f(x)|))   (sigma = 1 at x*),
+
+i.e. the model moves at least at the relative speed kappa (1/s) towards its goal, at most BOOST
+times faster than f, never slower than f.
+
+*Theorem (time change).* For any sigma(x) in [1, B] the certificate's conclusions hold for
+sigma f: (i) every trajectory of sigma f is a trajectory of f traversed with the clock
+dt' = sigma(x(t)) dt (the same set of points; so the reach box and the excursion bound, which bound
+the points, are unchanged); (ii) the virtual system ydot = sigma(x) sum_k h_k(x) f_k(y) has the
+non-negative weights sigma h_k, whose sum sigma >= 1, so the certified -G_k >= 0 (rate gamma, any
+weights in the simplex) gives d/dt |dy|^2_M <= -gamma sigma |dy|^2_M <= -gamma |dy|^2_M: contraction
+at rate at least gamma, and every trajectory converges to the goal. Nothing of the certificate is
+re-checked: it never involved the weights' sum beyond its being positive.
+
+*Choice* (training data only, :func:`floor_choice`): no floor when every reproduction of a
+training demonstration from its first sample reaches the goal (within GOAL_FRACTION of the data's
+diagonal) within ARRIVAL times the demonstration's duration; else the least kappa among the
+RATE_QUANTILES of the training samples' relative speeds |xdot| / |x - x*| (samples nearer the goal
+than GOAL_FRACTION of the diagonal left out) that makes them all arrive so, or the largest if none
+does. The least: a floor raises accelerations (kappa^2 |x - x*|
+where it binds), so it is used only where the field is too slow for the demonstrations' pace.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from sosdyn.limits import check_count
+from ..data.demonstrations import Demonstrations, sample_step
+from ..rollout import euler_blocks_until_rest
+from ..rollout.quality import GOAL_FRACTION
+
+BOOST = 10.0                    # the floor speeds the field up at most this many times
+ARRIVAL = 1.5                   # training reproductions must reach the goal within this x their duration
+RATE_QUANTILES = (0.25, 0.5, 0.75, 0.9)     # kappa candidates: these quantiles of the relative speeds
+
+
+def relative_speeds(X: np.ndarray, Xdot: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """|xdot_i| / |x_i - x*| over the samples farther than GOAL_FRACTION of the diagonal from the goal."""
+    r = np.linalg.norm(X - goal, axis=1)
+    far = r > GOAL_FRACTION * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+    return np.linalg.norm(Xdot[far], axis=1) / r[far]
+
+
+def floored(D: np.ndarray, V: np.ndarray, rate, boost=BOOST) -> np.ndarray:
+    """sigma V at the rows of D = x - x* and V = f(x) (module docstring; any consistent units): ``rate``
+    kappa and ``boost`` B numbers or columns (k, 1) of per-row values (rate 0: no floor)."""
+    speed = np.hypot.reduce(V, axis=1, keepdims=True)          # hypot: no overflow where |v|^2 would
+    want = rate * np.hypot.reduce(D, axis=1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sigma = np.where(speed > 0, np.minimum(boost, np.maximum(1.0, want / speed)), np.where(want > 0, boost, 1.0))
+    return V * sigma
+
+
+def arrival_ratios(paths: list[np.ndarray], demos: Demonstrations, dt: float) -> np.ndarray:
+    """Per reproduction ``paths[i]`` (rows every dt from demos[i]'s first sample): the first time within
+    GOAL_FRACTION of the diagonal of the goal over demos[i]'s duration (inf: never)."""
+    X = demos.stacked()[0]
+    radius = GOAL_FRACTION * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+    goal = np.asarray(demos.goal, dtype=float)
+    out = []
+    for p, d in zip(paths, demos):
+        inside = np.flatnonzero(np.linalg.norm(p - goal, axis=1) <= radius)
+        out.append(inside[0] * dt / d.duration if inside.size else np.inf)
+    return np.array(out)
+
+
+def floor_steps(demos: Demonstrations) -> int:
+    """The Euler steps of :func:`floor_choice`'s rollouts, ARRIVAL x the longest duration at the data's
+    step (+ 2), checked for all len(demos) starts against max_rollout_steps before any fit
+    (ResourceLimitError whose hint names what a CDSP user can change)."""
+    steps = int(np.ceil(ARRIVAL * max(d.duration for d in demos) / sample_step(demos))) + 2
+    check_count(steps * len(demos), "max_rollout_steps",
+                f"The rollouts that choose speed_floor='auto' ({len(demos)} demonstrations x {steps} steps, "
+                f"{ARRIVAL:g}x the longest duration)", "fewer samples per demonstration (demos.subsample(k)), or "
+                "speed_floor='none' or a rate (no choosing rollouts)")
+    return steps
+
+
+def floor_choice(field: Callable[[np.ndarray], np.ndarray], goal: np.ndarray, demos: Demonstrations
+                 ) -> tuple[float | None, dict[str, float]]:
+    """(kappa or None, {candidate: worst training arrival ratio, inf beyond ARRIVAL}) for the field
+    ``field`` (x -> xdot, data units) with goal ``goal`` (module docstring): every candidate's rollouts
+    from the demonstrations' first samples in one Euler loop, :func:`floor_steps` steps at the data's step."""
+    X, Xdot = demos.stacked()
+    rates = relative_speeds(X, Xdot, goal)
+    candidates = {"none": 0.0} if rates.size == 0 else \
+        {"none": 0.0, **{f"q{round(100 * q)}": float(np.quantile(rates, q)) for q in RATE_QUANTILES}}
+    kappas = np.array(list(candidates.values()))
+    dt, m, steps = sample_step(demos), len(demos), floor_steps(demos)
+    starts = np.tile(np.array([d.pos[0] for d in demos]), (len(kappas), 1))
+
+    def blocks(Xb, live):
+        rate = np.repeat(kappas[live], m)[:, None]
+        return floored(Xb - goal, field(Xb), rate)
+
+    runs = euler_blocks_until_rest(blocks, starts, len(kappas), dt=dt, max_steps=steps, vel_tol=np.finfo(float).tiny,
+                                   window=1)
+    worst = {name: float(np.max(arrival_ratios(r, demos, dt))) if isinstance(r, list) else np.inf
+             for name, r in zip(candidates, runs)}
+    ok = [name for name in candidates if worst[name] <= ARRIVAL]
+    return (candidates[ok[0] if ok else list(candidates)[-1]] or None), worst
+
+
+__all__ = ["ARRIVAL", "BOOST", "RATE_QUANTILES", "arrival_ratios", "floor_choice", "floor_steps", "floored",
+           "relative_speeds"]
