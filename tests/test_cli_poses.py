@@ -136,7 +136,7 @@ int main() {
   if (std::scanf("%lf %lf %lf %lf %lf %lf %lf", x, x + 1, x + 2, q, q + 1, q + 2, q + 3) != 7) return 2;
   const double dt = 0.005;
   for (int k = 0; k < 12000; ++k) {
-    if (!pose_model_pose::predict_pose(x, q, v, w)) return 1;
+    if (!arm_pose::predict_pose(x, q, v, w)) return 1;
     const double th = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * dt;
     const double s = th > 1e-12 ? std::sin(th / 2) / (th / dt) : dt / 2;
     const double d[4] = {std::cos(th / 2), s * w[0], s * w[1], s * w[2]};
@@ -153,8 +153,9 @@ int main() {
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
 def test_newcomer_csv_to_cpp_controller_from_170_degrees(tmp_path, capsys):
-    """A pose log (CSV) -> sosdyn fit -> export --to cpp -> compiled -> run from 170 deg off at the goal
-    position: the gripper turns home and does not move (no detour), smoothly; from a demo's start too."""
+    """A pose log (CSV) -> sosdyn fit -> export --to cpp (a namespace ending in _: arm_pose, never the reserved
+    arm__pose) -> compiled -> run from 170 deg off at the goal position: the gripper turns home and does not
+    move (no detour), smoothly; from a demo's start too."""
     logs = tmp_path / "logs"
     logs.mkdir()
     for f in sorted((DATASETS_DIR / "robottasks" / "openbox").glob("demo_0[0-5].csv")):
@@ -162,7 +163,7 @@ def test_newcomer_csv_to_cpp_controller_from_170_degrees(tmp_path, capsys):
     code, out, err = run(capsys, "fit", logs, "--units", "cm", "--out", tmp_path / "pose.json")
     assert code == 0 and "certificate: passed" in out, err
     code, _, err = run(capsys, "export", tmp_path / "pose.json", "--to", "cpp", "--max-speed", "10",
-                       "--max-angular-speed", "0.8", "--out", tmp_path / "pose.hpp")
+                       "--max-angular-speed", "0.8", "--namespace", "arm_", "--out", tmp_path / "pose.hpp")
     assert code == 0, err
     (tmp_path / "sim.cpp").write_text(SIM_MAIN)
     subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(tmp_path / "sim"),

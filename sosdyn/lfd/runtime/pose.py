@@ -25,7 +25,7 @@ ValueError; C++: false).
 
 The Python module needs numpy and scipy, never sosdyn; each block's module is embedded as a string
 literal (``repr``: no text of the model reaches the file unescaped) and run into its own namespace. The
-C++ header holds the blocks' namespaces NS_position and NS_orientation and NS_pose with ``predict_pose``
+C++ header holds the blocks' namespaces NS_position and NS_orientation and NS_pose with ``predict_pose`` (NS and the part joined by one underscore: ``abc_`` gives ``abc_pose``)
 in plain arithmetic (<cmath> only): quaternion product and conjugate, log and the right Jacobian.
 """
 from __future__ import annotations
@@ -179,10 +179,12 @@ def _cpp_ratio(limit: float | None, pointer: str, namespace: str) -> str:
 def pose_to_cpp(model, namespace: str = "pose_model", max_speed: float | None = None,
                 max_angular_speed: float | None = None) -> str:
     """Source of the header-only C++17 pose evaluator (module docstring): namespaces ``namespace``
-    + _position, _orientation and _pose (``predict_pose``)."""
+    + _position, _orientation and _pose (``predict_pose``), joined by one underscore (a ``namespace`` that
+    ends with one takes none more: ``abc_`` gives ``abc_pose``, never the reserved ``abc__pose``)."""
     max_speed, max_angular_speed = check_limits(max_speed, max_angular_speed)
     namespace = check_namespace(namespace, "pose_model")
-    pos_ns, ori_ns = f"{namespace}_position", f"{namespace}_orientation"
+    stem = namespace if namespace.endswith("_") else namespace + "_"
+    pos_ns, ori_ns, pose_ns = f"{stem}position", f"{stem}orientation", f"{stem}pose"
     blocks = to_cpp(model.position_, pos_ns) + to_cpp(model.orientation_, ori_ns)
     limits = (("  double top, norm;   // scratch of speed_ratio\n" if (max_speed, max_angular_speed) != (None, None) else "")
               + f"  const double speed = {_cpp_ratio(max_speed, 'v', pos_ns)};\n"
@@ -190,7 +192,7 @@ def pose_to_cpp(model, namespace: str = "pose_model", max_speed: float | None = 
               f"  const double scale = {pos_ns}::joint_factor(speed, turn);   // |v| < max_speed, |omega| < max_angular_speed\n")
     lo, hi = UNIT_RANGE
     return blocks + f"""
-namespace {namespace}_pose {{
+namespace {pose_ns} {{
 
 constexpr std::array<double, 4> goal_quat = {{{_flat(model.goal_quat_)}}};   // w x y z
 constexpr double small_angle = {SMALL_ANGLE!r};
@@ -247,5 +249,5 @@ inline bool predict_pose(const double* x, const double* quat, double* v, double*
   return finite;
 }}
 
-}}  // namespace {namespace}_pose
+}}  // namespace {pose_ns}
 """

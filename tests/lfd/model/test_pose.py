@@ -6,6 +6,7 @@ x(t) = x_g + e^{-kt} (x0 - x_g), R(t) = R_g exp(e^{-kt} r0). The cascade's prope
 moves for an orientation-only start or a goal turn; the angle never increases; every start up to 180 deg
 converges) are checked on rollouts, in Python and in the exported C++.
 """
+import re
 import shutil
 import subprocess
 
@@ -254,7 +255,7 @@ int main() {
   double in[14], v[3], w[3];
   while (std::scanf("%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", in, in + 1, in + 2, in + 3, in + 4,
                     in + 5, in + 6, in + 7, in + 8, in + 9, in + 10, in + 11, in + 12, in + 13) == 14) {
-    const bool ok = pose_model_pose::predict_pose(in, in + 3, v, w, in[7] == 0 ? nullptr : in + 7);
+    const bool ok = NAMESPACE::predict_pose(in, in + 3, v, w, in[7] == 0 ? nullptr : in + 7);
     std::printf("%.17g %.17g %.17g %.17g %.17g %.17g %d\\n", v[0], v[1], v[2], w[0], w[1], w[2], ok ? 1 : 0);
   }
 }
@@ -262,10 +263,15 @@ int main() {
 
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
-@pytest.mark.parametrize("limits", [(None, None), (V_MAX, W_MAX)])
-def test_cpp_export_returns_the_same_velocities(fitted, tmp_path, limits):
-    (tmp_path / "pose.hpp").write_text(pose_to_cpp(fitted, max_speed=limits[0], max_angular_speed=limits[1]))
-    (tmp_path / "main.cpp").write_text(CPP_MAIN)
+@pytest.mark.parametrize("limits, namespace, pose_ns", [((None, None), "pose_model", "pose_model_pose"),
+                                                       ((V_MAX, W_MAX), "arm_", "arm_pose")])
+def test_cpp_export_returns_the_same_velocities(fitted, tmp_path, limits, namespace, pose_ns):
+    """The header's predict_pose gives the predictor's (v, omega); any valid namespace, one ending in _ too,
+    names no reserved identifier (none with a double underscore)."""
+    source = pose_to_cpp(fitted, namespace, max_speed=limits[0], max_angular_speed=limits[1])
+    assert not re.search(r"[A-Za-z0-9_]*__[A-Za-z0-9_]*", source.replace("__cplusplus", ""))
+    (tmp_path / "pose.hpp").write_text(source)
+    (tmp_path / "main.cpp").write_text(CPP_MAIN.replace("NAMESPACE", pose_ns))
     subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(tmp_path / "main"),
                     str(tmp_path / "main.cpp")], check=True, capture_output=True, text=True)
     rng = np.random.default_rng(2)
