@@ -2,6 +2,7 @@
 and a standalone evaluator whose (v, omega) equal the model's."""
 from __future__ import annotations
 
+import re
 import importlib.util
 import shutil
 import subprocess
@@ -193,3 +194,17 @@ def test_fit_shipped_pose_set_learns_orientations(tmp_path, capsys):
     assert "orientation block" in out and "reproduction of each demonstration" in out
     model = load_model(tmp_path / "openbox.json")
     assert model.certified_ and model.still_ == {"position": None, "orientation": None}
+
+
+def test_pose_fit_progress_and_iteration_cap_name_the_block(tmp_path, capsys):
+    """Each block's convex steps are shown and capped as that block's own fit: every progress line and
+    every iteration-cap notice names its block (one fit's rows are never counted with the other's)."""
+    demos = write_pose_csvs(tmp_path / "demos", n=3)
+    code, out, err = run(capsys, "fit", demos, "--components", "2", "--max-iter", "1", "--warp", "none",
+                         "--out", tmp_path / "pose.json")
+    assert code == 0, err
+    steps = re.findall(r"^(.*)step \d+ \(", out, re.M)
+    assert {head.split(" block")[0] for head in steps} == {"position", "orientation"}
+    assert all(re.fullmatch(r"(position|orientation) block, ", head) for head in steps)
+    caps = re.findall(r"^iteration cap: (.*?): stopped at max_iter=1", out, re.M)
+    assert len(caps) == out.count("iteration cap:") and set(caps) <= {"position block", "orientation block"}
