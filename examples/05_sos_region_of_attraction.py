@@ -5,8 +5,10 @@
 
 V(x) = x^T P x with A^T P + P A = -I (the linearisation). The largest level set {V <= rho}
 on which dV/dt < 0 (except at 0) is found as one SOS program, linear in rho: dV/dt has no
-zero but 0 in {V < rho}  <=  (V - rho) |x|^2 >= 0 on {dV/dt = 0}, i.e. (V - rho) |x|^2 -
+zero but 0 in {V < rho}  <=  (V - rho) |x|^4 >= 0 on {dV/dt = 0}, i.e. (V - rho) |x|^4 -
 lambda(x) dV/dt is SOS for some polynomial lambda (Parrilo's S-procedure, `add_nonneg_on`).
+(With |x|^2 in place of |x|^4 the certificate is singular along directions the solver's kernel
+does not name in small rationals, and sosdyn refuses to hand out its rho unproven.)
 Sanity check: rho equals min V over the curve {dV/dt = 0, x != 0}, computed on a grid.
 Usage: python 05_sos_region_of_attraction.py
 """
@@ -24,7 +26,7 @@ Vdot = V.directional_derivative(f, ["x1", "x2"])
 
 prog = sd.SOSProgram("ROA")
 rho = prog.new_var()
-prog.add_nonneg_on((V - rho) * (x1**2 + x2**2), eqs=[Vdot], degree=6, name="level set")
+prog.add_nonneg_on((V - rho) * (x1**2 + x2**2) ** 2, eqs=[Vdot], degree=6, name="level set")
 prog.maximize(rho)
 sol = prog.solve(raise_on_failure=True)
 rho_sos = sol.value(rho)

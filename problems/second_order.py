@@ -18,7 +18,8 @@ Methods: ``CDSP`` (first order, ``sd.CDSP(random_state=0)``), ``SecondOrderCDSP`
 (``field="mixture", n_components=8``: the mixture of linear fields, issue 28's model); copy is every
 row's reference. Besides the protocol's scores, each entry has ``ratio_alike`` / ``dtwd_alike``: the same
 reproductions read at the kept test demos' period before the cumulative DTW (:func:`alike_scores`;
-issue 36: the protocol integrates at 0.01 s, twice the crossing set's kept period). One JSON per
+issue 36: on the crossing sets the protocol's own scores; on the LASA sets, integrated at 0.01 s
+as ds-opt scores them, not). One JSON per
 (set, method) is cached in ``<out>/cache``; ``<out>`` = ``reports/second_order``. ``--quick``:
 crossing/e only, small fits (CI).
 """
@@ -76,23 +77,17 @@ def data_path(name: str) -> str:
     return "realdata" if name.startswith("crossing") else "dsopt"
 
 
-def read_at(path: np.ndarray, period: float, dt: float = dsopt.DT) -> np.ndarray:
-    """The rollout ``path`` (sampled every ``dt`` from its start) read every ``period`` s (linear
-    interpolation), as the kept demos are sampled."""
-    t = np.arange(len(path)) * dt
-    q = np.arange(0.0, t[-1] + 1e-12, period)
-    return np.column_stack([np.interp(q, t, path[:, i]) for i in range(path.shape[1])])
-
-
 def alike_scores(model, order: int, demos, name: str) -> dict:
     """``dtwd_alike`` (mean over the test demos) and ``ratio_alike`` (over copy): the protocol's
-    reproductions of ``model`` (:func:`sosdyn.evaluation.second_order.reproduce`) read at the kept test
-    demos' median period (:func:`read_at`) before the cumulative DTW; for second order also the largest
-    certified excursion bound from the test starts over the training box's diagonal."""
+    reproductions of ``model`` (:func:`sosdyn.evaluation.second_order.reproduce`) each read at its kept
+    test demo's period (:func:`sosdyn.evaluation.realdata.at_period`; ``period``: their mean) before the
+    cumulative DTW -- on a "realdata" set the protocol's own scores, on a "dsopt" set (integrated at
+    0.01 s) not; for second order also the largest certified excursion bound from the test starts over
+    the training box's diagonal."""
     train, recorded, test, window, _ = prepare(demos, data_path(name), MULTI_SPLITS.get(name))
     paths = reproduce(model.predict if order == 1 else model, order, recorded, test, data_path(name), window)
-    period = float(np.median(np.concatenate([np.diff(d.t) for d in test])))
-    got = float(np.mean([dtwd(read_at(p, period), d.pos).total for p, d in zip(paths, test)]))
+    period = float(np.mean([(d.t[-1] - d.t[0]) / (len(d.t) - 1) for d in test]))
+    got = float(np.mean([dtwd(realdata.at_period(p, d), d.pos).total for p, d in zip(paths, test)]))
     copy = float(np.mean([min(dtwd(tr.pos, d.pos).total for tr in recorded) for d in test]))
     out = {"dtwd_alike": got, "ratio_alike": got / copy, "period": period}
     if order == 2:

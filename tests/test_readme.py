@@ -33,8 +33,8 @@ def test_sos_library_block_runs(capsys):
     scope = {}
     exec(compile(block, "README.md", "exec"), scope)  # noqa: S102 -- the README's own code, run as written
     sol, g = scope["sol"], scope["g"]
-    # Motzkin with a multiplier: min 0, the printed value is a bound (the solver's g is above 0)
-    assert sol.status == "optimal" and sol.solver_objective > 0.0 and -1e-6 < sol.value(g) <= 0.0
+    # Motzkin with a multiplier: min 0, the printed value is a bound (whatever the solver's g)
+    assert sol.verified and -1e-6 < sol.value(g) <= 0.0
     assert "optimal" in capsys.readouterr().out
 
 

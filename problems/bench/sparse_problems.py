@@ -230,7 +230,7 @@ def markdown(rows, budget_s) -> list:
                      [[r["problem"], r["n"], r["variant"], _cell(r), secs(r), sizes(r),
                        sp.get((r["problem"], r["n"], r["variant"]), "–")] for r in rows])
     return ["## Sparsity: chained Rosenbrock and chained Wood (global lower bound, max γ with f − γ SOS)", "",
-            (f"Known minima: Rosenbrock 0, Wood 1 (⚠ marks a bound above the minimum, more than 1e-3 below it, or refused: no safe bound exists for the Rosenbrock blocks, `docs/sos-semantics.md`). Each row runs in a "
+            (f"Known minima: Rosenbrock 0, Wood 1 (⚠ marks a bound above the minimum, more than 1e-3 below it, or refused: no proven point, `docs/sos-semantics.md`). Each row runs in a "
             f"child process with a {budget_s:.0f} s wall-time budget; a dense Gram basis that the memory guard "
             "refuses, or that runs over the budget, is recorded as such (\"refused\": the guard's estimate is "
             "over `max_bytes` before the solve starts). After a variant runs over the budget, its larger n get "

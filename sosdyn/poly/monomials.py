@@ -220,3 +220,24 @@ def match_rows(table: np.ndarray, queries: np.ndarray) -> np.ndarray:
     pos = np.clip(pos, 0, len(tk) - 1)
     found = tk[order][pos] == qk
     return np.where(found, order[pos], -1)
+
+
+def multiset_keys(exps: np.ndarray, cols: np.ndarray, width: int) -> np.ndarray:
+    """Row r: cols[c] + 1 repeated exps[r, c] times over c (``cols`` ascending, so sorted),
+    padded with zeros to ``width`` columns: a monomial by its variables, free of the total
+    number of variables."""
+    r, c = np.nonzero(exps)
+    reps = exps[r, c]
+    rows = np.repeat(r, reps)
+    deg = np.bincount(rows, minlength=exps.shape[0])
+    at = np.arange(rows.size) - np.repeat(np.cumsum(deg) - deg, deg)
+    out = np.zeros((exps.shape[0], width), dtype=np.int64)
+    out[rows, at] = np.repeat(np.asarray(cols, dtype=np.int64)[c], reps) + 1
+    return out
+
+
+def keys_to_exps(keys: np.ndarray, n: int) -> np.ndarray:
+    """The exponent rows over n variables of :func:`multiset_keys` rows."""
+    out = np.zeros((keys.shape[0], n + 1), dtype=np.int64)
+    np.add.at(out, (np.repeat(np.arange(keys.shape[0]), keys.shape[1]), keys.ravel()), 1)
+    return out[:, 1:]

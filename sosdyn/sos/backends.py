@@ -21,7 +21,11 @@ solver's working memory is estimated (:func:`solver_bytes`) and compared with
 """
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
 import time
+from contextlib import contextmanager
 
 import clarabel
 import numpy as np
@@ -174,6 +178,35 @@ def _cvxpy(program, data, solver, verbose, settings):
     return status, np.asarray(value, dtype=float), raw, seconds, info
 
 
+class Captured:
+    """The text a native library wrote to file descriptor 2 inside :func:`native_stderr`."""
+
+    text: str = ""
+
+
+@contextmanager
+def native_stderr():
+    """File descriptor 2 redirected into a temporary file for the duration (a Rust panic in
+    Clarabel prints its message and backtrace there, past Python's sys.stderr); yields a
+    :class:`Captured` whose ``text`` is set on exit."""
+    out = Captured()
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):          # no descriptor 2 (an embedded interpreter): nothing to hide
+        yield out
+        return
+    with tempfile.TemporaryFile() as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield out
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            out.text = tmp.read().decode(errors="replace")
+
+
 def solver_bytes(data, solver: str, backend: str) -> float:
     """A conservative estimate of the working memory (bytes) of solving ``data``.
 
@@ -274,21 +307,25 @@ def solve_program(program, solver, backend, scale, verbose, build=0.0, **setting
                     f"largest {max(sizes['psd_blocks'], default=0)} x {max(sizes['psd_blocks'], default=0)}, "
                     f"{sizes['equalities']} equality rows)",
                     _size_hint(solver))
-    try:
-        if backend == "direct":
-            status, x, raw, seconds, info = _clarabel(data, verbose, settings)
-        else:
-            status, x, raw, seconds, info = _cvxpy(program, data, solver, verbose, settings)
-    except InputError:
-        raise
-    except BaseException as exc:   # a solver crash (Clarabel's Rust panics too) becomes a status
-        if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
+    crashed = False
+    with native_stderr() as err:
+        try:
+            if backend == "direct":
+                status, x, raw, seconds, info = _clarabel(data, verbose, settings)
+            else:
+                status, x, raw, seconds, info = _cvxpy(program, data, solver, verbose, settings)
+        except InputError:
             raise
-        status, x, raw, seconds, info = ("solver_error", np.full(data.n, np.nan),
-                                         f"{type(exc).__name__}: {exc}", 0.0, {})
-        canon += info.get("compile_seconds") or 0.0
-        if info.get("solver_seconds"):
-            seconds = info["solver_seconds"]
+        except BaseException as exc:   # a solver crash (Clarabel's Rust panics too) becomes a status
+            if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
+                raise
+            crashed = True
+            status, x, raw, seconds, info = ("solver_error", np.full(data.n, np.nan),
+                                             f"{type(exc).__name__}: {exc}", 0.0, {})
+    if crashed:                        # the panic's text stays out of the terminal, kept for the message
+        info["solver_stderr"] = err.text[-4000:]
+    elif err.text:                     # anything else the solver printed there is passed on
+        sys.stderr.write(err.text)
     if status in ("optimal", "optimal_inaccurate") and not np.abs(x).max(initial=0.0) <= MAX_COEFFICIENT:
         status, raw = "solver_error", raw + f" (solution not finite or above {MAX_COEFFICIENT:.0e})"
     timings = {"build": build, "canonicalize": canon, "solve": seconds}

@@ -105,10 +105,11 @@ def sdsos_rows(psd: PsdBlock, a: np.ndarray, c: np.ndarray) -> list:
     return [ge, soc]
 
 
-def face_rows(psd: PsdBlock, K: np.ndarray, inner: PsdBlock | None, margin: float) -> list:
-    """Rows fixing Q = 0 outside the kept indices K and Q[K, K] = P + margin I (P = ``inner``).
+def face_rows(psd: PsdBlock, K: np.ndarray, inner: PsdBlock | None, margin) -> list:
+    """Rows fixing Q = 0 outside the kept indices K and Q[K, K] = P + diag(margin) (P = ``inner``;
+    ``margin`` one number or one per kept index).
 
-    The tightened programs of rigorous bounds (``SOSProgram.tightened``) are built from them.
+    The tightened programs of proofs (``SOSProgram.tightened``) are built from them.
     """
     i, j = svec_pairs(psd.size)
     zero = np.flatnonzero(~(np.isin(i, K) & np.isin(j, K)))
@@ -122,5 +123,5 @@ def face_rows(psd: PsdBlock, K: np.ndarray, inner: PsdBlock | None, margin: floa
                                np.concatenate([np.arange(k), np.arange(k)]),
                                np.concatenate([psd.ids[outer], inner.ids]),
                                np.concatenate([np.ones(k), -np.ones(k)]),
-                               np.where(a == c, margin, 0.0)))
+                               np.where(a == c, np.broadcast_to(np.asarray(margin, dtype=float), (K.size,))[a], 0.0)))
     return rows

@@ -25,6 +25,7 @@ import math
 from fractions import Fraction
 
 import numpy as np
+import scipy.linalg as sla
 
 from ..poly.monomials import unique_rows
 
@@ -303,3 +304,70 @@ def exact_correction(rows: list, values: dict):
             for d, a in lin.items():
                 delta[d] = delta.get(d, 0) + a * yi
     return delta
+
+
+def exact_solution(rows, start: dict, avoid=()):
+    """The exact change of the unknowns that makes every row c + sum a u = 0 hold, or None.
+
+    Independent rows and as many well-conditioned unknowns are chosen in floating point (QR with
+    column pivoting), the square system on them solved in rational arithmetic by sparse
+    elimination (the rows of a coefficient matching touch few unknowns), and every row then
+    checked exactly: a row the floats called dependent but that does not hold means the system is
+    inconsistent. Unknowns in ``avoid`` (the objective's) are chosen last: the correction moves the
+    certificate, not the bound, where it can."""
+    keys = sorted({u for _, lin in rows for u in lin}, key=repr)
+    col = {u: k for k, u in enumerate(keys)}
+    r = [-(c + sum((a * start[u] for u, a in lin.items()), Fraction(0))) for c, lin in rows]
+    if not any(r):
+        return {}
+    A = np.zeros((len(rows), len(keys)))
+    for i, (_, lin) in enumerate(rows):
+        for u, a in lin.items():
+            A[i, col[u]] = float(a)
+    _, Rr, prow = sla.qr(A.T, mode="economic", pivoting=True)
+    d = np.abs(np.diag(Rr))
+    rank = int((d > 1e-10 * max(d.max(initial=0.0), 1e-300)).sum())
+    use = prow[:rank]
+    weight = np.array([1e-8 if u in set(avoid) else 1.0 for u in keys])
+    _, _, pcol = sla.qr(A[use] * weight, mode="economic", pivoting=True)
+    chosen = [keys[k] for k in pcol[:rank]]
+    system = [({u: a for u, a in rows[i][1].items() if u in set(chosen)}, r[i]) for i in use]
+    solved = _eliminate(system, chosen)
+    if solved is None:
+        return None
+    values = {u: start[u] + solved.get(u, 0) for u in start}
+    if any(c + sum((a * values[u] for u, a in lin.items()), Fraction(0)) for c, lin in rows):
+        return None
+    return solved
+
+
+def _eliminate(system, unknowns):
+    """Solve the square sparse rational system [({unknown: a}, rhs)] for ``unknowns``, or None."""
+    rows = [({u: a for u, a in lin.items() if a}, rhs) for lin, rhs in system]
+    pivots = []
+    for u in unknowns:
+        cands = [k for k in range(len(pivots), len(rows)) if rows[k][0].get(u)]
+        if not cands:
+            return None
+        k = max(cands, key=lambda k: (abs(float(rows[k][0][u])), -len(rows[k][0])))
+        rows[len(pivots)], rows[k] = rows[k], rows[len(pivots)]
+        plin, prhs = rows[len(pivots)]
+        for j in range(len(pivots) + 1, len(rows)):
+            lin, rhs = rows[j]
+            f = lin.get(u)
+            if f:
+                f = f / plin[u]
+                for v, a in plin.items():
+                    w = lin.get(v, 0) - f * a
+                    if w:
+                        lin[v] = w
+                    else:
+                        lin.pop(v, None)
+                rows[j] = (lin, rhs - f * prhs)
+        pivots.append(u)
+    out = {}
+    for k in reversed(range(len(pivots))):
+        lin, rhs = rows[k]
+        u = pivots[k]
+        out[u] = (rhs - sum((a * out[v] for v, a in lin.items() if v != u), Fraction(0))) / lin[u]
+    return out

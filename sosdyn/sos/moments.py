@@ -44,6 +44,8 @@ class Atoms:
     """Points x_j (rows of ``points``, columns in ``vars`` order) and weights w_j > 0.
 
     ``residual`` is max|M - sum_j w_j z(x_j) z(x_j)^T| / max|M|; ``rank`` the numerical rank of M.
+    ``Solution.minimizers`` sets ``solver_value`` (the relaxation's value the points attain) and,
+    beside it, ``bound`` (the proven safe bound; nan when none was proven).
     """
 
     vars: tuple
@@ -51,6 +53,8 @@ class Atoms:
     weights: np.ndarray
     rank: int
     residual: float
+    solver_value: float = float("nan")
+    bound: float = float("nan")
 
     def __len__(self) -> int:
         return self.points.shape[0]

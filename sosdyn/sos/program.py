@@ -345,20 +345,21 @@ class SOSProgram:
         return self._compiled
 
     def tightened(self, kept: dict, margins: dict) -> "SOSProgram":
-        """A copy whose Gram blocks are tightened: Q[K, K] >= eps I and Q = 0 outside K.
+        """A copy whose Gram blocks are tightened: Q[K, K] >= diag(eps) and Q = 0 outside K.
 
-        ``kept`` maps id(PsdBlock) to the kept indices K (default all), ``margins`` to eps
-        (default 0). Each block (in any cone) becomes Q[K, K] = P + eps I with P a new block
-        in the same cone; its other rows and columns are fixed to zero (the face a solution
-        of this program lies on). Objective, constraints and decision ids are shared with
-        this program. Used by rigorous bounds (``Solution.rigorous_bound``).
+        ``kept`` maps id(PsdBlock) to the kept indices K (default all), ``margins`` to eps, one
+        number or one per kept index (default 0). Each block (in any cone) becomes Q[K, K] = P +
+        diag(eps) with P a new block in the same cone; its other rows and columns are fixed to
+        zero (the face a solution of this program lies on). Objective, constraints and decision
+        ids are shared with this program. Used by proofs (:mod:`.tightened`, :mod:`.rigorous`).
         """
         clone = copy.copy(self)
         clone.name = f"{self.name} (tightened)"
         clone.blocks = [Block(b.name, b.ids) if b.psd is not None and b.psd.cone == "psd" else b
                         for b in self.blocks]
         clone.linear, clone.sos_constraints = list(self.linear), list(self.sos_constraints)
-        clone._compiled, clone._forms, clone.cvxpy_vars = None, {}, {}
+        clone._compiled, clone._forms = None, {}
+        clone.cvxpy_vars = dict(self.cvxpy_vars)    # the same variables: a cvxpy objective still reads them
         clone._cone_parts = dict(self._cone_parts)
         for b in self.blocks:
             if b.psd is None or not b.psd.size:
@@ -368,13 +369,13 @@ class SOSProgram:
             if K.size:
                 inner = clone._block(f"{b.name}.interior", svec_size(K.size), K.size, b.psd.role).psd
                 clone._in_cone(inner, b.psd.cone)
-            rows = face_rows(b.psd, K, inner, float(margins.get(id(b.psd), 0.0)))
+            rows = face_rows(b.psd, K, inner, margins.get(id(b.psd), 0.0))
             clone.linear += rows
         return clone
 
     def solve(self, solver: str = "CLARABEL", backend: str = "auto", scale: bool = True,
               verbose: bool = False, raise_on_failure: bool = False, rigorous: bool = False,
-              retry: bool = True, **settings):
+              retry: bool = True, prove: bool = True, **settings):
         """Solve and return a :class:`~sosdyn.sos.solution.Solution`.
 
         ``backend``: "direct" hands the conic data straight to Clarabel (no canonicalisation: the fast
@@ -384,12 +385,16 @@ class SOSProgram:
         ``rigorous``: every number is read where the whole certificate holds exactly (``sol.bound``
         compares the proven bound with the solver's; :mod:`.rigorous`). ``retry``: re-solve with other
         settings after a numerical failure; after "unbounded", check the constraints alone (:mod:`.remedies`).
+        ``prove``: run the proof's remedies that need no re-solve now (:mod:`.proven`; False for a
+        program solved only for its numbers, as the proof's own re-solves are).
         """
         sol = solve_with_remedies(self, solver, backend, scale, verbose, self.build_seconds - self.build_reported,
                                   settings, retry)
         self.build_reported = self.build_seconds
         sol.rigorous = rigorous
         sol.verify()                        # now, while the program is the one that was solved
+        if prove:
+            sol.settle()                    # and the proof's remedies that need no re-solve
         if rigorous and sol.verified:
             try:
                 sol.rigorous_bound()        # now, so its time is in sol.timings["rigorous"]

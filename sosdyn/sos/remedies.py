@@ -14,11 +14,15 @@
   (block eigenvalues -3e-6 ... -1.7e-5 against -2.8e-6; its Gram blocks have no interior: with
   every block >= 1e-7 I relative it is primal infeasible; capping the objective short of the
   first answer does not help either, measured).
-* **Unbounded** -- a solver that reports dual infeasibility (no finite optimum) has not
-  shown that the constraints can be met: with an infeasible SOS constraint and an objective
-  variable that no constraint mentions, Clarabel says "unbounded". The program is then solved
-  once more without its objective (:func:`feasibility_status`); if that is infeasible, the
-  status is "infeasible" with that reason.
+* **Unbounded** -- a solver that reports dual infeasibility (no finite optimum) may be wrong
+  about it (maximize g with p - g SOS and the row g <= 1e12: Clarabel said "DualInfeasible" on
+  the scaled rows, measured), so the remedies above are tried too and an answer that passes the
+  check is taken; still "unbounded", it is solved once more without the user's inequalities
+  whose constant is far above their coefficients (:func:`far_rows`), and an answer that passes
+  the check -- which reads those rows -- is the program's. Nor has it shown that the constraints can be met: with an infeasible SOS
+  constraint and an objective variable that no constraint mentions, Clarabel says "unbounded".
+  The program is then solved once more without its objective (:func:`feasibility_status`); if
+  that is infeasible, the status is "infeasible" with that reason.
 * **A free variable of odd degree** -- ``p >= 0 on K`` where p has odd degree in a variable
   no constraint of K mentions (min over K = -inf) has no certificate; a solver may say so or
   stop with a numerical error. After such a failure the status is "infeasible" with that
@@ -32,8 +36,13 @@ from __future__ import annotations
 import copy
 import time
 
+import numpy as np
+
 from .backends import solve_program
 from .rigorous import ANSWERED
+from .solution import Solution
+
+FAR = 1e6
 
 #: (name, "flip" or "keep" the row scaling, Clarabel settings), tried in order
 REMEDIES = (
@@ -61,8 +70,10 @@ def _record(name, scale, settings, sol, seconds) -> dict:
 
 
 def needs_remedy(sol) -> bool:
-    """A solver error, or an answer that fails the check (not infeasible / unbounded: decided)."""
-    return sol.status == "solver_error" or (sol.status in ANSWERED and not sol.verify().passed)
+    """A solver error, an answer that fails the check, or "unbounded" (a report that large numbers in a
+    row -- x <= 1e12 -- can provoke: another scaling may find the finite optimum). Not "infeasible":
+    decided."""
+    return sol.status in ("solver_error", "unbounded") or (sol.status in ANSWERED and not sol.verify().passed)
 
 
 def free_odd_variable(con) -> str | None:
@@ -88,6 +99,20 @@ def free_odd_variable(con) -> str | None:
                     f"wherever its coefficient of {v}^{int(deg.max())} is non-zero): no certificate exists; "
                     f"bound {v} in the set (e.g. 1 - {v}^2 >= 0 after rescaling) or leave it out of the polynomial")
     return None
+
+
+def far_rows(program) -> list:
+    """The user's inequality rows whose constant is above FAR times their largest coefficient (x <=
+    1e12): a solver may call the program unbounded because of them; solved without them, an answer
+    that satisfies them (the check reads every row of the program) is the program's."""
+    out = []
+    for rows in program.linear:
+        if rows.role == "user" and rows.kind == "ge" and rows.rhs.size:
+            size = np.zeros(rows.rhs.size)
+            np.maximum.at(size, rows.rows, np.abs(rows.vals))
+            if (np.abs(rows.rhs) > FAR * np.maximum(size, 1e-300)).all():
+                out.append(rows)
+    return out
 
 
 def feasibility_status(program, solver, backend, scale, settings) -> str:
@@ -121,7 +146,20 @@ def solve_with_remedies(program, solver, backend, scale, verbose, build, setting
             if acceptable(sol):
                 chosen, chosen_at = sol, len(attempts) - 1
                 break
-    if retry and first.status == "unbounded" and program.objective is not None:
+    far = far_rows(program) if retry and chosen.status == "unbounded" and program.objective is not None else []
+    if far:
+        t1 = time.perf_counter()
+        relaxed = copy.copy(program)
+        relaxed.linear, relaxed._compiled = [r for r in program.linear if not any(r is q for q in far)], None
+        sol = solve_program(relaxed, solver=solver, backend=backend, scale=scale, verbose=verbose, build=build,
+                            **settings)
+        sol = Solution(program, program.compile(scale=scale), sol.status, sol.x, sol.solver, sol.backend,
+                       sol.timings, sol.raw_status, sol.info)
+        attempts.append(_record(f"without the far inequalities {[r.name for r in far]}", scale, settings, sol,
+                                time.perf_counter() - t1))
+        if acceptable(sol):
+            chosen, chosen_at = sol, len(attempts) - 1
+    if retry and chosen.status == "unbounded" and program.objective is not None:
         t1 = time.perf_counter()
         status = feasibility_status(program, solver, backend, scale, settings)
         attempts.append({"remedy": "constraints alone (objective dropped)", "scale": scale,

@@ -39,11 +39,12 @@ from .gram import (SQRT2, absorb_residual, evaluate_affine, exact, exact_affine,
                    exact_gram, exact_sub, float_down, gram_form, merge_affine, proven_min_eig,
                    svec_pairs, svec_to_matrix)
 from .objective import QuadraticForm, affine_rows, is_cvxpy
+from .eigen import eig_lower
 
 ANSWERED = ("optimal", "optimal_inaccurate")    # solver statuses that carry an answer
 FACE_TOL = 1e-7          # a Gram diagonal below this (relative) is taken as 0
 TIGHTENINGS = (1e-12, 3e-12, 1e-11, 3e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6)  # Q >= eps I (relative)
-QUICK_TIGHTENINGS = (1e-11, 1e-9)   # the automatic attempt of a plain solve (Solution.verify / objective)
+QUICK_TIGHTENINGS = (1e-11, 3e-11, 1e-10, 1e-9)   # the automatic attempt of a plain solve (proven.full_proof)
 SHIFT_MAX = 1e-7         # largest relative shift tried before tightening
 
 
@@ -238,7 +239,7 @@ def _objective_expr(program):
     return sense, expr
 
 
-def _bound_from(program, data, x_solver, sense, expr, x, method, kept, t0):
+def _bound_from(program, data, solver_value, sense, expr, x, method, kept, t0):
     """(the Bound proven near x, None), or (None, reason)."""
     xq, margins, reason = prove_point(program, data.ids, x, kept)
     if margins is None:
@@ -248,8 +249,28 @@ def _bound_from(program, data, x_solver, sense, expr, x, method, kept, t0):
         return Bound(None, None, None, method, point, margins, time.perf_counter() - t0), None
     value = _exact_objective(expr, xq)
     proven = float_down(value) if sense == "max" else -float_down(-value)
-    return Bound(sense, float(objective_value(data, x_solver)), proven, method, point, margins,
-                 time.perf_counter() - t0), None
+    return Bound(sense, solver_value, proven, method, point, margins, time.perf_counter() - t0), None
+
+
+def confirm(program, data, x, kept: dict, solver_x) -> Bound | None:
+    """The exact certificate at a point x the floating-point judge proved (:mod:`.proof`, on the
+    faces ``kept``), or None: each multiplier block raised to S + mu I with a proven lambda_min >= 0
+    (as the judge does), then :func:`prove_point` on those faces. Rigorous mode starts here."""
+    t0 = time.perf_counter()
+    sense, expr = _objective_expr(program)
+    y = x.copy()
+    owned = {id(psd) for con in program.sos_constraints for _, psd in con.gram_blocks}
+    for b in program.blocks:
+        if b.psd is None or id(b.psd) in owned or not b.psd.size or b.psd.role != "multiplier":
+            continue
+        pos = positions(data.ids, b.ids)
+        lam = eig_lower(svec_to_matrix(y[pos], b.psd.size))
+        if lam < 0:
+            i, j = svec_pairs(b.psd.size)
+            y[pos[i == j]] += -lam * (1 + 1e-6) + 1e-300
+    solver_value = float(objective_value(data, solver_x)) if sense else None
+    found, _ = _bound_from(program, data, solver_value, sense, expr, y, "exact at the proven point", kept, t0)
+    return found
 
 
 def _diagonals(program, ids, x) -> dict:
@@ -266,18 +287,20 @@ def _faces(program, ids, x) -> dict:
             else np.zeros(0, dtype=np.int64) for k, d in diags.items()}
 
 
-def prove_bound(program, data, x, tightenings=TIGHTENINGS) -> Bound:
-    """The objective of ``program`` proven exactly near the verified solver point x (module doc).
+def prove_bound(program, data, x, tightenings=TIGHTENINGS, solver_x=None) -> Bound:
+    """The objective of ``program`` proven exactly near the point x (module doc); ``solver_x`` (default
+    x) is the solver's point, whose objective the Bound reports beside the proven one.
 
     ``data`` is the conic data x belongs to. Raises UnverifiedSolutionError naming what could
     not be proven (the last two attempts).
     """
     t0 = time.perf_counter()
     sense, expr = _objective_expr(program)
+    solver_value = float(objective_value(data, x if solver_x is None else solver_x)) if sense else None
     kept = _faces(program, data.ids, x)
     reasons = []
     for candidate, method in _shift_candidates(program, data.ids, x, sense, expr, kept):
-        found, reason = _bound_from(program, data, x, sense, expr, candidate, method, kept, t0)
+        found, reason = _bound_from(program, data, solver_value, sense, expr, candidate, method, kept, t0)
         if found is not None:
             return found
         reasons.append(f"{method}: {reason}")
@@ -285,11 +308,11 @@ def prove_bound(program, data, x, tightenings=TIGHTENINGS) -> Bound:
     scales = {k: max(float(d.max()), 1.0) for k, d in _diagonals(program, data.ids, x).items()}
     for rel in tightenings:
         tight = program.tightened(kept, {k: rel * v for k, v in scales.items()})
-        sol = tight.solve(tol_feas=1e-10, tol_gap_abs=1e-10, tol_gap_rel=1e-10)
+        sol = tight.solve(prove=False, tol_feas=1e-10, tol_gap_abs=1e-10, tol_gap_rel=1e-10)
         if sol.status not in ANSWERED or not np.isfinite(sol.x).all():
             reasons.append(f"tightened by {rel:.0e}: {sol.status}")
             continue
-        found, reason = _bound_from(program, data, x, sense, expr, sol.values_of(data.ids),
+        found, reason = _bound_from(program, data, solver_value, sense, expr, sol.values_of(data.ids),
                                     f"tightened ({rel:.0e})", kept, t0)
         if found is not None:
             return found

@@ -16,7 +16,9 @@ free multiplier's degree) for a relaxation degree.
 """
 from __future__ import annotations
 
-from itertools import combinations
+import math
+from fractions import Fraction
+from itertools import combinations, product
 
 import numpy as np
 from scipy.optimize import linprog
@@ -119,12 +121,12 @@ class BasicSet:
         return "BasicSet{" + ", ".join(parts) + "}"
 
 
-def variable_bounds(K: BasicSet, vars) -> np.ndarray | None:
-    """R with |x_i| <= R_i on K for each of ``vars``, or None when some x_i is not bounded by
-    what is read here: separable quadratics c + l.x - sum_i a_i x_i^2 >= 0 (a_i > 0: boxes,
-    balls, ellipses; (x_i - m_i)^2 <= (c + sum l_i^2 / 4 a_i) / a_i) and the polytope of the
-    linear inequalities (an LP per variable and side)."""
-    R = np.full(len(vars), np.inf)
+def variable_box(K: BasicSet, vars) -> tuple[np.ndarray, np.ndarray] | None:
+    """(lo, hi) with lo_i <= x_i <= hi_i on K for each of ``vars``, or None when some x_i is not
+    bounded by what is read here: separable quadratics c + l.x - sum_i a_i x_i^2 >= 0 (a_i > 0:
+    boxes, balls, ellipses; |x_i - m_i| <= ((c + sum l_i^2 / 4 a_i) / a_i)^(1/2)) and the polytope
+    of the linear inequalities (an LP per variable and side); the intervals are intersected."""
+    lo, hi = np.full(len(vars), -np.inf), np.full(len(vars), np.inf)
     at = {v: i for i, v in enumerate(vars)}
     lin = []
     for g in K.ineqs:
@@ -150,16 +152,96 @@ def variable_bounds(K: BasicSet, vars) -> np.ndarray | None:
             continue
         rhs = c0 + sum(line.get(k, 0.0) ** 2 / (-4 * a) for k, a in quad.items())
         for k, a in quad.items():
-            m = line.get(k, 0.0) / (-2 * a)
-            R[cols[k]] = min(R[cols[k]], abs(m) + np.sqrt(max(rhs, 0.0) / -a))
-    if lin and not np.isfinite(R).all():
+            m, r = line.get(k, 0.0) / (-2 * a), np.sqrt(max(rhs, 0.0) / -a)
+            lo[cols[k]], hi[cols[k]] = max(lo[cols[k]], m - r), min(hi[cols[k]], m + r)
+    if lin:
         A = -np.array(lin)
-        for i in np.flatnonzero(~np.isfinite(R)):
-            side = [linprog(sgn * np.eye(len(vars))[i], A_ub=A[:, :-1], b_ub=-A[:, -1],
-                            bounds=(None, None), method="highs") for sgn in (1, -1)]
-            if all(r.status == 0 for r in side):
-                R[i] = max(abs(side[0].fun), abs(side[1].fun))
-    return R if np.isfinite(R).all() else None
+        for i in range(len(vars)):
+            for sgn, side in ((1, lo), (-1, hi)):
+                res = linprog(sgn * np.eye(len(vars))[i], A_ub=A[:, :-1], b_ub=-A[:, -1], bounds=(None, None),
+                              method="highs")
+                if res.status == 0:
+                    side[i] = max(side[i], res.fun) if sgn == 1 else min(side[i], -res.fun)
+    return (lo, hi) if np.isfinite(lo).all() and np.isfinite(hi).all() else None
+
+
+def variable_bounds(K: BasicSet, vars) -> np.ndarray | None:
+    """R with |x_i| <= R_i on K (:func:`variable_box`), or None."""
+    box = variable_box(K, vars)
+    return None if box is None else np.maximum(np.abs(box[0]), np.abs(box[1]))
+
+
+def _along(p: Polynomial, x0, r) -> list:
+    """The exact coefficients (Fractions, in s) of p(x0 + s r) for rational x0, r."""
+    out = [Fraction(0)] * (max(p.degree, 0) + 1)
+    for e, c in zip(p.exps, p.coef[:, 0]):
+        poly = [Fraction(c)]
+        for k, power in enumerate(e):
+            for _ in range(int(power)):                       # times (x0_k + s r_k)
+                poly = [a * x0[k] + (poly[d - 1] * r[k] if d else 0)
+                        for d, a in enumerate(poly)] + [poly[-1] * r[k]]
+        for d, a in enumerate(poly):
+            out[d] += a
+    return out
+
+
+def unbounded_ray(f: Polynomial, K: BasicSet):
+    """(x0, r) with x0 + s r in K for every s >= 0 and f(x0 + s r) -> -inf, or None.
+
+    A proof that f has no finite lower bound on K: every g_i(x0 + s r) has only nonnegative
+    coefficients in s, every h_j(x0 + s r) is 0, and f(x0 + s r) has a negative leading
+    coefficient (all in rational arithmetic). Tried: x0 on the integer grid {-2..2}^n (n <= 3; else
+    0 and +-e_i), r among +-e_i and +-e_i +- e_j."""
+    vars = f.vars + tuple(v for v in K.vars if v not in f.vars)
+    n = len(vars)
+    if not n or n > 8:
+        return None
+    polys = [p.with_vars(vars) for p in (f,) + K.ineqs + K.eqs]
+    if any(p.ids.size for p in polys):
+        return None
+    f, ineqs, eqs = polys[0], polys[1:1 + len(K.ineqs)], polys[1 + len(K.ineqs):]
+    I = np.eye(n, dtype=np.int64)
+    starts = list(product(range(-2, 3), repeat=n)) if n <= 3 else [tuple(v) for v in np.vstack([0 * I[:1], I, -I])]
+    rays = [tuple(v) for v in np.vstack([I, -I])]
+    rays += [tuple(s * I[i] + t * I[j]) for i in range(n) for j in range(i + 1, n) for s in (1, -1) for t in (1, -1)]
+    for x0 in starts:
+        point = np.array(x0, dtype=float)[None, :]
+        if any(g(point, vars)[0] < 0 for g in ineqs) or any(h(point, vars)[0] != 0 for h in eqs):
+            continue
+        q0 = [Fraction(int(v)) for v in x0]
+        for r in rays:
+            rq = [Fraction(int(v)) for v in r]
+            along = _along(f, q0, rq)
+            top = next((a for a in reversed(along[1:]) if a), 0)
+            if top >= 0:
+                continue
+            if all(min(_along(g, q0, rq)) >= 0 for g in ineqs) and all(not any(_along(h, q0, rq)) for h in eqs):
+                return np.array(x0, dtype=float), np.array(r, dtype=float)
+    return None
+
+
+def substituted(p: Polynomial, center, half) -> tuple[Polynomial, float, Polynomial]:
+    """(q, err, d): q(u) the float coefficients of p(center + half * u), computed exactly then
+    rounded; d the bounds of those roundings, monomial by monomial (|q_a - exact_a| <= d_a), and err
+    their sum, so |q(u) - p(center + half u)| <= d(|u|) everywhere and <= err on the unit box."""
+    vars = p.vars
+    total: dict = {}
+    for e, c in zip(p.exps, p.coef[:, 0]):
+        terms = {(): Fraction(c)}
+        for k, power in enumerate(e):
+            binom = [Fraction(math.comb(int(power), j)) * Fraction(center[k]) ** (int(power) - j)
+                     * Fraction(half[k]) ** j for j in range(int(power) + 1)]
+            terms = {key + (j,): a * b for key, a in terms.items() for j, b in enumerate(binom) if b}
+        for key, a in terms.items():
+            total[key] = total.get(key, 0) + a
+    keys = [k for k, a in total.items() if a]
+    coef = [float(total[k]) for k in keys]
+    rounding = [math.nextafter(float(abs(total[k] - Fraction(c))), math.inf) for k, c in zip(keys, coef)]
+    err = float(sum(abs(total[k] - Fraction(c)) for k, c in zip(keys, coef)))
+    exps = np.array(keys, dtype=np.int64).reshape(-1, len(vars)) if keys else np.zeros((1, len(vars)), dtype=np.int64)
+    q = Polynomial(vars, exps, coef if keys else [0.0])
+    d = Polynomial(vars, exps, [r if r > 5e-324 else 0.0 for r in rounding] if keys else [0.0])
+    return q, math.nextafter(err, math.inf) * (1 + 1e-12) if err else 0.0, d
 
 
 def as_set(ineqs=(), eqs=()) -> BasicSet:

@@ -1,9 +1,12 @@
-"""Solutions of SOS programs: status, values and Gram matrices -- only when verified.
+"""Solutions of SOS programs: status, values and Gram matrices -- only where proven.
 
-The rule: no number leaves a Solution (``value``, ``objective``, ``gram_matrix``) unless
-the whole certificate passes ``verify()`` (:mod:`.verification`), whatever status the solver
-reported. In rigorous mode (``SOSProgram.solve(rigorous=True)``) every number is read at the
-point where the certificate is proven exactly (:mod:`.rigorous`).
+The rule: no number leaves a Solution (``value``, ``objective``, ``gram_matrix``) unless the
+solver's answer passes the independent check ``verify()`` (:mod:`.verification`) *and* a
+point is found where every constraint is proven (:mod:`.proof`, the remedies of :mod:`.proven`):
+every number is read there, so a value is one at which the constraints hold and an objective is
+on the safe side of the optimum, however the program is written. In rigorous mode
+(``SOSProgram.solve(rigorous=True)``) every number is read where the certificate is proven in
+exact arithmetic (:mod:`.rigorous`).
 
 A Solution refers to the program it solved, which it never changes; a program changed later
 (``update``, ``set_weights``, a new constraint: its ``version`` moved on) cannot be re-checked
@@ -16,17 +19,18 @@ import time
 
 import numpy as np
 
-from ..errors import (InfeasibleError, InputError, ResourceLimitError, SolverError, UnboundedError,
+from ..errors import (InfeasibleError, InputError, SolverError, UnboundedError,
                       UnverifiedSolutionError)
 from ..poly import PolyMatrix, Polynomial
-from .conic import assign_at, objective_value, positions
+from .conic import assign_at, cvxpy_block_vars, objective_value, positions
 from .decomposition import SOSDecomposition, sos_decomposition
 from .gram import svec_to_matrix
 from .moments import Atoms, Moments, check_atoms, moments_from_dual
 from .objective import QuadraticForm, is_cvxpy
-from .posterior import bound_pattern, safe_point
-from .rigorous import ANSWERED, QUICK_TIGHTENINGS, Bound, prove_bound
-from .tightened import tightened_safe_point
+from .identity import gam
+from .eigen import down
+from .proven import Pending, Proof, certified, cheap_proof, exact_bound, full_proof, refusal, unverified_hint
+from .rigorous import ANSWERED, Bound
 from .verification import VerificationReport, verify_certificate
 
 _HINTS = {
@@ -34,16 +38,7 @@ _HINTS = {
     "solver_error": "keep scale=True, rescale the data (coefficients of very different "
                     "magnitudes), lower the degree, or backend='cvxpy' with another installed solver",
 }
-_UNVERIFIED_HINTS = {
-    "SCS": "solver='CLARABEL' (the default interior-point solver, far more accurate than SCS), "
-           "or tighter SCS tolerances (eps=1e-9, max_iters=100000)",
-    None: "tighter solver tolerances (Clarabel: tol_feas=1e-10, tol_gap_abs=1e-10, "
-          "tol_gap_rel=1e-10), rescale the problem data, or give the program more margin "
-          "(a small positive margin in strict inequalities, a lower degree)",
-}
 _DEFAULT_TOLS = (1e-7, 1e-6)      # verify()'s default (eig_tol, rel_tol): the cached report
-QUICK_PROOF_MAX = 10_000        # Gram entries up to which a bound without float correction tries the proof
-_PROVING = False                  # an exact proof (Solution._proven) is under way
 
 
 def infeasible_hint(program) -> str:
@@ -67,9 +62,21 @@ def infeasible_hint(program) -> str:
     return "; or ".join(tips)
 
 
-def unverified_hint(solver: str) -> str:
-    """What to try when a solver's answer fails the independent check."""
-    return _UNVERIFIED_HINTS.get(solver, _UNVERIFIED_HINTS[None])
+def safe_objective(data, x) -> float:
+    """The affine or quadratic objective at x in the user's sense, rounded outwards by the bound of
+    its own rounding (gamma_(n+4) times the sum of |terms|): <= the true value at x for a maximum,
+    >= for a minimum. A single term with coefficient +-1 is exact."""
+    value = objective_value(data, x)
+    terms = np.abs(data.q * x)
+    mag = float(terms.sum()) + abs(data.c)
+    if data.P is not None:
+        mag += float(np.abs(x) @ (abs(data.P) @ np.abs(x)))
+    exact = data.P is None and np.count_nonzero(data.q * x) + (data.c != 0) <= 1 and \
+        np.all(np.isin(np.abs(data.q[data.q != 0]), (1.0,)))
+    if exact:
+        return value
+    err = float(gam(2 * x.size + 8)) * mag
+    return down(value - err) if data.sense == "max" else -down(-(value + err))
 
 
 class Solution:
@@ -93,35 +100,46 @@ class Solution:
         self._report = None
         self._bound = None
         self._bound_error = None
-        self._safe = None              # (position of the bound variable, its safe value, the safe objective)
+        self._proof = None             # the Proof, or the UnverifiedSolutionError of its search
+        self._certified = None         # the point handed out (proven, with its certificates)
 
     # ------------------------------------------------------------------ status
     @property
-    def verified(self) -> bool:
-        """The solver gave an answer and its whole certificate passes ``verify()``."""
+    def usable(self) -> bool:
+        """The solver gave an answer and it passes ``verify()``: its numbers (``values_of``) are an
+        approximate solution, good for an iterative method; nothing is proven about them."""
         return self.status in ANSWERED and self.verify().passed
 
-    usable = verified        # the name the learner uses
+    @property
+    def verified(self) -> bool:
+        """A point is found where every constraint is proven (``proof``): the numbers ``value``,
+        ``objective`` and ``gram_matrix`` hand out are read there."""
+        return self.status in ANSWERED and not isinstance(self._proven(), UnverifiedSolutionError)
 
     @property
     def outcome(self) -> str:
-        """"verified", "unverified" (an answer whose certificate fails) or the failure status."""
+        """"verified", "unverified" (an answer not proven at any point found) or the failure status."""
         if self.status not in ANSWERED:
             return self.status
-        return "verified" if self.verify().passed else "unverified"
+        return "verified" if self.verified else "unverified"
 
     def raise_for_status(self) -> "Solution":
-        """Raise a typed error, with what to try, unless the solution is verified.
+        """Raise a typed error, with what to try, unless the answer is ``usable`` (or, failing the
+        check, proven at a point the cheap remedies reach: :mod:`.proven`).
 
-        In rigorous mode the bound must also be proven (see ``rigorous_bound``).
+        In rigorous mode the bound must also be proven (see ``rigorous_bound``). The accessors of
+        numbers also need the proof (``proof``) and raise UnverifiedSolutionError without one.
         """
-        self._raise_unless_verified()
+        self._raise_unless_usable()
         if self.rigorous:
             self.rigorous_bound()
         return self
 
-    def _raise_unless_verified(self):
-        if self.verified:
+    def _raise_unless_usable(self):
+        if self.usable:
+            return
+        found = self._proven() if self.status in ANSWERED else None
+        if self.status in ANSWERED and not isinstance(found, UnverifiedSolutionError):
             return
         detail = f" ({self.reason})" if self.reason else f" (solver said {self.raw_status!r})"
         if self.status == "infeasible":
@@ -130,6 +148,8 @@ class Solution:
         if self.status == "unbounded":
             raise UnboundedError(f"program {self.program.name!r} is unbounded: the objective has no finite "
                                  f"optimum{detail}.", "unbounded", _HINTS["unbounded"])
+        if isinstance(found, UnverifiedSolutionError):
+            raise found
         if self.status in ANSWERED:
             report = self.verify()
             raise UnverifiedSolutionError(
@@ -139,40 +159,69 @@ class Solution:
         raise SolverError(f"solving {self.program.name!r} failed: status {self.status}{detail}.",
                           self.status, _HINTS.get(self.status))
 
+    @property
+    def proof(self) -> Proof:
+        """The proven point every number is read at (:mod:`.proven`), found on first use; raises
+        the typed error of the status or check, or UnverifiedSolutionError saying what was tried."""
+        self._raise_unless_usable()
+        found = self._proven()
+        if isinstance(found, UnverifiedSolutionError):
+            raise found
+        return found
+
+    def settle(self) -> "Solution":
+        """Run the remedies without a re-solve now (``SOSProgram.solve`` calls it while the program is
+        the one solved, so an older solution keeps its numbers after the program changes)."""
+        if self._proof is None and self.status in ANSWERED:
+            t0 = time.perf_counter()
+            self._proof = cheap_proof(self)
+            self.timings["proof"] = time.perf_counter() - t0
+        return self
+
+    def _proven(self):
+        """The Proof, or the UnverifiedSolutionError of its search (cached): every remedy for an
+        answer that passes ``verify()``, only those without a re-solve for one that fails it."""
+        self.settle()
+        if isinstance(self._proof, Pending):
+            if not self.usable:
+                self._proof = refusal(self, self._proof)
+                return self._proof
+            self._require_unchanged("proof")
+            t0 = time.perf_counter()
+            try:
+                self._proof = full_proof(self, self._proof)
+            except UnverifiedSolutionError as exc:
+                exc.report = self.verify()
+                self._proof = exc
+            finally:
+                self.timings["proof"] = self.timings.get("proof", 0.0) + time.perf_counter() - t0
+        return self._proof
+
     # ------------------------------------------------------------------ values
     def values_of(self, ids) -> np.ndarray:
         """Values of decision ids as the solver returned them (unchecked: for diagnostics)."""
         return self.x[positions(self.data.ids, np.asarray(ids, dtype=np.int64))]
 
     def _point(self) -> np.ndarray:
-        """The decision vector handed out: the proven one in rigorous mode."""
-        return self.rigorous_bound().x if self.rigorous else self.x
-
-    def _point_for(self, ids) -> np.ndarray:
-        """The decision vector handed out for an expression in decision ``ids``: in a lower-bound
-        program whose bound variable t is among them, t is read at its safe value (``objective``)."""
-        x = self._point()
-        pattern = None if self.rigorous else bound_pattern(self.program)
-        if pattern is None or pattern[1] not in set(np.asarray(ids).tolist()):
-            return x
-        pos, t, _ = self._safe_point(pattern)
-        x = x.copy()
-        x[pos] = t
-        return x
+        """The decision vector handed out: the proven one (exactly proven in rigorous mode), its
+        blocks the certificates proven there (:func:`~.proven.certified`; read once, while the
+        program is the one solved, else the proven point as it is)."""
+        if self.rigorous:
+            return self.rigorous_bound().x
+        proof = self.proof
+        if self._certified is None:
+            unchanged = self.program_version == getattr(self.program, "version", None)
+            self._certified = certified(self.program, self.data.ids, proof) if unchanged else proof.x
+        return self._certified
 
     def _assign(self, p: Polynomial) -> Polynomial:
-        return assign_at(p, self.data.ids, self._point_for(p.ids))
+        return assign_at(p, self.data.ids, self._point())
 
     def value(self, item):
-        """Numbers for a decision expression: float, numeric Polynomial, ndarray or PolyMatrix.
-
-        In a lower-bound program (maximize t, t only in the constant term of one SOS constraint:
-        ``posterior.bound_pattern``) t is read at the safe value ``objective`` is computed from,
-        t - delta / a (:mod:`.posterior`), never the solver's t, which can lie above the minimum;
-        UnverifiedSolutionError when no safe value exists (as ``objective``). The other
-        variables are the solver's (verified) numbers. Raises InfeasibleError /
-        UnverifiedSolutionError / SolverError unless verified.
-        """
+        """Numbers for a decision expression: float, numeric Polynomial, ndarray or PolyMatrix,
+        read at the proven point (``proof``): every constraint holds there, whatever the solver's
+        own numbers (``values_of``). Raises InfeasibleError / UnverifiedSolutionError / SolverError
+        when there is no such point."""
         self.raise_for_status()
         if isinstance(item, Polynomial):
             p = self._assign(item)
@@ -183,13 +232,21 @@ class Solution:
                 return np.vectorize(lambda e: e.constant_value(), otypes=[float])(m.entries)
             return m
         if isinstance(item, QuadraticForm):
-            return item.value(self._point_for(item.ids)[positions(self.data.ids, item.ids)])
+            return item.value(self._point()[positions(self.data.ids, item.ids)])
         if is_cvxpy(item):
-            return item.value
+            return self._cvxpy_value(item)
         raise TypeError(f"cannot take the value of {type(item).__name__}")
 
+    def _cvxpy_value(self, expr) -> float:
+        """A cvxpy expression of this program's variables at the proven point."""
+        x = self._point()
+        for b, var in zip(self.program.blocks, cvxpy_block_vars(self.program)):
+            var.value = x[positions(self.data.ids, b.ids)]
+        return expr.value
+
     def gram_matrix(self, item, checked: bool = True) -> np.ndarray:
-        """The Gram matrix of a constraint or multiplier (anything with a ``psd`` block).
+        """The Gram matrix of a constraint or multiplier (anything with a ``psd`` block), at the
+        proven point (the residual of its identity is what the proof absorbs).
 
         Raises unless verified; ``checked=False`` returns the solver's numbers anyway
         (diagnostics only).
@@ -201,71 +258,50 @@ class Solution:
 
     @property
     def objective(self) -> float:
-        """Objective value in the user's sense (maximise -> the maximum); proven if rigorous.
-
-        A lower-bound program (maximize gamma, gamma only in the constant term of one SOS
-        constraint: ``posterior.bound_pattern``) returns gamma lowered to the safe side
-        (:mod:`.posterior`; at a tightened re-solve, :mod:`.tightened`, when the solver's point
-        has no correction), or the exactly proven bound, else UnverifiedSolutionError;
-        ``value(gamma)`` is the same number; ``solver_objective`` is the solver's."""
+        """Objective value in the user's sense (maximise -> the maximum), at the proven point: a
+        feasible point, so it is on the safe side of the optimum (<= the maximum, >= the minimum),
+        rounded outwards; for a lower-bound program (maximize gamma, f - gamma SOS or >= 0 on K)
+        it is a lower bound of f. In rigorous mode the exactly proven bound; ``solver_objective``
+        is the solver's number."""
         self.raise_for_status()
         sense, expr = self.program.objective or ("min", None)
-        if is_cvxpy(expr):
-            return float(self.info.get("objective"))
         if self.rigorous and self.rigorous_bound().proven is not None:
             return self.rigorous_bound().proven
-        pattern = bound_pattern(self.program)
-        if pattern is None:
-            return objective_value(self.data, self.x)
-        return self._safe_point(pattern)[2]
-
-    def _safe_point(self, pattern) -> tuple[int, float, float]:
-        """(position of the bound variable t, its safe value, the safe objective): the posterior
-        shift (:func:`~.posterior.safe_point`) at the solver's point, else at the point of a
-        re-solve with every Gram block tightened (:func:`~.tightened.tightened_safe_point`), else
-        the quick exact proof's point; cached, and so is the refusal when none exists."""
-        if self._safe is None:
-            try:
-                self._safe = safe_point(self, pattern)
-            except UnverifiedSolutionError as exc:   # no floating-point correction: a margin, an exact proof
-                self._safe = tightened_safe_point(self, pattern) or self._proven_safe_point(pattern, exc)
-        if isinstance(self._safe, UnverifiedSolutionError):
-            raise self._safe
-        return self._safe
-
-    def _proven_safe_point(self, pattern, exc):
-        """The quick exact proof's (position of t, t, proven bound), or the refusal to raise. Not tried
-        above QUICK_PROOF_MAX Gram entries (rational arithmetic on Broyden n = 1000, 54,890
-        entries, ran over 15 minutes): ``rigorous=True`` asks for it."""
-        entries = sum(b.psd.size * (b.psd.size + 1) // 2 for b in self.program.blocks if b.psd is not None)
-        try:
-            bound = self._quick_proof() if entries <= QUICK_PROOF_MAX else None
-        except (UnverifiedSolutionError, ResourceLimitError):    # no proof, or its re-solves too large
-            bound = None
-        if bound is None or bound.proven is None:
-            return UnverifiedSolutionError(
-                f"{exc.detail} (nor at a tightened re-solve, nor by a quick exact proof), so neither "
-                "objective nor the value of its bound variable is returned", "unverified",
-                "rigorous=True (the full exact search); solver_objective is the solver's number, which "
-                f"is not a bound; or {exc.hint}")
-        pos = int(positions(self.data.ids, np.array([pattern[1]], dtype=np.int64))[0])
-        return pos, float(np.nextafter(bound.x[pos], -np.inf)), bound.proven
+        if is_cvxpy(expr):
+            return float(self._cvxpy_value(expr))
+        if self.proof.exact is not None and self.proof.exact.proven is not None:
+            return self.proof.exact.proven
+        return safe_objective(self.data, self.proof.x)
 
     @property
     def solver_objective(self) -> float:
-        """The objective as the solver returned it (verified, not corrected; rigorous: the
-        solver's value next to the proven one)."""
-        self.raise_for_status()
+        """The objective as the solver returned it (not proven: for comparison)."""
+        self._raise_unless_usable()
+        if is_cvxpy((self.program.objective or (None, None))[1]):
+            return float(self.info.get("objective"))
         return objective_value(self.data, self.x)
 
     # ------------------------------------------------------------------ dual side
+    def _constraint(self, con, what: str):
+        """``con`` if it is an SOS constraint of this program; InputError otherwise (a multiplier,
+        a constraint of another program)."""
+        if not any(con is c for c in self.program.sos_constraints):
+            kind = type(con).__name__
+            raise InputError(f"{what} takes a constraint of program {self.program.name!r} (the handle add_sos "
+                             f"or add_nonneg_on returned), got {kind} {getattr(con, 'name', con)!r}. Try: "
+                             + ("the constraint the multiplier belongs to (its moments carry the points)"
+                                if kind in ("Multiplier", "EqualityMultiplier") else
+                                "the handle returned by this program's add_sos/add_nonneg_on"))
+        return con
+
     def moments(self, con, tol: float = 1e-6) -> Moments:
         """The moments of an SOS constraint (the dual of its Gram block; :mod:`.moments`).
 
-        Raises unless the solution is verified, and UnverifiedSolutionError unless the dual is
-        a PSD moment matrix to ``tol``.
+        Raises unless the solver's answer is usable, and UnverifiedSolutionError unless the dual
+        is a PSD moment matrix to ``tol``.
         """
-        self.raise_for_status()
+        self._raise_unless_usable()
+        self._constraint(con, "moments()")
         if con.kind not in ("sos", "nonneg_on") or con.psd.cone != "psd":
             raise InputError(f"moments are read from a scalar SOS constraint in the PSD cone; {con.name!r} "
                              f"is {con.kind!r} in cone {con.psd.cone!r}. Try: add_sos or add_nonneg_on "
@@ -285,26 +321,30 @@ class Solution:
         """Points where the bound of ``con`` is attained, with weights (flat extension; :mod:`.moments`).
 
         Each point is checked: every constraint of ``add_nonneg_on`` holds (g_i >= 0, h_j = 0) to
-        ``tol`` relative to the largest coefficient, and ``con.source`` (p - gamma at the solution)
-        vanishes there to within the bound's own error at that point, (|lambda_min(Q)| + N r)
-        |z(x)|^2 + 1e-9 (1 + max |p_a|) (r the block's coefficient residual, N its size): a
-        local minimiser above the bound by more is refused. Raises NoAtomsError when the moments
-        are not flat or a point fails.
+        ``tol`` relative to the largest coefficient, and ``con.source`` at the *solver's* numbers
+        (f - gamma*: the relaxation's own value) vanishes there to within the verifier's error of
+        that identity at the point, (|lambda_min(Q)| + N r) |z(x)|^2 + 1e-9 (1 + max |p_a|) (r the
+        block's coefficient residual, N its size): a local minimiser above the relaxation's value by
+        more is refused, a true minimiser of a flat relaxation never. The atoms carry the
+        solver's value and, beside it, the proven safe bound when there is one (``Atoms.bound``).
+        Raises NoAtomsError when the moments are not flat or a point fails.
         """
+        self._constraint(con, "minimizers()")
         shift = max([1] + [(m.constraint.degree + 1) // 2 for m in con.multipliers])
         atoms = self.moments(con, tol).atoms(rank_tol, tol, shift)
-        residual = self.value(con.source)
-        residual = residual if isinstance(residual, Polynomial) else Polynomial.constant(residual)
+        residual = assign_at(con.source, self.data.ids, self.x)
         check_atoms(atoms, residual, [m.constraint for m in con.multipliers],
                     [m.constraint for m in con.eq_multipliers], tol, self._bound_error_at(con, residual))
+        atoms.solver_value = self.solver_objective
+        try:
+            atoms.bound = self.objective
+        except UnverifiedSolutionError:
+            pass
         return atoms
 
     def _bound_error_at(self, con, residual):
-        """points -> the error of the bound of ``con`` there (see ``minimizers``)."""
-        c = next((c for c in self.verify().checks if c.name == con.name), None)
-        if c is None:
-            raise InputError(f"{con.name!r} is not a constraint of program {self.program.name!r}. "
-                             "Try: the handle returned by this program's add_sos/add_nonneg_on")
+        """points -> the error of the identity of ``con`` there (see ``minimizers``)."""
+        c = next(c for c in self.verify().checks if c.name == con.name)
         err = abs(c.min_eig) + c.basis_size * c.residual
         square = Polynomial(con.basis.vars, 2 * con.basis.exps, np.ones(len(con.basis)))
         floor = 1e-9 * (1.0 + float(np.abs(residual.coef[:, 0]).max(initial=0.0)))
@@ -332,35 +372,10 @@ class Solution:
         self._require_unchanged("verify")
         t0 = time.perf_counter()
         report = verify_certificate(self.program, self.data.ids, self.x, eig_tol, rel_tol)
-        if report.needs_exact and self.status in ANSWERED:
-            report = self._proven(report)
         if (eig_tol, rel_tol) == _DEFAULT_TOLS:
             self._report = report
             self.timings["verify"] = time.perf_counter() - t0
         return report
-
-    def _proven(self, report: VerificationReport) -> VerificationReport:
-        """A feasibility certificate whose blocks lack a floating-point margin (p SOS but on the
-        boundary, e.g. with real zeros) passes only if proven exactly (:mod:`.rigorous`)."""
-        try:
-            bound = self._quick_proof()
-        except UnverifiedSolutionError:
-            return report
-        return report if bound is None else report.proven_exactly(bound.method)
-
-    def _quick_proof(self) -> Bound | None:
-        """The exact proof (:func:`~.rigorous.prove_bound`) with a short tightening schedule, kept
-        as the rigorous bound when it succeeds; None inside another proof (no nested proofs).
-        ``rigorous=True`` tries the full schedule."""
-        global _PROVING
-        if self._bound is not None or _PROVING:
-            return self._bound
-        _PROVING = True
-        try:
-            self._bound = prove_bound(self.program, self.data, self.x, QUICK_TIGHTENINGS)
-        finally:
-            _PROVING = False
-        return self._bound
 
     def _require_unchanged(self, what: str):
         if self.program_version != getattr(self.program, "version", None):
@@ -378,11 +393,11 @@ class Solution:
             return self._bound
         if self._bound_error is not None:
             raise self._bound_error
-        self._raise_unless_verified()
+        self._raise_unless_usable()
         t0 = time.perf_counter()
         try:
             self._require_unchanged("rigorous_bound")
-            self._bound = prove_bound(self.program, self.data, self.x)
+            self._bound = exact_bound(self)
         except UnverifiedSolutionError as exc:
             self._bound_error = exc
             raise

@@ -23,31 +23,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..poly import Polynomial, unique_rows
+from ..poly import Polynomial, keys_to_exps, multiset_keys, unique_rows
 from .constraints import Basis, LinearRows, SOSConstraint, as_sos_polynomial
 from .gram import gram_matching, svec_to_matrix
 from .verification import GramStructure
-
-
-def multiset_keys(exps: np.ndarray, cols: np.ndarray, width: int) -> np.ndarray:
-    """Row r: cols[c] + 1 repeated exps[r, c] times over c (``cols`` ascending, so sorted),
-    padded with zeros to ``width`` columns: a monomial by its variables, free of the total
-    number of variables."""
-    r, c = np.nonzero(exps)
-    reps = exps[r, c]
-    rows = np.repeat(r, reps)
-    deg = np.bincount(rows, minlength=exps.shape[0])
-    at = np.arange(rows.size) - np.repeat(np.cumsum(deg) - deg, deg)
-    out = np.zeros((exps.shape[0], width), dtype=np.int64)
-    out[rows, at] = np.repeat(np.asarray(cols, dtype=np.int64)[c], reps) + 1
-    return out
-
-
-def keys_to_exps(keys: np.ndarray, n: int) -> np.ndarray:
-    """The exponent rows over n variables of :func:`multiset_keys` rows."""
-    out = np.zeros((keys.shape[0], n + 1), dtype=np.int64)
-    np.add.at(out, (np.repeat(np.arange(keys.shape[0]), keys.shape[1]), keys.ravel()), 1)
-    return out[:, 1:]
 
 
 class SparseSOSConstraint(SOSConstraint):

@@ -1,22 +1,23 @@
-"""The independent check of a certificate: numbers, not the solver's own matching matrix.
+"""The independent check of a solver's answer: numbers, not the solver's own matching matrix.
 
 For every SOS constraint, :func:`verify_certificate` rebuilds z^T Q z from the basis by
 polynomial arithmetic and compares it with the constraint's polynomial at the decision values
 (:func:`check_gram`); it checks every Gram block -- SOS constraints, SOS-matrix constraints,
 families, the multipliers of ``add_nonneg_on``, ``new_sos`` and ``new_psd`` blocks -- for
 Q >= 0 (smallest eigenvalue) or, for DSOS blocks, diagonal dominance Q_ii >= sum_j |Q_ij| as
-numbers (:func:`check_block`; an SDSOS block is checked for Q >= 0 like a PSD one: that is
-what the certificate needs, and the solver's split into 2x2 blocks is never trusted); and every linear equality and inequality (:func:`check_linear`)
-and cvxpy constraint. With e = p - z^T Q z and every monomial of e in the Gram monomial set,
-p = z^T (Q + E) z for the smallest such E, so the block's margin lambda_min(Q) - ||E||_F
-bounds lambda_min(Q + E) from below: a residual is judged by what it does to the Gram
-identity, not by its size next to p's coefficients. Tolerances are relative (max |Q_ij|,
-|p_a|), with the absolute floor 1 only as large as the program's own numbers
-(:func:`tolerance_scale`). A feasibility program (no objective:
-the claim "p is SOS") needs margin >= -(floating-point error); failing only that, it passes
-if the certificate is proven exactly (``Solution.verify``, :mod:`.rigorous`). A program with
-an objective sits on the boundary of the cone: its blocks pass on the relative tolerances
-alone, and the bound it returns is corrected to the safe side (:mod:`.posterior`). docs/sos-semantics.md.
+numbers (:func:`check_block`; an SDSOS block is checked for Q >= 0 like a PSD one); and every
+linear equality and inequality (:func:`check_linear`) and cvxpy constraint. Tolerances are
+relative (max |Q_ij|, |p_a|), with the absolute floor 1 only as large as the program's own
+numbers (:func:`tolerance_scale`).
+
+This is a *screen*: it says whether the solver answered this program to its tolerances, so its
+numbers are a usable approximation (``Solution.usable``). It proves nothing -- at the optimum of
+a bound program a Gram block is singular and the identity holds only to the solver's tolerance.
+What is proven is decided by :mod:`.proof` (floating point with rounding bounds) at a point
+:mod:`.proven` finds; :func:`check_gram` of a given certificate runs that proof too
+(docs/sos-semantics.md). Each check still reports the block's ``margin``: with e = p - z^T Q z on
+the Gram monomial set, p = z^T (Q + E) z for the smallest such E and lambda_min(Q) - ||E||_F
+bounds lambda_min(Q + E) from below.
 
 The monomial structure of z^T Q z against p (:class:`GramStructure`: where each product
 z_i z_j and each monomial of p lands in their union) depends only on the basis and on p's
@@ -37,6 +38,7 @@ from ..errors import PolynomialError
 from ..poly import MAX_COEFFICIENT, unique_rows
 from .conic import cvxpy_block_vars, positions
 from .gram import svec_to_matrix
+from .proof import prove_gram
 
 
 @dataclass
@@ -56,12 +58,12 @@ class CertificateCheck:
     min_eig: float
     residual: float          # max |coefficient| of p - z^T Q z (or max row violation)
     rel_residual: float      # residual / max |coefficient of p| (or per-row scale)
-    strict: bool             # margin = lambda_min(Q) - ||E||_F >= 0, e representable
+    margin: float            # lambda_min(Q) - ||E||_F (-inf when e has a monomial z^T Q z cannot give)
     passed: bool
     cone: str = "psd"
     dd_margin: float = math.nan   # min_i Q_ii - sum_{j != i} |Q_ij| (DSOS blocks)
     reason: str = ""
-    exact_needed: bool = False    # fails only the strict margin: an exact proof may still pass it
+    proven: bool | None = None    # check_gram: the identity proven (proof.prove_gram); None: not asked
 
 
 def tolerance_scale(largest: float, program_scale=None) -> float:
@@ -151,14 +153,19 @@ def constraint_gram_structure(con, p_exps) -> GramStructure:
     return out
 
 
-def check_gram(name, kind, p, basis_exps, Q, eig_tol=1e-7, rel_tol=1e-6, cone="psd",
-               strict=False) -> CertificateCheck:
-    """Check p = z^T Q z and Q in its cone for a numeric polynomial p and basis exponents."""
+def check_gram(name, kind, p, basis_exps, Q, eig_tol=1e-7, rel_tol=1e-6, cone="psd") -> CertificateCheck:
+    """Check a given certificate: p = z^T Q z and Q in its cone for a numeric polynomial p and
+    basis exponents, to the tolerances *and* proven (:func:`~.proof.prove_gram`: the residual
+    absorbed within a proven eigenvalue margin, or exactly in rational arithmetic): ``passed``
+    only if both hold, at any scale of the coefficients."""
     if p.ids.size:
         raise PolynomialError(f"check_gram needs a numeric polynomial; {name!r} has decision variables. "
                               "Try: assign the solution's values first, e.g. sol.value(p)")
-    return check_gram_values(name, kind, p.coef[:, 0], gram_structure(p.exps, basis_exps), Q,
-                             eig_tol, rel_tol, cone, strict=strict)
+    check = check_gram_values(name, kind, p.coef[:, 0], gram_structure(p.exps, basis_exps), Q,
+                              eig_tol, rel_tol, cone)
+    proven, why = prove_gram(p, basis_exps, Q)
+    reason = check.reason if proven else "; ".join(r for r in (check.reason, f"not proven: {why}") if r)
+    return replace(check, passed=bool(check.passed and proven), proven=proven, reason=reason)
 
 
 def residual_gram_norms(e, structure: GramStructure, sizes) -> np.ndarray:
@@ -174,17 +181,15 @@ def residual_gram_norms(e, structure: GramStructure, sizes) -> np.ndarray:
 
 
 def check_gram_values(name, kind, p_coef, structure: GramStructure, Q, eig_tol=1e-7, rel_tol=1e-6,
-                      cone="psd", strict=False, scale=None) -> CertificateCheck:
-    """:func:`check_gram` for p given by its coefficients ``p_coef`` on the monomials of ``structure``.
+                      cone="psd", scale=None) -> CertificateCheck:
+    """The screen of p = z^T Q z for p given by its coefficients ``p_coef`` on the monomials of
+    ``structure``.
 
     e = p - z^T Q z on the union U of monomials (each z_i z_j adds Q_ij to its monomial). With
     e on the Gram monomial set, p = z^T (Q + E) z exactly and lambda_min(Q + E) >=
-    lambda_min(Q) - ||E||_F (:func:`residual_gram_norms`): that is the block's ``margin``. It
-    passes when lambda_min(Q) >= -eig_tol x max |Q_ij| and e is within ``rel_tol`` x max |p_a|
-    (each through :func:`tolerance_scale`, with the program's ``scale``); ``strict=True`` (a
-    feasibility claim "p is SOS") also demands margin >= -(floating-point error): a singular
-    certificate then needs an exact proof. Without ``strict`` (a program with an objective) the
-    margin is reported only: the bound is made safe after the check (:mod:`.posterior`)."""
+    lambda_min(Q) - ||E||_F (:func:`residual_gram_norms`): that is the block's ``margin``,
+    reported. It passes when lambda_min(Q) >= -eig_tol x max |Q_ij| and e is within ``rel_tol``
+    x max |p_a| (each through :func:`tolerance_scale`, with the program's ``scale``)."""
     size = structure.in_gram.size
     e = np.bincount(structure.p_at, weights=p_coef, minlength=size) \
         - np.bincount(structure.pair_at, weights=Q.ravel(), minlength=size)
@@ -194,16 +199,10 @@ def check_gram_values(name, kind, p_coef, structure: GramStructure, Q, eig_tol=1
     res = float(np.abs(e).max(initial=0.0))
     representable = not np.any(e[~structure.in_gram] != 0.0)
     margin = (min_eig if cone != "dsos" else dd) - float(residual_gram_norms(e, structure, [Q.shape[0]])[0])
-    floor = fp_error(Q)
-    margin_ok = margin >= -floor or not strict
-    if cone_ok and not margin_ok:
-        reason = (f"min eigenvalue {min_eig:.3e} does not survive the residual (margin {margin:.3e} "
-                  f"below -{floor:.1e}; a feasibility claim needs margin >= 0)")
     res_ok, reason = _residual_verdict(res, rel_tol, scale, reason)
     rel = relative_residual(res, scale)
-    return CertificateCheck(name, kind, Q.shape[0], min_eig, res, rel, bool(representable and margin >= 0),
-                            bool(cone_ok and margin_ok and res_ok), cone, dd, reason,
-                            bool(strict and cone_ok and res_ok and not margin_ok))
+    return CertificateCheck(name, kind, Q.shape[0], min_eig, res, rel, margin if representable else -math.inf,
+                            bool(cone_ok and res_ok), cone, dd, reason)
 
 
 def _residual_verdict(res: float, rel_tol: float, scale: float, reason: str) -> tuple[bool, str]:
@@ -220,12 +219,12 @@ def relative_residual(res: float, scale: float) -> float:
 
 
 def check_blocks_values(name, kind, p_coef, structure: GramStructure, Qs, cones, eig_tol=1e-7,
-                        rel_tol=1e-6, strict=False, scale=None) -> CertificateCheck:
+                        rel_tol=1e-6, scale=None) -> CertificateCheck:
     """:func:`check_gram_values` for p = sum_k z_k^T Q_k z_k over several Gram blocks.
 
     e = p - sum_k z_k^T Q_k z_k on the union U; with e_k the part of e on the monomials whose
     first producing block is k, p = sum_k z_k^T (Q_k + E_k) z_k (E_k the smallest such), so the
-    margin is min_k lambda_min(Q_k) - ||E_k||_F (:func:`residual_gram_norms`), judged as in
+    margin is min_k lambda_min(Q_k) - ||E_k||_F (:func:`residual_gram_norms`), reported as in
     :func:`check_gram_values`. ``min_eig`` is the least over the blocks."""
     q_scales = [tolerance_scale(float(np.abs(Q).max(initial=0.0)), scale) for Q in Qs]
     scale = tolerance_scale(float(np.abs(p_coef).max(initial=0.0)), scale)
@@ -237,36 +236,22 @@ def check_blocks_values(name, kind, p_coef, structure: GramStructure, Qs, cones,
     representable = not np.any(e[~structure.in_gram] != 0.0)
     norms = residual_gram_norms(e, structure, [Q.shape[0] for Q in Qs])
     margins = [(p[0] if cone != "dsos" else p[1]) - nk for p, cone, nk in zip(parts, cones, norms)]
-    floors = [fp_error(Q) for Q in Qs]
     cone_ok = all(p[2] for p in parts)
-    margin_ok = all(m >= -f for m, f in zip(margins, floors)) or not strict
     reason = "; ".join(p[3] for p in parts if p[3])
-    if cone_ok and not margin_ok:
-        k = int(np.argmin([m + f for m, f in zip(margins, floors)]))
-        reason = (f"block {k}: min eigenvalue {parts[k][0]:.3e} does not survive the residual (margin "
-                  f"{margins[k]:.3e} below -{floors[k]:.1e}; a feasibility claim needs margin >= 0)")
     res_ok, reason = _residual_verdict(res, rel_tol, scale, reason)
     worst = min(range(len(Qs)), key=lambda k: parts[k][0], default=None)
     rel = relative_residual(res, scale)
     return CertificateCheck(name, kind, sum(Q.shape[0] for Q in Qs), parts[worst][0] if Qs else 0.0, res,
-                            rel, bool(representable and min(margins, default=0.0) >= 0),
-                            bool(cone_ok and margin_ok and res_ok), cones[0] if cones else "psd",
-                            parts[worst][1] if Qs else math.nan, reason,
-                            bool(strict and cone_ok and res_ok and not margin_ok))
-
-
-def fp_error(A) -> float:
-    """A bound on the floating-point error of eigvalsh(A)'s smallest eigenvalue and of the
-    sums forming A's identity: 8 n eps ||A||_F (n = order of A)."""
-    return 8.0 * max(1, A.shape[0]) * np.finfo(float).eps * float(np.linalg.norm(A))
+                            rel, min(margins, default=0.0) if representable else -math.inf,
+                            bool(cone_ok and res_ok), cones[0] if cones else "psd",
+                            parts[worst][1] if Qs else math.nan, reason)
 
 
 def check_block(name, kind, Q, cone="psd", eig_tol=1e-7, scale=None) -> CertificateCheck:
     """Check a block that must only lie in its cone (multipliers, new_sos, new_psd); tolerance
     eig_tol x max |Q_ij| through :func:`tolerance_scale` (``scale``: the program's)."""
     min_eig, dd, ok, reason = _cone_check(Q, cone, eig_tol, tolerance_scale(float(np.abs(Q).max(initial=0.0)), scale))
-    return CertificateCheck(name, kind, Q.shape[0], min_eig, 0.0, 0.0, bool(min_eig > 0), bool(ok),
-                            cone, dd, reason)
+    return CertificateCheck(name, kind, Q.shape[0], min_eig, 0.0, 0.0, min_eig, bool(ok), cone, dd, reason)
 
 
 def check_linear(rows, ids, x, tol) -> CertificateCheck:
@@ -283,7 +268,7 @@ def check_linear(rows, ids, x, tol) -> CertificateCheck:
     reason = "" if ok else (f"row {int(rel.argmax())} violated by {float(viol.max()):.2e} "
                             f"(relative {worst:.2e} above {tol:.0e})")
     return CertificateCheck(rows.name, rows.kind, n, math.nan, float(viol.max(initial=0.0)), worst,
-                            False, bool(ok), "", math.nan, reason)
+                            math.nan, bool(ok), "", math.nan, reason)
 
 
 @dataclass
@@ -293,18 +278,6 @@ class VerificationReport:
     checks: list
     linear_residual: float
     passed: bool
-
-    def proven_exactly(self, method: str) -> "VerificationReport":
-        """This report once the blocks that failed only their strict margin (``exact_needed``)
-        are proven PSD in exact arithmetic (:func:`~.rigorous.prove_bound`)."""
-        checks = [replace(c, passed=True, reason=f"proven exactly ({method})") if c.exact_needed else c
-                  for c in self.checks]
-        return VerificationReport(checks, self.linear_residual, all(c.passed for c in checks))
-
-    @property
-    def needs_exact(self) -> bool:
-        """Every failing block failed only its strict margin."""
-        return bool(self.failures) and all(c.exact_needed for c in self.failures)
 
     @property
     def failures(self) -> list:
@@ -351,7 +324,7 @@ def check_cvxpy(program, ids, x, tol) -> list:
         scale = max([1.0] + [float(np.abs(a.value).max()) for a in c.args if a.value is not None])
         ok = viol <= tol * scale
         out.append(CertificateCheck(f"cvxpy[{k}]", "cvxpy", int(np.size(c.violation())), math.nan, viol,
-                                    viol / scale, False, bool(ok), "", math.nan,
+                                    viol / scale, math.nan, bool(ok), "", math.nan,
                                     "" if ok else f"violated by {viol:.2e}"))
     return out
 
@@ -370,25 +343,23 @@ def verify_certificate(program, ids, x, eig_tol=1e-7, rel_tol=1e-6) -> Verificat
     """
     if not np.abs(x).max(initial=0.0) <= MAX_COEFFICIENT:     # polynomials refuse such numbers
         bad = CertificateCheck("solution", "vector", int(x.size), math.nan, math.inf, math.inf,
-                               False, False, "", math.nan, "non-finite entries (or entries above "
+                               math.nan, False, "", math.nan, "non-finite entries (or entries above "
                                f"{MAX_COEFFICIENT:.0e}) in the solution")
         return VerificationReport([bad], math.inf, False)
     at = lambda block_ids: x[positions(ids, block_ids)]  # noqa: E731
     checks, owned = [], set()
-    strict = program.objective is None       # a feasibility claim: margins must survive (docstring)
     scale = program_scale(program, at)
     for con in program.sos_constraints:
         owned.add(id(con.psd))
         if hasattr(con, "identity_values"):          # several Gram blocks (sparse_constraint)
             checks.append(check_blocks_values(con.name, con.kind, *con.identity_values(at), eig_tol, rel_tol,
-                                              strict=strict, scale=scale))
+                                              scale=scale))
             continue
         Q = svec_to_matrix(at(con.psd.ids), con.psd.size)
         p = con.poly.with_vars(con.basis.vars)
         coef = p.coef[:, 0] + p.coef[:, 1:] @ at(p.ids)               # p at x
         checks.append(check_gram_values(con.name, con.kind, coef, constraint_gram_structure(con, p.exps),
-                                        Q, eig_tol, rel_tol, con.psd.cone, strict=strict,
-                                        scale=scale))
+                                        Q, eig_tol, rel_tol, con.psd.cone, scale=scale))
     for b in program.blocks:
         if b.psd is not None and id(b.psd) not in owned:
             Q = svec_to_matrix(at(b.psd.ids), b.psd.size)

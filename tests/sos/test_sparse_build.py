@@ -1,6 +1,5 @@
 """The sparse build (sosdyn.sos.sparse_constraint): multiset monomial keys, matching assembled once,
 the same rows as the polynomial route, linear growth, update; known answers."""
-import time
 
 import numpy as np
 import pytest
@@ -8,7 +7,8 @@ import pytest
 import sosdyn as sd
 from sosdyn.sos.constraints import gram_polynomial
 from sosdyn.sos.gram import gram_matching
-from sosdyn.sos.sparse_constraint import SparseSOSConstraint, keys_to_exps, multiset_keys
+from sosdyn.poly import keys_to_exps, multiset_keys
+from sosdyn.sos.sparse_constraint import SparseSOSConstraint
 from sosdyn.sos.sparsity import clique_faces, sparse_bases
 
 
@@ -87,7 +87,6 @@ def test_sparse_lower_bound_is_made_safe_block_by_block():
     prog.add_sos(wood(40) - g, sparsity="correlative")
     prog.maximize(g)
     sol = prog.solve()
-    assert sol.solver_objective > 1.0                                   # the solver's number is not a bound
     assert 1.0 - 1e-4 <= sol.objective <= 1.0                         # the returned one is, and tight
 
 
@@ -117,20 +116,13 @@ def test_sparse_bases_stay_in_the_clique_variables():
 
 
 @pytest.mark.slow
-def test_chained_wood_400_builds_and_solves_in_seconds():
-    # issue 27's target: build + solve <= 10 s and build(400) <= 15 x build(40) (was 60 s / 1000x)
-    def build_seconds(n):
-        f = wood(n)
-        prog = sd.SOSProgram()
-        g = prog.new_var()
-        t0 = time.process_time()                        # CPU seconds: the machine's load stays out
-        prog.add_sos(f - g, sparsity="correlative")
-        prog.maximize(g)
-        return time.process_time() - t0, prog, g
-    build_seconds(8)                                     # imports, first-call caches
-    t40 = min(build_seconds(40)[0] for _ in range(3))
-    t400, prog, g = build_seconds(400)
-    sol = prog.solve()
-    assert sol.value(g) == pytest.approx(1.0, abs=1e-4)
-    assert t400 + sol.timings["canonicalize"] + sol.timings["solve"] <= 10.0, t400
-    assert t400 <= 15 * t40, (t400, t40)
+def test_chained_wood_400_is_bounded_by_its_cliques():
+    # issue 27's speed targets (build + solve <= 10 s, build(400) <= 15 x build(40)) are measured by
+    # `make bench-sos` (problems.bench.sparse_scaling); here: the bound (minimum 1), from 399 blocks
+    # of at most 3 variables each
+    prog = sd.SOSProgram()
+    g = prog.new_var()
+    con = prog.add_sos(wood(400) - g, sparsity="correlative")
+    prog.maximize(g)
+    assert len(con.gram_blocks) == 399 and all(len(b.vars) <= 3 for b, _ in con.gram_blocks[1:])
+    assert 1.0 - 1e-4 <= prog.solve().value(g) <= 1.0

@@ -29,21 +29,17 @@ def block_variables(con):
     return [int((b.exps.sum(axis=0) > 0).sum()) for b, _ in con.gram_blocks]
 
 
-@pytest.mark.parametrize("n, settings", [(10, {"scale": False}), (20, {})])
-def test_chained_rosenbrock_correlative_bound_is_zero(n, settings):
-    # n = 10 with the default row scaling: Clarabel stops at optimal_inaccurate with a clique
-    # block of eigenvalue -3e-4, which the verifier refuses (measured); unscaled it is optimal
+@pytest.mark.parametrize("n", [10, 20])
+def test_chained_rosenbrock_correlative_bound_is_zero(n):
+    # sum 100 (x_(i+1) - x_i^2)^2 + (1 - x_i)^2: a sum of squares, minimum 0 at x = 1, each clique's
+    # block singular along z(1) and the last along x_n - x_(n-1)^2 in every exact certificate (no
+    # interior, no floating-point margin): the face the solver's kernel names carries the proof
     prog = sd.SOSProgram()
     g = prog.new_var()
     con = prog.add_sos(rosenbrock(n) - g, sparsity="correlative")
     prog.maximize(g)
-    sol = prog.solve(**settings)
-    assert sol.verified and abs(sol.solver_objective) <= 1e-6
-    # the last clique's Gram matrix is singular along x_n + x_{n-1}^2 in every exact certificate
-    # (x_n^2 and x_n x_{n-1}^2 appear only in 100 (x_n - x_{n-1}^2)^2), a direction without the
-    # constant monomial: no floating-point shift makes it safe, so the bound is refused, typed
-    with pytest.raises(sd.UnverifiedSolutionError, match="solver_objective"):
-        sol.value(g)
+    sol = prog.solve()
+    assert -1e-6 <= sol.value(g) <= 0.0
     assert block_variables(con) == [2] * (n - 1)                     # n - 1 cliques of size 2
     # clique {x_i, x_i+1}: 1, x_i, x_i+1, x_i^2, x_i x_i+1, x_i+1^2 (x_i+1^4 is a term of the next
     # summand); the last clique has no x_{n-1}^4, so neither x_{n-1}^2 nor x_{n-2} x_{n-1}
@@ -58,7 +54,7 @@ def test_a_bad_clique_block_fails_the_independent_check():
     con = prog.add_sos(rosenbrock(4) - g, sparsity="correlative")
     prog.maximize(g)
     sol = prog.solve(scale=False)
-    assert sol.verified
+    assert sol.usable
     _, psd = con.gram_blocks[1]
     x = sol.x.copy()
     x[positions(sol.data.ids, psd.ids)] = matrix_to_svec(-np.eye(psd.size))

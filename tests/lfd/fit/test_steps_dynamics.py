@@ -25,7 +25,7 @@ def step():
 def test_a_field_that_contracts_in_the_metric_is_recovered(step):
     C, sol = step.solve(np.eye(2)[:, :, None])
     np.testing.assert_allclose(C[0], A_IN, atol=1e-5)
-    assert sol.status == "optimal" and step.data.cost(C) < 1e-9
+    assert sol.usable and step.data.cost(C) < 1e-9
 
 
 def test_the_constraint_binds_for_a_field_that_does_not(step):

@@ -217,7 +217,7 @@ def metric_step(C, gamma, M0=None, prox=0.0, eps=METRIC_EPS, solver="CLARABEL"):
     else:
         prog.maximize(t)
     sol = solve_with_fallback(prog, solver, affine_psd=True)
-    return svec_to_matrix(sol.values_of(M.ids), m), float(sol.value(t))
+    return svec_to_matrix(sol.values_of(M.ids), m), float(sol.values_of(t.ids)[0])   # the solver's margin: a target
 
 
 def energy_metric_step(C, gamma, E, Edot, margin, M0, prox=0.0, eps=METRIC_EPS, solver="CLARABEL"):

@@ -75,4 +75,4 @@ class MetricStep:
         W = np.zeros((self.n, self.n, self.mexps.shape[0]))
         for (a, b), ids in self.pair_ids.items():
             W[a, b] = W[b, a] = sol.values_of(ids)
-        return W, sol.value(self.t), sol
+        return W, float(sol.values_of(self.t.ids)[0]), sol       # the solver's margin: a target for the next step
