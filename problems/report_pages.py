@@ -106,8 +106,8 @@ def poses(r: dict) -> tuple[str, dict]:
     """PoseCDSP on the RoboTasks tasks: certificate, position and orientation against copying."""
     numbers = {}
     for t in r["tasks"]:
-        numbers[f"{t['task']}: position DTWD ÷ copy"] = t["mean"]["pos_dtwd"] / t["mean"]["copy_pos"]
-        numbers[f"{t['task']}: orientation DTW ÷ copy"] = t["mean"]["ori_dtw"] / t["mean"]["copy_ori"]
+        numbers[f"{t['task']}: position DTWD ÷ copy"] = t["pos_ratio"]
+        numbers[f"{t['task']}: orientation DTW ÷ copy"] = t["ori_ratio"]
     pos = [v for k, v in numbers.items() if "position" in k]
     ori = [v for k, v in numbers.items() if "orientation" in k]
     n = len(r["tasks"])

@@ -12,7 +12,7 @@ from .poly import PolyMatrix, Polynomial, from_sympy, jacobian, to_sympy, variab
 from .sos import BasicSet, SOSProgram, Solution, minimize_on, sum_squares
 from .lfd import (CDSP, Demonstration, Demonstrations, PoseCDSP, PoseDemonstrations, SecondOrderCDSP, Trajectory,
                   check_demonstrations, dataset_names, lasa_names, load_dataset, load_demos, load_lasa, load_model,
-                  load_pose_demos, load_pose_model, preprocess)
+                  load_pose_demos, load_pose_model, preprocess, preprocess_poses)
 
 __version__ = "0.1.0"
 
@@ -24,5 +24,5 @@ __all__ = [
     "SOSProgram", "Solution", "sum_squares", "BasicSet", "minimize_on",
     "CDSP", "Demonstration", "Demonstrations", "Trajectory", "check_demonstrations",
     "dataset_names", "lasa_names", "load_dataset", "load_demos", "load_lasa", "load_model", "preprocess",
-    "PoseCDSP", "PoseDemonstrations", "load_pose_demos", "load_pose_model", "SecondOrderCDSP",
+    "PoseCDSP", "PoseDemonstrations", "load_pose_demos", "load_pose_model", "preprocess_poses", "SecondOrderCDSP",
 ]

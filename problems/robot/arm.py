@@ -1,9 +1,12 @@
 """The simulated arm: a Franka Panda in pybullet (headless, ``p.DIRECT``), stepped at 240 Hz.
 
 :class:`PandaSim` holds the simulator's state: it reads the end-effector pose and Jacobian, sends
-joint velocities (``VELOCITY_CONTROL`` with the Panda's torque limits), pushes the end effector
-(``applyExternalForce``), moves the goal marker, solves inverse kinematics for a start and renders
-camera frames with the CPU TinyRenderer. The control law is :mod:`.control`.
+joint velocities (``VELOCITY_CONTROL`` with the Panda's torque limits) for an end-effector twist,
+pushes and twists the end effector (``applyExternalForce`` / ``applyExternalTorque``), moves the goal
+marker (a red ball, and a blue bar along the goal orientation's gripper axis z), solves inverse
+kinematics for a start and renders camera frames with the CPU TinyRenderer. The control law is
+:mod:`.control`. Quaternions are pybullet's (x, y, z, w) here; :func:`wxyz` / :func:`xyzw` convert
+to and from sosdyn's (w, x, y, z).
 """
 from __future__ import annotations
 
@@ -11,7 +14,7 @@ import numpy as np
 import pybullet as p
 import pybullet_data
 
-from .control import K_ORIENT, joint_velocities, rotation_error
+from .control import joint_velocities, rotation_error
 
 URDF = "franka_panda/panda.urdf"
 EE_LINK = 11                     # panda_grasptarget: between the fingertips
@@ -25,6 +28,17 @@ RATE = 240.0
 QDOT_MAX = np.array([2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61])
 #: A joint this close to its limit (rad) counts as hitting it.
 HIT = np.deg2rad(0.5)
+AXIS_BAR = 0.06                  # m: length of the goal marker's bar along the goal gripper axis
+
+
+def wxyz(q) -> np.ndarray:
+    """pybullet's (x, y, z, w) as sosdyn's (w, x, y, z)."""
+    return np.array([q[3], q[0], q[1], q[2]], dtype=float)
+
+
+def xyzw(q) -> np.ndarray:
+    """sosdyn's (w, x, y, z) as pybullet's (x, y, z, w)."""
+    return np.array([q[1], q[2], q[3], q[0]], dtype=float)
 
 
 class PandaSim:
@@ -45,6 +59,9 @@ class PandaSim:
         shape = p.createVisualShape(p.GEOM_SPHERE, radius=0.02, rgbaColor=[0.85, 0.1, 0.1, 1],
                                     physicsClientId=c)
         self.marker = p.createMultiBody(baseMass=0, baseVisualShapeIndex=shape, physicsClientId=c)
+        bar = p.createVisualShape(p.GEOM_BOX, halfExtents=[0.006, 0.006, AXIS_BAR / 2], rgbaColor=[0.1, 0.3, 0.85, 1],
+                                  visualFramePosition=[0, 0, AXIS_BAR / 2], physicsClientId=c)
+        self.bar = p.createMultiBody(baseMass=0, baseVisualShapeIndex=bar, physicsClientId=c)
         self.size = (width, height)
         self.reset(HOME)
 
@@ -53,7 +70,7 @@ class PandaSim:
 
     # ------------------------------------------------------------------ state
     def reset(self, q, goal=None):
-        """Joints to q (at rest), fingers closed, goal marker at ``goal``."""
+        """Joints to q (at rest), fingers closed, goal marker at ``goal`` (position, or pose x, y, z + w x y z)."""
         for j, qj in zip(ARM, q):
             p.resetJointState(self.robot, j, float(qj), 0.0, physicsClientId=self.client)
         for j in FINGERS:
@@ -84,34 +101,38 @@ class PandaSim:
         return bool(np.any((q - self.lo < HIT) | (self.hi - q < HIT)))
 
     # ------------------------------------------------------------------ acting
-    def command(self, v, orientation=DOWN, k_orient=K_ORIENT) -> np.ndarray:
-        """Send the joint velocities that realise the end-effector velocity v (3,) while holding
-        ``orientation``; returns them (:func:`.control.joint_velocities`)."""
+    def command(self, twist) -> np.ndarray:
+        """Send the joint velocities that realise the end-effector twist (v, omega) (6,) (world frame);
+        returns them (:func:`.control.joint_velocities`)."""
         q, _ = self.joints()
-        _, quat = self.ee()
-        twist = np.concatenate([v, k_orient * rotation_error(quat, orientation)])
-        qdot = joint_velocities(self.jacobian(q), twist, q, self.lo, self.hi, QDOT_MAX)
+        qdot = joint_velocities(self.jacobian(q), np.asarray(twist, dtype=float), q, self.lo, self.hi, QDOT_MAX)
         p.setJointMotorControlArray(self.robot, ARM, p.VELOCITY_CONTROL, targetVelocities=qdot.tolist(),
                                     forces=self.torque.tolist(), physicsClientId=self.client)
         return qdot
 
-    def push(self, force):
-        """Apply ``force`` (N, world frame) at the end effector during the next step."""
+    def push(self, force, torque=None):
+        """Apply ``force`` (N) at the end effector, and ``torque`` (N m) to it, world frame, during the next step."""
         pos, _ = self.ee()
         p.applyExternalForce(self.robot, EE_LINK, list(map(float, force)), pos.tolist(), p.WORLD_FRAME,
                              physicsClientId=self.client)
+        if torque is not None:
+            p.applyExternalTorque(self.robot, EE_LINK, list(map(float, torque)), p.WORLD_FRAME,
+                                  physicsClientId=self.client)
 
     def step(self):
         p.stepSimulation(physicsClientId=self.client)
 
     def move_marker(self, goal):
-        p.resetBasePositionAndOrientation(self.marker, list(map(float, goal)), [0, 0, 0, 1],
-                                          physicsClientId=self.client)
+        """The ball to the goal position, the bar along the goal orientation's z axis (pose goals only)."""
+        goal = np.asarray(goal, dtype=float)
+        p.resetBasePositionAndOrientation(self.marker, goal[:3].tolist(), [0, 0, 0, 1], physicsClientId=self.client)
+        where = (goal[:3].tolist(), xyzw(goal[3:]).tolist()) if goal.size == 7 else ([0, 0, -1.0], [0, 0, 0, 1])
+        p.resetBasePositionAndOrientation(self.bar, *where, physicsClientId=self.client)
 
     # ------------------------------------------------------------------ kinematics
-    def solve_ik(self, pos, orientation=DOWN, iters=400, tol=1e-4) -> tuple[np.ndarray, float]:
-        """Joint angles placing the end effector at ``pos`` with ``orientation``, by the same
-        damped least squares as the controller (kinematic steps from HOME); (q, position error)."""
+    def solve_ik(self, pos, orientation=DOWN, iters=600, tol=1e-4) -> tuple[np.ndarray, float]:
+        """Joint angles placing the end effector at ``pos`` with ``orientation`` (x, y, z, w), by the
+        same damped least squares as the controller (kinematic steps from HOME); (q, position error)."""
         self.reset(HOME)
         q = HOME.copy()
         for _ in range(iters):

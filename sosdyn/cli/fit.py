@@ -72,7 +72,8 @@ def progress_line(row: dict, step_s: float, total_s: float) -> str:
     """One convex step of a fit: ``step 3 (metric): cost 12.5 (0.21 s; 1.4 s since start)``,
     prefixed by ``warp 60 maps, decay 1, `` for a candidate of warp="auto" and ``corrective
     round 1, `` during a refit on corrective data. ``step_s``: since the previous line."""
-    head = (f"warp {row['warp']}, " if row.get("warp") else "") + \
+    head = (f"{row['block']} block, " if row.get("block") else "") + \
+        (f"warp {row['warp']}, " if row.get("warp") else "") + \
         (f"corrective round {row['round']}, " if row.get("round") else "")
     return (f"{head}step {row['iteration'] + 1} ({row['step']}): cost {row['cost']:.6g} "
             f"({step_s:.2f} s; {total_s:.1f} s since start)")
@@ -105,7 +106,7 @@ class FitProgress:
         now = time.perf_counter()
         line = progress_line(row, now - self._last, now - self.start)
         self._last = now
-        self.rows.setdefault((row.get("warp"), row.get("round")), []).append(row)
+        self.rows.setdefault((row.get("block"), row.get("warp"), row.get("round")), []).append(row)
         if self._status is not None:
             self._status.update(f"{self.message}: {line}")
         elif not State.quiet:
@@ -114,10 +115,11 @@ class FitProgress:
     def caps(self, model) -> list[str]:
         """One line per fit (candidate / round) that hit the iteration cap (``model.iteration_cap``)."""
         lines = []
-        for (warp, round_), rows in self.rows.items():
+        for (block, warp, round_), rows in self.rows.items():
             cap = model.iteration_cap(rows)
             if cap:
-                who = " ".join(filter(None, (warp and f"warp {warp}", round_ and f"corrective round {round_}")))
+                who = " ".join(filter(None, (block and f"{block} block", warp and f"warp {warp}",
+                                             round_ and f"corrective round {round_}")))
                 lines.append(f"{who or 'the fit'}: {cap} (more iterations: --max-iter)")
         return lines
 
@@ -147,6 +149,13 @@ def _units(value: str | None) -> str | None:
     problem = None if value is None else units_problem(value)
     if problem:
         raise typer.BadParameter(f"{problem}, e.g. m or mm.")
+    return value
+
+
+def open_degrees(value: float | None) -> float | None:
+    """``--goal-tol-deg`` callback: a number strictly between 0 and 180 (or not given)."""
+    if value is not None and not 0 < value < 180:
+        raise typer.BadParameter(f"must be a number of degrees in (0, 180), both ends excluded; got {value}.")
     return value
 
 
@@ -241,9 +250,9 @@ def fit(
              "when the ends spread more than 1% of the data's diagonal; on; off; or a number = on, accepting "
              "shifts up to it (data units; default limit 25% of the diagonal).")] = "auto",
     goal_tol_deg: Annotated[float | None, typer.Option(
-        "--goal-tol-deg", min=0.0, max=180.0, help="Pose files: refuse end orientations farther than this (deg) "
-                                                   "from their chordal mean; nearer ones are aligned to it.",
-        show_default=f"{GOAL_TOL_DEG:g}")] = None,
+        "--goal-tol-deg", callback=open_degrees, help="Pose files: refuse end orientations farther than this (deg, "
+                                                      "strictly between 0 and 180) from their chordal mean; nearer "
+                                                      "ones are aligned to it.", show_default=f"{GOAL_TOL_DEG:g}")] = None,
     field: Annotated[SecondOrderField | None, typer.Option(
         "--field", help="Second order: tracking = the demonstrations tracked in (x, v), certified by an energy "
                         "tank; mixture = a mixture of linear fields under one quadratic certificate.",

@@ -1,7 +1,7 @@
 """What ``sosdyn fit`` does around the fit: shipped data sets, preprocessing, crossings, and the
 table of how the fitted model reproduces each demonstration.
 
-``dataset:NAME`` reads :func:`sosdyn.load_dataset` (positions only; the loader's notes, e.g.
+``dataset:NAME`` reads :func:`sosdyn.load_dataset` (a pose set with its orientations: a pose model; the loader's notes, e.g.
 hammer's declared time step, are printed). ``--smooth``, ``--trim-rest`` and ``--align-ends``
 are the options of the family's ``prepare`` (:func:`sosdyn.preprocess`'s), which also warns about
 crossing demonstrations when the family cannot follow them (:mod:`sosdyn.lfd.data.crossing`); after
@@ -18,10 +18,11 @@ import numpy as np
 import typer
 from rich.markup import escape
 
-from ..lfd.data.datasets import dataset_info, load_dataset
+from ..lfd.data.datasets import load_dataset
 from ..lfd.rollout.quality import arrival_caution
 from .base import State, info, out
 from .paths import DATASET_PREFIX
+
 DEVIATION_WARN = 0.10
 
 
@@ -52,15 +53,13 @@ def parse_align(value: str) -> bool | str | float:
 
 
 def load_dataset_input(spec: str, dt: float | None):
-    """The shipped set ``dataset:NAME``, positions only; the loader's notes printed."""
+    """The shipped set ``dataset:NAME`` (a pose set with its orientations: a pose model); the loader's notes printed."""
     name = spec.removeprefix(DATASET_PREFIX)
     with warnings.catch_warnings(record=True) as notes:
         warnings.simplefilter("always")
-        data = load_dataset(name, positions_only=True, dt=dt)
+        data = load_dataset(name, dt=dt)
     for note in notes:
         info(f"note: {escape(str(note.message))}")
-    if dataset_info(name).pose:
-        info(f"note: {name}: positions only (x, y, z); its orientations are not learned yet.")
     return data
 
 
@@ -96,12 +95,17 @@ def print_score(rows: list[dict] | None, data) -> None:
     out.print(f"reproduction of each demonstration from its start ({u}; reaches goal = the first time within 1% "
               f"of the extent {extent:.4g}, 'never' = not within twice the demo's duration):", highlight=False,
               soft_wrap=True)
-    out.print(f"{'demo':>4}  {'mean dev':>10}  {'max dev':>10}  {'reaches goal s':>14}  {'demo s':>7}  at goal",
-              highlight=False)
+    angles = any("max_dev_deg" in r for r in rows)       # a pose model's rows also score the orientation (deg)
+    if angles:
+        out.print("orientations: deviation in deg; the goal is reached within 1 deg of the goal orientation too.",
+                  highlight=False)
+    out.print(f"{'demo':>4}  {'mean dev':>10}  {'max dev':>10}  " + (f"{'mean deg':>8}  {'max deg':>8}  " if angles else "")
+              + f"{'reaches goal s':>14}  {'demo s':>7}  at goal", highlight=False)
     for r in rows:
         arrival = f"{r['arrival_s']:.3g}" if np.isfinite(r["arrival_s"]) else "never"
-        out.print(f"{r['demo']:>4}  {r['mean_dev']:>10.4g}  {r['max_dev']:>10.4g}  {arrival:>14}  "
-                  f"{r['duration_s']:>7.3g}  {'yes' if r['at_goal'] else 'NO'}", highlight=False)
+        out.print(f"{r['demo']:>4}  {r['mean_dev']:>10.4g}  {r['max_dev']:>10.4g}  "
+                  + (f"{r['mean_dev_deg']:>8.3g}  {r['max_dev_deg']:>8.3g}  " if angles else "")
+                  + f"{arrival:>14}  {r['duration_s']:>7.3g}  {'yes' if r['at_goal'] else 'NO'}", highlight=False)
     far = [r for r in rows if r["max_dev"] > DEVIATION_WARN * extent]
     if far:
         worst = max(far, key=lambda r: r["max_dev"])

@@ -40,8 +40,9 @@ def _events(specs: list[str] | None, option: str, example: str) -> list[tuple[fl
 def _dimension(point: np.ndarray, names: tuple[str, ...], option: str) -> np.ndarray:
     """``point`` if it has one number per name; else InputError naming them."""
     if point.shape != (len(names),):
+        example = ",".join("1" if name == "qw" else "0" for name in names)     # a quaternion's w: a valid pose
         raise InputError(f"{option} has {point.size} numbers but the model takes {len(names)}: {','.join(names)}. "
-                         f"Try: {len(names)} comma-separated numbers, e.g. {','.join(['0'] * len(names))}.")
+                         f"Try: {len(names)} comma-separated numbers, e.g. {example}.")
     return point
 
 

@@ -17,11 +17,11 @@ format's fields, validated in one place), ``model.fileformat`` and ``model.files
 loading), ``runtime.codegen`` and ``runtime.states``.
 """
 from .data import (Demonstration, Demonstrations, PoseDemonstrations, check_demonstrations, dataset_names,
-                   lasa_names, load_dataset, load_demos, load_lasa, load_pose_demos, preprocess)
+                   lasa_names, load_dataset, load_demos, load_lasa, load_pose_demos, preprocess, preprocess_poses)
 from .model import CDSP, MotionModel, PoseCDSP, SecondOrderCDSP, family_for, load_model, load_pose_model, save_model
 from .rollout import Trajectory, rollout
 
 __all__ = ["CDSP", "Demonstration", "Demonstrations", "check_demonstrations", "dataset_names", "lasa_names",
-           "load_dataset", "preprocess", "load_demos", "load_lasa", "load_model", "save_model", "Trajectory",
+           "load_dataset", "preprocess", "preprocess_poses", "load_demos", "load_lasa", "load_model", "save_model", "Trajectory",
            "rollout", "PoseCDSP", "SecondOrderCDSP", "PoseDemonstrations", "load_pose_demos", "load_pose_model",
            "MotionModel", "family_for"]

@@ -27,9 +27,10 @@ strokes, a pen-tablet log; ``python -m problems crossing-letters``), held out: m
 on ``crossing`` only. :attr:`DatasetInfo.synthetic` marks them, and experiments on real data ask for
 ``dataset_names(synthetic=False)``.
 
-Pose sets (robottasks, pouring) also hold an orientation quaternion ``qw, qx, qy, qz``;
-sosdyn learns positions only for now, so the loader reads x, y, z and says so (a
-``UserWarning`` unless ``positions_only=True`` is passed; ``positions_only=False`` is refused).
+Pose sets (robottasks, pouring) also hold an orientation quaternion ``qw, qx, qy, qz``: the loader
+returns :class:`~sosdyn.lfd.data.pose.PoseDemonstrations` (positions and orientations, read as a pose
+CSV is: :func:`~sosdyn.lfd.data.pose.load_pose_demos`, for :class:`~sosdyn.PoseCDSP`), or with
+``positions_only=True`` the positions x, y, z alone as :class:`Demonstrations`.
 ``hammer`` has no time stamps (sample index): its time step is declared by ``dt`` (default
 :data:`HAMMER_DT` = 0.01 s, an assumption announced by a warning unless ``dt`` is given).
 The synthetic ``pick_and_place`` set of the source collection is not shipped.
@@ -46,6 +47,7 @@ import numpy as np
 
 from sosdyn.errors import InputError
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations, check_demonstrations
+from sosdyn.lfd.data.pose import PoseDemonstrations, load_pose_demos
 
 DATASETS_DIR = Path(__file__).resolve().parent / "datasets"
 HAMMER_DT = 0.01        # s per sample, declared (the source has none; its loader uses dt = 1)
@@ -122,7 +124,7 @@ def _read_csv(path: Path, info: DatasetInfo) -> tuple[np.ndarray, np.ndarray]:
 
 
 def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | None = None,
-                 goal_tol: float | None = None) -> Demonstrations:
+                 goal_tol: float | None = None) -> Demonstrations | PoseDemonstrations:
     """The demonstrations of the shipped set ``name`` (:func:`dataset_names`), checked by
     :func:`check_demonstrations` except for the ends, which are one rule applied after preprocessing
     (``pouring``'s ends scatter up to 11 cm: :func:`sosdyn.lfd.data.preprocess.preprocess` aligns
@@ -131,18 +133,14 @@ def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | N
 
     Positions as recorded, in the units of the set's README (``units`` names them, with
     "(inferred)" where the source does not state them); velocities estimated from positions
-    (:meth:`Demonstration.from_positions`). Pose sets: x, y, z only (module docstring);
-    ``positions_only=True`` says you know, ``False`` is refused. ``dt``: the time step (s) of
+    (:meth:`Demonstration.from_positions`). Pose sets: :class:`PoseDemonstrations` (positions and
+    orientations), or the positions alone with ``positions_only=True`` (module docstring). ``dt``: the time step (s) of
     an index-timed set (``hammer``; default :data:`HAMMER_DT`, announced); refused for sets with
     time stamps.
     """
     info = dataset_info(name)
-    if info.pose and positions_only is False:
-        raise InputError(f"{name} holds positions and orientations; sosdyn learns positions only for now. "
-                         "Try: positions_only=True (x, y, z; the quaternion columns are not read).")
-    if info.pose and positions_only is None:
-        warnings.warn(f"{name}: positions only (x, y, z); the orientation quaternion (qw, qx, qy, qz) is not "
-                      "read. Pass positions_only=True to silence this.", UserWarning, stacklevel=2)
+    if positions_only not in (None, True, False):
+        raise InputError(f"positions_only must be None, True or False, got {positions_only!r}.")
     if dt is not None and not info.index_time:
         raise InputError(f"{name} has time stamps; dt applies only to index-timed sets "
                          f"({', '.join(n for n, i in DATASETS.items() if i.index_time)}). Try: drop dt.")
@@ -153,8 +151,12 @@ def load_dataset(name: str, *, positions_only: bool | None = None, dt: float | N
         step = HAMMER_DT if dt is None else dt
         if isinstance(step, bool) or not isinstance(step, (int, float, np.number)) or not 0 < step < np.inf:
             raise InputError(f"dt must be a finite number > 0 (s per sample), got {dt!r}.")
+    paths = sorted((DATASETS_DIR / info.folder).glob("demo_*.csv"))
+    if info.pose and not positions_only:
+        poses = load_pose_demos(paths, units=info.units, name=name)
+        return PoseDemonstrations(poses.demos, name, info.units, poses.notes)
     demos = []
-    for path in sorted((DATASETS_DIR / info.folder).glob("demo_*.csv")):
+    for path in paths:
         t, pos = _read_csv(path, info)
         demos.append(Demonstration.from_positions(t * step if info.index_time else t, pos,
                                                   f"{name}/{path.name}"))

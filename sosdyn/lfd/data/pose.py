@@ -15,14 +15,18 @@ the one of +-q_k nearer (larger dot product) to the previous, kept, sample.
 The goal orientation (:func:`goal_orientation`) is the chordal L2 mean of the end orientations
 (:meth:`scipy.spatial.transform.Rotation.mean`: the rotation R minimising sum_i ||R - R_i||_F^2).
 Scattered ends (:func:`align_orientations`), like scattered end positions: each demo i is turned
-by R_i(t) <- R_i(t) exp(w(t) log(R_i(T)^T R_g)), w(t) = (t - t_0) / (T - t_0) rising from 0 to 1,
-so it starts where it started and ends at R_g; the angle moved is reported; ends more than
+by R_i(t) <- R_i(t) exp(w(t) log(R_i(T)^T R_g)), w(t) the smoothstep of the position alignment
+(:func:`~.preprocess.blend_shift`: 0 before the last half of the demo, rising to 1 at its end), so it
+starts where it started and ends at R_g; the angle moved is reported; ends more than
 ``goal_tol_deg`` from R_g are refused with the value to try.
 
-The chart (:func:`chart`): r = log(R_g^T R), the rotation vector of the rotation from the goal,
-defined for rotation angles |r| < pi (the cut locus |r| = pi has two logarithms); samples above
-pi - CHART_MARGIN are refused (docs/theory.md, "Poses"). All quaternion algebra is scipy's
-:class:`~scipy.spatial.transform.Rotation` (scalar_first=True for w x y z).
+The chart (:func:`chart`, :func:`from_chart`): r = log(R_g^T R), the rotation vector of the rotation
+from the goal, |r| in [0, pi] its geodesic angle from the goal (at the cut locus |r| = pi the two
+logarithms +-pi u are both valid; scipy picks one). Demonstrations must stay below pi - CHART_MARGIN
+from their goal (:func:`demo_chart`: a demo crossing the cut locus would jump in r); starts and run-time
+states may be anywhere (docs/theory.md, "Poses"). Geodesic angles between quaternions:
+:func:`angle_matrix`; the demos split into positions and rotation vectors: :func:`split_demonstrations`.
+All quaternion algebra is scipy's :class:`~scipy.spatial.transform.Rotation` (scalar_first=True for w x y z).
 """
 from __future__ import annotations
 
@@ -36,12 +40,13 @@ from scipy.spatial.transform import Rotation
 from sosdyn.errors import DemonstrationError, InputError
 from .columns import TIME_UNITS, check_duration, check_time_units, time_header_names, time_unit
 from .demonstrations import Demonstration, Demonstrations, time_problem
+from .preprocess import blend_shift
 
 POSITION_COLUMNS = ("x", "y", "z")
 SCALAR_FIRST, SCALAR_LAST = ("qw", "qx", "qy", "qz"), ("qx", "qy", "qz", "qw")
 NORM_REPORT = 1e-6            # row norms further than this from 1 are reported after renormalising
 NORM_REFUSE = 0.1             # ... and further than this are refused (not a unit quaternion)
-CHART_MARGIN = np.deg2rad(10.0)     # demos and starts stay below pi - CHART_MARGIN from the goal
+CHART_MARGIN = np.deg2rad(10.0)     # demonstrations stay below pi - CHART_MARGIN from their goal
 GOAL_TOL_DEG = 20.0           # default refusal of end orientations scattered more than this
 
 
@@ -235,8 +240,8 @@ def align_orientations(demos: PoseDemonstrations, goal_quat, goal_tol_deg: float
                 f"pose demo {i} ({d.source}) ends {angle:.3g} deg from the mean end orientation, more than "
                 f"goal_tol_deg = {goal_tol_deg:g}; the demos do not share a goal orientation. Try: drop that "
                 f"demo, or goal_tol_deg={1.1 * angle:.3g}.")
-        w = (d.t - d.t[0]) / (d.t[-1] - d.t[0])
-        turned = d.rotations * Rotation.from_rotvec(w[:, None] * fix)
+        w, _ = blend_shift(d.t, np.ones(1))
+        turned = d.rotations * Rotation.from_rotvec(w * fix)
         quat, _ = sign_continuous(turned.as_quat(scalar_first=True))
         quat = quat if quat[0] @ d.quat[0] >= 0 else -quat
         out.append(PoseDemonstration(d.t, d.pos, quat, d.source))
@@ -244,23 +249,43 @@ def align_orientations(demos: PoseDemonstrations, goal_quat, goal_tol_deg: float
     return PoseDemonstrations(out, demos.name, demos.units, demos.notes), moved
 
 
-def chart(quat, goal_quat, label: str = "orientation") -> np.ndarray:
-    """r = log(R_g^T R) (rotation vectors, radians) of the rows of ``quat`` (w x y z); refused if any
-    angle |r| >= pi - CHART_MARGIN (near the cut locus the chart is not defined)."""
+def chart(quat, goal_quat) -> np.ndarray:
+    """r = log(R_g^T R) (rotation vectors, radians, |r| <= pi) of the rows of ``quat`` (w x y z)."""
     Rg = Rotation.from_quat(goal_quat, scalar_first=True)
-    r = (Rg.inv() * Rotation.from_quat(np.atleast_2d(quat), scalar_first=True)).as_rotvec()
+    return (Rg.inv() * Rotation.from_quat(np.atleast_2d(quat), scalar_first=True)).as_rotvec()
+
+
+def from_chart(r, goal_quat) -> np.ndarray:
+    """Unit quaternions (w x y z) R_g exp(r) of the rotation vectors r (m, 3)."""
+    Rg = Rotation.from_quat(goal_quat, scalar_first=True)
+    return (Rg * Rotation.from_rotvec(np.atleast_2d(r))).as_quat(scalar_first=True)
+
+
+def demo_chart(quat, goal_quat, label: str = "orientation") -> np.ndarray:
+    """:func:`chart` of a demonstration's samples; refused if any angle |r| >= pi - CHART_MARGIN (a
+    demonstration near the cut locus may jump between the two logarithms)."""
+    r = chart(quat, goal_quat)
     angle = np.linalg.norm(r, axis=1)
     worst = int(np.argmax(angle))
     if angle[worst] >= np.pi - CHART_MARGIN:
-        raise InputError(
+        raise DemonstrationError(
             f"{label} row {worst} is {np.rad2deg(angle[worst]):.1f} deg from the goal orientation, beyond "
-            f"{np.rad2deg(np.pi - CHART_MARGIN):.0f} deg: the log chart at the goal is not defined at 180 deg "
-            "(two shortest rotations). Try: a start or demos turned less than that from the goal.")
+            f"{np.rad2deg(np.pi - CHART_MARGIN):.0f} deg: near the half turn the rotation vector from the goal "
+            "jumps. Try: demonstrations that end within a half turn less 10 deg of where they turned from.")
     return r
 
 
-def chart_demonstrations(demos: PoseDemonstrations, goal_quat, rot_factor: float) -> Demonstrations:
-    """The 6-D demonstrations s = (x, rot_factor r), r = :func:`chart` of each sample."""
-    return Demonstrations([Demonstration.from_positions(
-        d.t, np.hstack([d.pos, rot_factor * chart(d.quat, goal_quat, f"pose demo {d.source!r}")]), d.source)
-        for d in demos], demos.name, demos.units)
+def angle_matrix(qa, qb) -> np.ndarray:
+    """(N, M) geodesic angles in degrees: theta = 2 arccos |<a_i, b_j>| (the rotation of R_a^T R_b)."""
+    dots = np.clip(np.abs(np.asarray(qa, float) @ np.asarray(qb, float).T), 0.0, 1.0)
+    return np.rad2deg(2.0 * np.arccos(dots))
+
+
+def split_demonstrations(demos: PoseDemonstrations, goal_quat) -> tuple[Demonstrations, Demonstrations]:
+    """(positions, rotation vectors): the demos' positions x and their r = :func:`demo_chart` at
+    ``goal_quat``, each as :class:`Demonstrations` (velocities estimated from the samples)."""
+    pos = Demonstrations([Demonstration.from_positions(d.t, d.pos, d.source) for d in demos], demos.name,
+                         demos.units)
+    rot = Demonstrations([Demonstration.from_positions(d.t, demo_chart(d.quat, goal_quat, f"pose demo {d.source!r}"),
+                                                       d.source) for d in demos], demos.name, "rad")
+    return pos, rot

@@ -187,6 +187,18 @@ def align_ends(demos, max_shift: float | None = None, fraction: float = BLEND_FR
                           getattr(demos, "goal_tol", None), getattr(demos, "columns", None)), shifts
 
 
+def check_options(smooth_window, align) -> None:
+    """InputError unless ``smooth_window`` is "auto", "off", None or an odd int >= MIN_WINDOW and ``align``
+    is "auto", True or False (:func:`preprocess`'s options, and the pose preprocessing's)."""
+    if not (smooth_window in ("auto", "off", None) or (isinstance(smooth_window, (int, np.integer))
+                                                        and not isinstance(smooth_window, bool)
+                                                        and smooth_window >= MIN_WINDOW and smooth_window % 2)):
+        raise InputError(f"smooth_window must be 'auto', 'off', None or an odd integer >= {MIN_WINDOW}, got "
+                         f"{smooth_window!r}. Try: 'auto'.")
+    if align not in ("auto", True, False):
+        raise InputError(f"align must be 'auto', True or False, got {align!r}.")
+
+
 def preprocess(demos, *, smooth_window: int | str | None = "auto", trim_rest: bool = True,
                align: bool | str = "auto", max_shift: float | None = None):
     """Steps 1-4 of the module docstring on ``demos``: (Demonstrations, PreprocessReport).
@@ -199,13 +211,7 @@ def preprocess(demos, *, smooth_window: int | str | None = "auto", trim_rest: bo
     items = list(demos)
     if not items or any(not isinstance(d, Demonstration) or len(d.t) < MIN_WINDOW for d in items):
         raise InputError(f"preprocess needs Demonstrations of at least {MIN_WINDOW} samples each.")
-    if not (smooth_window in ("auto", "off", None) or (isinstance(smooth_window, (int, np.integer))
-                                                        and not isinstance(smooth_window, bool)
-                                                        and smooth_window >= MIN_WINDOW and smooth_window % 2)):
-        raise InputError(f"smooth_window must be 'auto', 'off', None or an odd integer >= {MIN_WINDOW}, got "
-                         f"{smooth_window!r}. Try: 'auto'.")
-    if align not in ("auto", True, False):
-        raise InputError(f"align must be 'auto', True or False, got {align!r}.")
+    check_options(smooth_window, align)
     name, units = getattr(demos, "name", ""), getattr(demos, "units", "")
     resampled = [resample_uniform(d) for d in items]
     changed = [i for i, (a, b) in enumerate(zip(items, resampled)) if a is not b]

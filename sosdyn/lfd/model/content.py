@@ -17,7 +17,7 @@ matrices do not depend on the state; m field and p metric monomials), compared w
 ``max_sampled_work`` (:mod:`sosdyn.limits`). So a file the limits admit loads in seconds (measured:
 a 24-D 3-component and a 16-D 14-component second-order file at the limit, 3.3 and 4.0 s).
 
-Per family: the first-order state (:func:`validate_state`, also the pose model's 6-D chart model;
+Per family: the first-order state (:func:`validate_state`, also each of the pose model's two blocks;
 :func:`state_record` is the inverse for saving), the second-order state
 (:func:`second_order_state`) and the pose model's own fields (:func:`pose_fields`). The estimators
 are built from the checked values by their ``from_content`` (:mod:`.cdsp`, :mod:`.pose`,
@@ -40,11 +40,12 @@ from ..fit.twist import check_twist
 from ..fit.warp import check_maps
 from .fileformat import FORMAT
 
-POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 1
+POSE_FORMAT, POSE_VERSION = "sosdyn-pose", 2
+BLOCKS = ("position", "orientation")         # a pose file's two CDSP blocks (params and state each)
 SECOND_ORDER_FORMAT, SECOND_ORDER_VERSION = "sosdyn-second-order", 1
 #: Each format's top-level fields besides ``format`` and ``version`` (the digests are the container's).
 TOP_LEVEL = {FORMAT: ("params", "state"), SECOND_ORDER_FORMAT: ("params", "state"),
-             POSE_FORMAT: ("params", "state", "goal_quat", "rot_factor", "goal_tol_deg")}
+             POSE_FORMAT: ("goal_tol_deg", "goal_quat", "still", *BLOCKS)}
 SECOND_ORDER_STATE = ("goal", "dt", "length_scale", "time_scale", "window", "C", "M", "margin")
 #: A second-order state's own fields by its ``field`` parameter: the gating mixture, or the tracked samples and the tank.
 SECOND_ORDER_OWN = {"mixture": ("weights", "means", "covariances"),
@@ -121,6 +122,11 @@ def check_load_work(fmt: str, content: dict) -> None:
     """ResourceLimitError (naming the limit and how to raise it) when the file's dimension, its
     components or, for a second-order file, its exact check's work (K + 1)(2n)^3 exceed the limits
     in force; read from the header fields before any other field is converted or checked."""
+    if fmt == POSE_FORMAT:                       # two first-order blocks
+        for block in BLOCKS:
+            check_fields(need(content, block, "", dict), TOP_LEVEL[FORMAT], block)
+            check_load_work(FORMAT, content[block])
+        return
     state = need(content, "state", "", dict)
     if fmt == SECOND_ORDER_FORMAT:
         n, K = len(need(state, "goal", "state", list)), len(need(state, "C", "state", list))
@@ -352,14 +358,19 @@ def second_order_state(st: dict, field: str = "mixture") -> dict:
 
 
 # ---------------------------------------------------------------------- the pose model's own fields
-def pose_fields(content: dict) -> tuple[np.ndarray, float, float]:
-    """(goal_quat, rot_factor, goal_tol_deg) of a pose file: a unit quaternion (norm 1 to 1e-9),
-    c > 0 and a tolerance in (0, 180) degrees, all finite numbers."""
+def pose_fields(content: dict) -> tuple[np.ndarray, dict, float]:
+    """(goal_quat, still, goal_tol_deg) of a pose file: a unit quaternion (norm 1 to 1e-9), the still rates
+    ({"position", "orientation"}: null or a number > 0) and a tolerance in (0, 180) degrees, all finite
+    numbers; each block (``position``, ``orientation``) must be an object of a first-order file's fields."""
     q = array(need(content, "goal_quat", ""), "goal_quat", (4,))
     if abs(np.linalg.norm(q) - 1) > 1e-9:
         raise ModelFileError(f"malformed: goal_quat must be a unit quaternion (norm 1), got norm {np.linalg.norm(q):.12g}")
-    c = positive(need(content, "rot_factor", ""), "rot_factor")
+    still = need(content, "still", "", dict)
+    check_fields(still, BLOCKS, "still")
+    rates = {b: None if need(still, b, "still") is None else positive(still[b], f"still.{b}") for b in BLOCKS}
     tol = positive(need(content, "goal_tol_deg", ""), "goal_tol_deg")
     if not tol < 180:
         raise ModelFileError(f"malformed: goal_tol_deg must be in (0, 180), got {tol!r}")
-    return q, c, tol
+    for block in BLOCKS:
+        check_fields(need(content, block, "", dict), TOP_LEVEL[FORMAT], block)
+    return q / np.linalg.norm(q), rates, tol

@@ -1,51 +1,53 @@
-"""PoseCDSP: a certified model of position and orientation (docs/theory.md, "Poses"); the pose family
-of the model interface (:class:`~.base.MotionModel`).
+"""PoseCDSP: a certified model of position and orientation as two certified blocks (docs/theory.md, "Poses");
+the pose family of the model interface (:class:`~.base.MotionModel`).
 
-State s = (x, c r) in R^6: the position x and the rotation vector r = log(R_g^T R) of the
-orientation in the chart at the goal orientation R_g (:func:`~sosdyn.lfd.data.pose.chart`),
-r scaled by ``rot_factor_`` c = max |x - x_g|_inf / max |r|_inf over the training data (each block
-by its own data scale, so the two are commensurate). A :class:`~.cdsp.CDSP` is fitted on the 6-D
-demonstrations: positions and orientations coupled, its usual certificate (contraction at rate
-gamma in the metric, SOS + sampled check + the warp's numbers) on R^6 with goal (x_g, 0).
+The pose (x, R) is carried by the chart state s = (x, r), r = log(R_g^T R) the rotation vector of the
+orientation from the goal orientation R_g (:func:`~sosdyn.lfd.data.pose.chart`). The model is
 
-Carrying over to rotations: exp_{R_g}: r -> R_g exp(r) is a diffeomorphism of the open ball
-|r| < pi onto SO(3) minus the cut locus {angle(R_g^T R) = pi}; a chart trajectory that stays in
-the ball is a rotation trajectory, and r -> 0 is R -> R_g. The ball is kept: with a constant
-metric M (metric_degree 0) the certificate gives d/dt (u^T M u) <= -gamma u^T M u (u = z, or
-phi(z) with a warp), so the ellipsoid through the start is invariant and
-|r(t)| <= :func:`chart_bound` (z0) for all t; a rollout whose bound is not below
-pi - CHART_MARGIN is checked sample by sample and refused (InputError) if it would leave.
+    xdot = F_x(x)        the certified CDSP of the positions (``position_``, as a position model),
+    rdot = F_r(r)        a CDSP of r in the identity metric (``orientation_``, :mod:`~sosdyn.lfd.fit.pose`),
 
-Rollout: the chart state is integrated (the CDSP's integrator) and mapped by R = R_g exp(r):
-unit quaternions by construction, no drift off the sphere. Velocities: v = xdot, and the world
-angular velocity omega = R J_r(r) rdot (:func:`body_velocity`, the right Jacobian of SO(3):
-R^T Rdot = [J_r(r) rdot]_x for R = R_g exp(r)).
+so the position never depends on the orientation: an orientation-only start or a turn of the goal
+orientation moves the position by exactly 0. The orientation's certificate makes the geodesic angle
+|r| = angle(R, R_g) decrease, d|r|^2/dt <= -gamma |r|^2, along every trajectory, so a state that starts
+in the chart (|r| < pi, any orientation but the exact half turn, which has two logarithms and takes
+either) never leaves it: every start converges, with no refusal. A block that does not move in the
+demonstrations is fitted as a still block (:func:`~sosdyn.lfd.fit.pose.still_block`, ``still_``).
+
+The predictor evaluates one pose in plain floats (:mod:`~sosdyn.lfd.runtime.pose`, the same formulas).
+
+Rollout: the chart state is integrated (the CDSP's integrator, absolute tolerance relative to each
+block's scale) and mapped by R = R_g exp(r): unit quaternions by construction. Velocities: v = xdot,
+and the world angular velocity omega = R J_r(r) rdot (:func:`~sosdyn.lfd.runtime.pose.body_velocity`).
+A goal pose (x_g', R_g') translates the position field and moves the chart: r' = log(R_g'^T R).
 
 Speed limits (``max_speed`` on |v|, data units / s; ``max_angular_speed`` on |omega|, rad / s): the
 chart velocity is scaled by one factor lambda, the speed limit's of the joint ratio of |v| / v_max and
-|omega| / w_max (:func:`pose_speed_factor`; |v| < v_max, |omega| < w_max);
-omega is linear in rdot, so both are scaled by lambda, and one positive factor on the 6-D field
-keeps its paths and its goal (the limited system is a time change of the certified one).
+|omega| / w_max (:func:`~sosdyn.lfd.runtime.pose.pose_speed_factor`, built on :mod:`~sosdyn.lfd.runtime.states`;
+|v| < v_max, |omega| < w_max); one positive factor on the whole velocity keeps the paths and the goal (a time
+change of the certified system).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from sosdyn.errors import InputError, NotFittedError
-from ..data.pose import (CHART_MARGIN, GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart,
-                          chart_demonstrations, goal_orientation)
-from ..fit.composite import apply as warp_apply, check as check_warp
+from sosdyn.errors import InputError, ModelFileError, NotFittedError
+from ..data.pose import (GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart, from_chart, goal_orientation,
+                         split_demonstrations)
+from ..data.pose_preprocess import preprocess_poses
 from ..fit.params import preset_params
-from ..rollout import rollout as integrate
-from ..rollout.quality import HORIZON, reproduction_rows
-from ..runtime.pose import body_velocity, pose_speed_factor, pose_to_cpp, pose_to_python
-from ..runtime.states import check_max_speed
+from ..fit.pose import check_moves, isotropic_demonstrations, orientation_params, still_block
+from ..rollout import ATOL_REL, rollout as integrate
+from ..rollout.quality import HORIZON
+from ..runtime.pose import (body_velocity_one, chart_one, check_limits, pose_speed_factor, pose_to_cpp, pose_to_python,
+                            rotate_one)
 from .base import Layout, MotionModel, Reproductions
 from .cdsp import CDSP, DEFAULTS
-from .content import POSE_FORMAT, POSE_VERSION, pose_fields
+from .content import BLOCKS, POSE_FORMAT, POSE_VERSION, pose_fields
+from .pose_score import pose_reproduction_table
 from .reach import metric_matrix, reach_box
 
 #: The numbers of a pose (a start, a goal, a rollout row) and of a push (a world rotation vector w).
@@ -53,37 +55,14 @@ POSE_NAMES = ("x", "y", "z", "qw", "qx", "qy", "qz")
 PUSH_NAMES = ("dx", "dy", "dz", "wx", "wy", "wz")
 
 
-def chart_bound(model: CDSP, z0, rot_factor: float) -> float:
-    """An upper bound on sup_t |r(t)| from the start z0 (z-units): with u = phi(z) and constant M,
-    u^T M u is non-increasing, so |r| = s |z_r| / c <= s / c * sqrt(u0^T M u0) * b with b =
-    sqrt(lambda_max(P M^-1 P^T)) (P picks the r block; no warp) or 1 / (sqrt(lambda_min M) b_lo) (warp:
-    |z| <= |u| / b_lo, b_lo = prod(1 - l_j) / lam(K) <= sigma_min(J_phi), :mod:`~sosdyn.lfd.fit.composite`).
-    inf when M is not constant."""
-    M = metric_matrix(model)
-    if M is None:
-        return np.inf
-    z0 = np.asarray(z0, dtype=float)
-    if model.warp_ is None:
-        level, Minv = float(z0 @ M @ z0), np.linalg.inv(M)
-        b = np.sqrt(np.linalg.eigvalsh(Minv[3:, 3:]).max())
-    else:
-        u0 = warp_apply(z0[None], model.warp_)[0]
-        level = float(u0 @ M @ u0)
-        lower = check_warp(model.warp_, 1, 0)["singular_bound"]
-        b = 1.0 / (np.sqrt(np.linalg.eigvalsh(M).min()) * lower) if lower > 0 else np.inf
-    return float(model.scale_ / rot_factor * np.sqrt(max(level, 0.0)) * b)
-
-
 @dataclass
 class PoseTrajectory:
-    """A pose rollout: ``t`` (T,), ``pos`` (T, 3), ``quat`` (T, 4 unit, w x y z), ``chart_bounds``:
-    the a-priori bound on the angle from the goal (radians) of each segment (between events);
-    ``goal_history`` (T, 7): the goal pose in effect at each sample."""
+    """A pose rollout: ``t`` (T,), ``pos`` (T, 3), ``quat`` (T, 4 unit, w x y z), ``goal_history`` (T, 7): the
+    goal pose in effect at each sample."""
 
     t: np.ndarray
     pos: np.ndarray
     quat: np.ndarray
-    chart_bounds: list = field(default_factory=list)
     goal_history: np.ndarray | None = None
 
     @property
@@ -92,16 +71,37 @@ class PoseTrajectory:
         return np.hstack([self.pos, self.quat])
 
 
+@dataclass(frozen=True)
+class PoseCertificateReport:
+    """The two blocks' certificate checks (:class:`~sosdyn.lfd.fit.certificate.CertificateReport` each)."""
+
+    position: object
+    orientation: object
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.position.passed and self.orientation.passed)
+
+    def __str__(self) -> str:
+        return f"position: {self.position}\norientation (identity metric: the angle never increases): {self.orientation}"
+
+
 class PoseCDSP(MotionModel):
     """Learn a certified pose motion (position and orientation) from :class:`PoseDemonstrations`.
 
-    ``goal_tol_deg``: end orientations further than this from their chordal mean are refused
-    (they are aligned to it otherwise, ``orientation_moved_deg_``); every other keyword is a
-    :class:`CDSP` parameter of the 6-D chart model ``cdsp_``.
+    ``goal_tol_deg``: end orientations further than this from their chordal mean are refused (nearer
+    ones are aligned to it, ``orientation_moved_deg_``); every other keyword is a :class:`CDSP`
+    parameter of the position block ``position_``, and of the orientation block ``orientation_`` with
+    the identity metric and no warp (:func:`~sosdyn.lfd.fit.pose.orientation_params`).
+
+    Learned: ``goal_quat_`` (w x y z), ``position_`` and ``orientation_`` (CDSPs; the orientation's goal
+    is r = 0), ``still_`` ({"position": a or None, "orientation": a or None}: the rate of a block that did
+    not move in the demonstrations), ``orientation_moved_deg_`` (set by ``fit``).
     """
 
     name = "PoseCDSP"
     file_format, file_version = POSE_FORMAT, POSE_VERSION
+    columns_ = None             # pose files are read by their own header rule (x, y, z and a quaternion)
 
     def __init__(self, goal_tol_deg: float = GOAL_TOL_DEG, **cdsp_params):
         if isinstance(goal_tol_deg, bool) or not isinstance(goal_tol_deg, (int, float)) or \
@@ -116,233 +116,99 @@ class PoseCDSP(MotionModel):
         self.cdsp_params = cdsp_params
         CDSP(**cdsp_params).check_params()
 
-    def fit(self, demos: PoseDemonstrations) -> PoseCDSP:
-        """Goal orientation, aligned ends, the chart, the scale c, then the certified 6-D CDSP."""
-        if not isinstance(demos, PoseDemonstrations):
-            raise InputError(f"PoseCDSP.fit takes PoseDemonstrations (sosdyn.lfd.data.pose.load_pose_demos), "
-                             f"got {type(demos).__name__}.")
-        goal_quat = goal_orientation(demos)
-        aligned, self.orientation_moved_deg_ = align_orientations(demos, goal_quat, self.goal_tol_deg)
-        X = np.vstack([d.pos for d in aligned])
-        R = np.vstack([chart(d.quat, goal_quat) for d in aligned])
-        pos_scale, rot_scale = np.abs(X - aligned.goal_pos).max(), np.abs(R).max()
-        self.rot_factor_ = float(pos_scale / rot_scale) if rot_scale > 0 and pos_scale > 0 else 1.0
-        self.goal_quat_ = goal_quat
-        self.cdsp_ = CDSP(**self.cdsp_params, progress=self.progress).fit(chart_demonstrations(aligned, goal_quat, self.rot_factor_))
-        return self
-
-    # ------------------------------------------------------------------ state and chart
-    def _check_fitted(self):
-        if not hasattr(self, "cdsp_"):
-            raise NotFittedError("this PoseCDSP is not fitted yet; call fit(pose_demos) first")
-
-    @property
-    def goal_pos_(self) -> np.ndarray:
-        return self.cdsp_.goal_[:3]
-
-    @property
-    def certified_(self) -> bool:
-        return bool(self.cdsp_.certified_)
-
-    verification_ = property(lambda self: self.cdsp_.verification_, doc="The 6-D chart model's check.")
-    history_ = property(lambda self: self.cdsp_.history_, doc="The 6-D chart model's convex steps.")
-    units_ = property(lambda self: self.cdsp_.units_, doc="The positions' units.")
-    columns_ = None             # pose files are read by their own header rule (x, y, z and a quaternion)
-
-    def _pose(self, p, what: str) -> tuple[np.ndarray, np.ndarray]:
-        p = np.asarray(p, dtype=float)
-        if p.shape != (7,) or not np.isfinite(p).all():
-            raise InputError(f"{what} must be a finite 7-vector (x, y, z, qw, qx, qy, qz), got shape {p.shape}.")
-        if not 0.5 < np.linalg.norm(p[3:]) < 1.5:
-            raise InputError(f"{what}: the quaternion {p[3:]} is not unit (norm {np.linalg.norm(p[3:]):.3g}).")
-        return p[:3], p[3:] / np.linalg.norm(p[3:])
-
-    def _goal(self, goal) -> tuple[np.ndarray, np.ndarray]:
-        return (self.goal_pos_, self.goal_quat_) if goal is None else self._pose(goal, "goal")
-
-    def state(self, x, quat, goal_quat) -> np.ndarray:
-        """s = (x, c r), r = log(R_g^T R) (refused near the cut locus)."""
-        return np.concatenate([x, self.rot_factor_ * chart(quat, goal_quat, "the start orientation")[0]])
-
-    def orientation(self, S, goal_quat) -> np.ndarray:
-        """Unit quaternions (w x y z) R_g exp(r) of the chart states S (m, 6)."""
-        Rg = Rotation.from_quat(goal_quat, scalar_first=True)
-        return (Rg * Rotation.from_rotvec(S[:, 3:] / self.rot_factor_)).as_quat(scalar_first=True)
-
-    # ------------------------------------------------------------------ motion
-    def predictor(self, max_speed=None, max_angular_speed=None, goal=None, **other):
-        """``step(x, quat, goal=None) -> (v, omega)``: linear velocity (3,) and world angular velocity
-        (3,) at the position x and orientation quat (w x y z), for the goal pose (7-vector; default
-        the model's, fixed here or per call); both scaled by :func:`pose_speed_factor` so that
-        |v| <= max_speed and |omega| <= max_angular_speed (rad/s) when given."""
-        self.refuse(other, "predictor")
-        self._check_fitted()
-        fixed = self._goal(goal)
-        limits = self._limits(max_speed, max_angular_speed)
-        step6 = self.cdsp_.predictor()
-        g6 = self.cdsp_.goal_
-
-        def step(x, quat, goal=None):
-            gx, gq = fixed if goal is None else self._pose(goal, "goal")
-            x = np.asarray(x, dtype=float)
-            s = self.state(x, np.asarray(quat, dtype=float), gq)
-            sdot = step6(s - np.concatenate([gx, np.zeros(3)]) + g6)
-            sdot = sdot * pose_speed_factor(s[None], sdot[None], self.rot_factor_, *limits)[0]
-            r, rdot = s[3:] / self.rot_factor_, sdot[3:] / self.rot_factor_
-            R = Rotation.from_quat(gq, scalar_first=True) * Rotation.from_rotvec(r)
-            return sdot[:3], R.apply(body_velocity(r, rdot)[0])
-        return step
-
-    @staticmethod
-    def _limits(max_speed, max_angular_speed) -> tuple:
-        return (check_max_speed(max_speed), check_max_speed(max_angular_speed, "max_angular_speed", "rad/s"))
-
-    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None,
-                max_angular_speed=None, **other) -> PoseTrajectory:
-        """Integrate from the pose x0 = (x, y, z, qw, qx, qy, qz) for ``duration`` s; ``perturbations``
-        (pushes) [(t, (dx, dy, dz, wx, wy, wz))]: x += dx and R <- exp(w) R (world rotation vector);
-        ``goal_changes`` [(t, goal pose)]. Between events the chart state at the goal in effect is
-        integrated and mapped back (module docstring); a segment whose a-priori bound is not below
-        pi - CHART_MARGIN and whose samples leave it is refused. ``max_speed`` / ``max_angular_speed``:
-        as :meth:`predictor` (the same paths, traversed more slowly)."""
-        self.refuse(other, "rollout")
-        self._check_fitted()
-        limits = self._limits(max_speed, max_angular_speed)
-        x, q = self._pose(x0, "x0")
-        gx, gq = self._goal(goal)
-        events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in perturbations] +
-                        [(float(t), 1, np.asarray(g, dtype=float)) for t, g in goal_changes], key=lambda e: e[:2])
-        if any(not 0 <= e[0] < duration for e in events) or any(k == 0 and d.shape != (6,) for _, k, d in events):
-            raise InputError(f"events must lie in [0, duration = {duration}) and pushes be 6-vectors (dx, w).")
-        ts, P, Q, G, bounds, t0 = [], [], [], [], [], 0.0
-        for t_end, kind, data in events + [(float(duration), -1, None)]:
-            if t_end > t0:
-                traj = self._segment(x, q, gx, gq, t_end - t0, dt, bounds, limits)
-                keep = slice(1 if ts else 0, None)
-                ts.append(t0 + traj.t[keep])
-                P.append(traj.pos[keep, :3])
-                Q.append(self.orientation(traj.pos, gq)[keep])
-                G.append(np.tile(np.concatenate([gx, gq]), (len(ts[-1]), 1)))
-                x, q, t0 = traj.pos[-1, :3], Q[-1][-1] if len(Q[-1]) else q, t_end
-            if kind == 0:
-                x = x + data[:3]
-                q = (Rotation.from_rotvec(data[3:]) * Rotation.from_quat(q, scalar_first=True)).as_quat(
-                    scalar_first=True)
-            elif kind == 1:
-                gx, gq = self._pose(data, "goal change")
-        return PoseTrajectory(np.concatenate(ts), np.vstack(P), np.vstack(Q), bounds, np.vstack(G))
-
-    def _segment(self, x, q, gx, gq, duration, dt, bounds, limits):
-        s0 = self.state(x, q, gq)
-        g6 = np.concatenate([gx, np.zeros(3)])
-        bound = chart_bound(self.cdsp_, (s0 - g6) / self.cdsp_.scale_, self.rot_factor_)
-        bounds.append(bound)
-        model, c = self.cdsp_, self.rot_factor_
-
-        def field(S, g):            # g = g6: the chart goal, r = 0
-            Sdot = model.field(S, g)
-            return Sdot * pose_speed_factor(S, Sdot, c, *limits)
-        traj = integrate(field, s0, duration=duration, dt=model.dt_ if dt is None else dt, goal=g6,
-                         scale=model.scale_)
-        angle = np.linalg.norm(traj.pos[:, 3:], axis=1) / self.rot_factor_
-        if bound >= np.pi - CHART_MARGIN and angle.max() >= np.pi - CHART_MARGIN:
-            raise InputError(f"the rollout turns {np.rad2deg(angle.max()):.0f} deg from the goal orientation, "
-                             "out of the chart (cut locus at 180 deg). Try: a start nearer the demonstrations.")
-        return traj
-
-    # ------------------------------------------------------------------ evidence and files
-    def verify(self, n_samples=None, seed=None):
-        """The 6-D model's certificate check (:meth:`CDSP.verify`)."""
-        self._check_fitted()
-        return self.cdsp_.verify(n_samples, seed)
-
-    def content(self) -> dict:
-        """The pose model file's fields: the 6-D CDSP's params and state, the goal orientation and c."""
-        self._check_fitted()
-        return {"goal_tol_deg": self.goal_tol_deg, "goal_quat": self.goal_quat_, "rot_factor": self.rot_factor_,
-                **self.cdsp_.content()}
-
-    @classmethod
-    def from_content(cls, content: dict) -> PoseCDSP:
-        """A pose model (not yet verified) from a file's content (:func:`~.content.pose_fields`)."""
-        goal_quat, rot_factor, tol = pose_fields(content)
-        model = cls(tol)
-        model.cdsp_ = CDSP.from_content({"params": content.get("params"), "state": content.get("state")})
-        model.goal_quat_, model.rot_factor_ = goal_quat, rot_factor
-        return model
-
-    def accept(self, report) -> None:
-        self.cdsp_.accept(report)
-
-    # ------------------------------------------------------------------ the model interface
-    def __repr__(self) -> str:
-        fitted = "" if not hasattr(self, "cdsp_") else (
-            f", fitted: goal {np.array2string(self.goal_pos_, precision=4, separator=', ')} "
-            f"{np.array2string(self.goal_quat_, precision=4, separator=', ')}, certified={self.certified_}")
-        params = "".join(f", {k}={v!r}" for k, v in self.cdsp_params.items())
-        return f"PoseCDSP(goal_tol_deg={self.goal_tol_deg:g}{params}{fitted})"
-
     def get_params(self) -> dict:
         return {"goal_tol_deg": self.goal_tol_deg, **CDSP(**self.cdsp_params).get_params()}
 
     @classmethod
     def preset(cls, name: str, **overrides) -> PoseCDSP:
-        """An unfitted pose model whose 6-D chart model has the CDSP preset ``name``, then ``overrides``."""
+        """An unfitted pose model whose blocks have the CDSP preset ``name``, then ``overrides``."""
         return cls(**{**preset_params(name), **overrides})
 
     @classmethod
     def prepare(cls, demos, smooth_window="auto", trim_rest=True, align="auto", max_shift=None):
-        """(demos, what reading changed, []): pose demonstrations are fitted without preprocessing, so a
-        preprocessing option other than the default is refused."""
-        given = [f"{name} ({option})" for name, value, default, option in (
-            ("smooth_window", smooth_window, "auto", "--smooth"), ("trim_rest", trim_rest, True, "--trim-rest"),
-            ("align", align, "auto", "--align-ends"), ("max_shift", max_shift, None, "--align-ends")) if value != default]
-        if given:
-            raise InputError(f"{', '.join(given)} {'applies' if len(given) == 1 else 'apply'} to position files; "
-                             "these are pose files (quaternion columns), fitted without preprocessing. Try: drop "
-                             f"{'it' if len(given) == 1 else 'them'} (--goal-tol-deg bounds the end orientations), "
-                             "or --columns x,y,z for a position model.")
-        return demos, [f"read: {n}" for n in demos.notes if "renormalised" in n or "sign-flipped" in n], []
+        """(demos preprocessed, notes, []): :func:`~sosdyn.lfd.data.pose_preprocess.preprocess_poses` on both
+        parts (the end orientations are left to :meth:`fit`, which aligns them within ``goal_tol_deg``), and
+        what reading changed (renormalised quaternions, sign flips)."""
+        result, report = preprocess_poses(demos, smooth_window=smooth_window, trim_rest=trim_rest, align=align,
+                                          max_shift=max_shift, goal_tol_deg=None)
+        read = [f"read: {n}" for n in demos.notes if "renormalised" in n or "sign-flipped" in n]
+        return result, read + [f"preprocess: {line}" for line in report.lines(demos.units)], []
 
-    def predict(self, X, Q):
-        """(v, omega), (m, 3) each, at positions X (m, 3) and orientations Q (m, 4, w x y z): :meth:`predictor`'s."""
-        step = self.predictor()
-        rows = [step(x, q) for x, q in zip(np.atleast_2d(X), np.atleast_2d(Q))]
-        return np.array([v for v, _ in rows]), np.array([w for _, w in rows])
+    def __repr__(self) -> str:
+        """``PoseCDSP(goal_tol_deg=20.0, ...)``: the parameters given; fitted, also the goal pose, each
+        block's components and whether the certificates passed."""
+        args = [f"goal_tol_deg={self.goal_tol_deg:g}"] + [f"{k}={v!r}" for k, v in self.cdsp_params.items()]
+        if hasattr(self, "position_"):
+            blocks = ", ".join(f"{b}: " + (f"still (rate {self.still_[b]:.3g}/s)" if self.still_[b] else
+                                          f"K={getattr(self, b + '_').C_.shape[0]}") for b in BLOCKS)
+            args.append(f"fitted: goal=({np.array2string(self.goal_pos_, precision=4, separator=', ')}, "
+                        f"{np.array2string(self.goal_quat_, precision=4, separator=', ')}), {blocks}, "
+                        f"certified={self.certified_}")
+        return f"PoseCDSP({', '.join(args)})"
 
-    def score(self, demos) -> list[dict]:
-        """Per demonstration, its rollout from its first pose for HORIZON x its duration (step ``dt_``),
-        scored on the positions as :meth:`CDSP.score`, with ``final_angle_deg`` (to the goal orientation)."""
-        self._check_fitted()
-        dt = self.cdsp_.dt_
-        runs = [self.rollout(np.concatenate([d.pos[0], d.quat[0]]), HORIZON * d.duration, dt=dt) for d in demos]
-        rows = reproduction_rows(demos, [r.pos for r in runs], self.goal_pos_, dt)
-        for row, run in zip(rows, runs):
-            row["final_angle_deg"] = float(np.rad2deg(2 * np.arccos(min(1.0, abs(run.quat[-1] @ self.goal_quat_)))))
-        return rows
+    def fit(self, demos: PoseDemonstrations) -> PoseCDSP:
+        """Goal orientation, aligned end orientations, then the two certified blocks (module docstring)."""
+        if not isinstance(demos, PoseDemonstrations):
+            raise InputError(f"PoseCDSP.fit takes PoseDemonstrations (sosdyn.lfd.data.pose.load_pose_demos), "
+                             f"got {type(demos).__name__}.")
+        goal_quat = goal_orientation(demos)
+        aligned, self.orientation_moved_deg_ = align_orientations(demos, goal_quat, self.goal_tol_deg)
+        pos, rot = split_demonstrations(aligned, goal_quat)
+        still = {"position": still_block(pos, "position"), "orientation": still_block(rot, "orientation")}
+        check_moves(still["position"], still["orientation"], demos.name)
+        params = {"position": self.cdsp_params, "orientation": orientation_params(self.cdsp_params)}
+        goals = {"position": pos.goal, "orientation": np.zeros(3)}
+        for block, data in (("position", pos), ("orientation", rot)):
+            rate = still[block]
+            if rate is not None:
+                data = isotropic_demonstrations(3, rate, goals[block], data.units, data.name)
+            model = CDSP(**{**params[block], **({"n_components": 1} if rate else {})},
+                         progress=self.progress and tagged(self.progress, block)).fit(data)
+            if rate is not None or block == "orientation":
+                model.goal_ = goals[block]    # exactly (aligned ends, or symmetric synthetic ones: at round-off)
+            setattr(self, f"{block}_", model)
+        self.goal_quat_, self.still_ = goal_quat, still
+        return self
 
-    def excursion_bound(self, x0, goal=None, **other) -> float:
-        """A certified bound on max_t |x(t) - goal position| from the pose x0: the position block of the
-        6-D chart model's reach box (:func:`~.reach.reach_box`); inf when its metric is not constant."""
-        self.refuse(other, "excursion_bound")
-        self._check_fitted()
-        x, q = self._pose(x0, "x0")
-        gx, gq = self._goal(goal)
-        box = reach_box(self.cdsp_, (self.state(x, q, gq) - np.concatenate([gx, np.zeros(3)]) + self.cdsp_.goal_)[None])
-        if box is None:
-            return float("inf")
-        lo, hi = (b[0, :3] - self.goal_pos_ for b in box)
-        return float(np.linalg.norm(np.maximum(-lo, hi)))
+    # ------------------------------------------------------------------ state and chart
+    def _check_fitted(self):
+        if not hasattr(self, "position_"):
+            raise NotFittedError("this PoseCDSP is not fitted yet; call fit(pose_demos) first")
 
-    def to_python(self, max_speed=None, max_angular_speed=None, **other) -> str:
-        """A standalone module with ``predict_pose(x, quat, goal=None) -> (v, omega)`` (:func:`~sosdyn.lfd.runtime.pose.pose_to_python`)."""
-        self.refuse(other, "to_python")
-        return pose_to_python(self, max_speed, max_angular_speed)
+    @property
+    def cdsp_(self) -> CDSP:
+        """The position block (``position_``)."""
+        return self.position_
 
-    def to_cpp(self, namespace=None, max_speed=None, max_angular_speed=None, **other) -> str:
-        """A header-only C++17 ``NS_pose::predict_pose(x, quat, v, omega, goal)`` (:func:`~sosdyn.lfd.runtime.pose.pose_to_cpp`)."""
-        self.refuse(other, "to_cpp")
-        return pose_to_cpp(self, "pose_model" if namespace is None else namespace, max_speed, max_angular_speed)
+    @property
+    def goal_pos_(self) -> np.ndarray:
+        return self.position_.goal_
+
+    @property
+    def units_(self) -> str:
+        return self.position_.units_
+
+    @property
+    def dt_(self) -> float:
+        return self.position_.dt_
+
+    @property
+    def certified_(self) -> bool:
+        return bool(self.position_.certified_ and self.orientation_.certified_)
+
+    @property
+    def verification_(self) -> PoseCertificateReport:
+        return PoseCertificateReport(self.position_.verification_, self.orientation_.verification_)
+
+    @property
+    def history_(self) -> list:
+        """Both blocks' convex steps (position, then orientation)."""
+        return [*self.position_.history_, *self.orientation_.history_]
+
+    def accept(self, report: PoseCertificateReport) -> None:
+        """Record the check a loaded file passed, block by block."""
+        self.position_.accept(report.position)
+        self.orientation_.accept(report.orientation)
 
     def names(self) -> tuple[str, ...]:
         return POSE_NAMES[:3]
@@ -350,9 +216,151 @@ class PoseCDSP(MotionModel):
     def layout(self) -> Layout:
         return Layout(POSE_NAMES, (PUSH_NAMES,), POSE_NAMES, POSE_NAMES)
 
+    @staticmethod
+    def _pose(p, what: str) -> tuple[np.ndarray, np.ndarray]:
+        """(x, unit q) of a pose p = (x, y, z, qw, qx, qy, qz); InputError if not 7 finite numbers with a
+        quaternion of norm in (0.5, 1.5) (renormalised)."""
+        try:
+            p = np.asarray(p, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{what} must be 7 numbers (x, y, z, qw, qx, qy, qz), got {p!r:.60}.") from None
+        if p.shape != (7,) or not np.isfinite(p).all():
+            raise InputError(f"{what} must be 7 finite numbers (x, y, z, qw, qx, qy, qz), got shape {p.shape}"
+                             f"{'' if p.shape != (7,) else ' with NaN or inf'}.")
+        return p[:3], PoseCDSP._quat(p[3:], what)
+
+    @staticmethod
+    def _quat(q, what: str) -> np.ndarray:
+        """q / |q| for a finite 4-vector with |q| in (0.5, 1.5); InputError otherwise (zero, NaN, inf, norm 100)."""
+        try:
+            q = np.asarray(q, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{what}: the quaternion must be 4 numbers (w, x, y, z), got {q!r:.60}.") from None
+        norm = float(np.linalg.norm(q)) if q.shape == (4,) and np.isfinite(q).all() else np.nan
+        if not 0.5 < norm < 1.5:
+            raise InputError(f"{what}: the quaternion {q} is not a finite unit 4-vector (w, x, y, z)"
+                             f"{f' (norm {norm:.3g})' if np.isfinite(norm) else ''}. Try: a unit quaternion, "
+                             "e.g. 1,0,0,0 for the identity.")
+        return q / norm
+
+    def _goal(self, goal) -> tuple[np.ndarray, np.ndarray]:
+        return (self.goal_pos_, self.goal_quat_) if goal is None else self._pose(goal, "goal")
+
+    def field(self, S, goal_pos) -> np.ndarray:
+        """The chart velocity (m, 6) at the chart states S = (x, r) (m, 6) for the goal position ``goal_pos``
+        (the orientation's goal is r = 0 in the chart at the goal orientation)."""
+        return np.hstack([self.position_.field(S[:, :3], goal_pos), self.orientation_.field(S[:, 3:], np.zeros(3))])
+
+    # ------------------------------------------------------------------ motion
+    def predictor(self, max_speed=None, max_angular_speed=None, goal=None, **other):
+        """``step(x, quat, goal=None) -> (v, omega)``: linear velocity (3,) and world angular velocity
+        (3,) at the position x and orientation quat (w x y z), for the goal pose (7-vector; default
+        the model's, fixed here or per call); both scaled by one factor so that |v| <= max_speed and
+        |omega| <= max_angular_speed (rad/s) when given. Every input is checked (InputError)."""
+        self.refuse(other, "predictor")
+        self._check_fitted()
+        fixed = self._goal(goal)
+        limits = self._limits(max_speed, max_angular_speed)
+        step_x, step_r = self.position_.predictor(), self.orientation_.predictor()
+        origin = np.zeros(3)
+
+        def step(x, quat, goal=None):
+            gx, gq = fixed if goal is None else self._pose(goal, "goal")
+            q = self._quat(quat, "quat").tolist()
+            r = chart_one(q, gq.tolist())
+            v, rdot = step_x(x, gx), step_r(np.array(r), origin)
+            w = np.array(rotate_one(q, body_velocity_one(r, rdot.tolist())))
+            lam = float(pose_speed_factor(np.array([r]), np.concatenate([v, rdot])[None], *limits)[0, 0]) \
+                if limits != (None, None) else 1.0
+            return lam * v, lam * w
+        return step
+
+    @staticmethod
+    def _limits(max_speed, max_angular_speed) -> tuple:
+        return check_limits(max_speed, max_angular_speed)
+
+    def predict(self, X, Q):
+        """(v, omega), (m, 3) each, at positions X (m, 3) and orientations Q (m, 4, w x y z): :meth:`predictor`'s."""
+        step = self.predictor()
+        rows = [step(x, q) for x, q in zip(np.atleast_2d(X), np.atleast_2d(Q))]
+        return np.array([v for v, _ in rows]), np.array([w for _, w in rows])
+
+    def rollout(self, x0, duration, dt=None, goal=None, perturbations=(), goal_changes=(), max_speed=None,
+                max_angular_speed=None, **other) -> PoseTrajectory:
+        """Integrate from the pose x0 = (x, y, z, qw, qx, qy, qz) for ``duration`` s; ``perturbations`` (pushes)
+        [(t, (dx, dy, dz, wx, wy, wz))]: x += dx and R <- exp(w) R (world rotation vector);
+        ``goal_changes`` [(t, goal pose)]. Between events the chart state at the goal in effect is
+        integrated and mapped back (module docstring). ``max_speed`` / ``max_angular_speed``: as
+        :meth:`predictor` (the same paths, traversed more slowly)."""
+        self.refuse(other, "rollout")
+        self._check_fitted()
+        limits = self._limits(max_speed, max_angular_speed)
+        x, q = self._pose(x0, "x0")
+        gx, gq = self._goal(goal)
+        try:
+            events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in perturbations] +
+                            [(float(t), 1, np.concatenate(self._pose(g, "goal change"))) for t, g in goal_changes],
+                            key=lambda e: e[:2])
+        except (TypeError, ValueError):
+            raise InputError("pushes and goal_changes must be lists of pairs (time, vector).") from None
+        if any(not 0 <= e[0] < duration for e in events) or \
+                any(k == 0 and (d.shape != (6,) or not np.isfinite(d).all()) for _, k, d in events):
+            raise InputError(f"events must lie in [0, duration = {duration}) and pushes be 6 finite numbers "
+                             "(dx, dy, dz, wx, wy, wz).")
+        ts, P, Q, G, t0 = [], [], [], [], 0.0
+        for t_end, kind, data in events + [(float(duration), -1, None)]:
+            if t_end > t0:
+                traj = self._segment(x, q, gx, gq, t_end - t0, dt, limits)
+                keep = slice(1 if ts else 0, None)
+                ts.append(t0 + traj.t[keep])
+                P.append(traj.pos[keep, :3])
+                Q.append(from_chart(traj.pos[:, 3:], gq)[keep])
+                G.append(np.tile(np.concatenate([gx, gq]), (len(ts[-1]), 1)))
+                x, q, t0 = traj.pos[-1, :3], from_chart(traj.pos[-1:, 3:], gq)[0], t_end
+            if kind == 0:
+                x = x + data[:3]
+                q = (Rotation.from_rotvec(data[3:]) * Rotation.from_quat(q, scalar_first=True)).as_quat(
+                    scalar_first=True)
+            elif kind == 1:
+                gx, gq = data[:3], data[3:]
+        return PoseTrajectory(np.concatenate(ts), np.vstack(P), np.vstack(Q), np.vstack(G))
+
+    def _segment(self, x, q, gx, gq, duration, dt, limits):
+        """One segment of the chart state from (x, q) towards (gx, gq) (the blocks' integrator)."""
+        def field(S, g):
+            Sdot = self.field(S, g[:3])
+            return Sdot * pose_speed_factor(S[:, 3:], Sdot, *limits)
+        atol = ATOL_REL * min(self.position_.scale_, self.orientation_.scale_)
+        return integrate(field, np.concatenate([x, chart(q, gq)[0]]), duration=duration,
+                         dt=self.dt_ if dt is None else dt, goal=np.concatenate([gx, np.zeros(3)]), atol=atol)
+
+    def excursion_bound(self, x0, goal=None, **other) -> float:
+        """The certified bound on max_t |x(t) - x_g| (data units) from the pose x0: the farthest point of
+        the position block's reach box (:func:`~sosdyn.lfd.model.reach.reach_box`; inf without a certified
+        constant metric). The angle from the goal orientation is bounded by its start value (module
+        docstring)."""
+        self.refuse(other, "excursion_bound")
+        self._check_fitted()
+        x, _ = self._pose(x0, "x0")
+        gx, _ = self._goal(goal)
+        box = reach_box(self.position_, (x - gx + self.goal_pos_)[None]) if self.position_.certified_ else None
+        if box is None:
+            return float("inf")
+        lo, hi = box[0][0] - self.goal_pos_, box[1][0] - self.goal_pos_
+        return float(np.linalg.norm(np.maximum(np.abs(lo), np.abs(hi))))
+
+    def score(self, demos: PoseDemonstrations) -> list[dict]:
+        """Per demonstration, its reproduction from its first pose (step ``dt_``): position deviation
+        (mean / max, data units) and orientation deviation (mean / max, deg), arrival time, final
+        position and angle errors, at goal (:func:`~.pose_score.pose_reproduction_table`)."""
+        self._check_fitted()
+        if not isinstance(demos, PoseDemonstrations):
+            raise InputError(f"PoseCDSP.score takes PoseDemonstrations, got {type(demos).__name__}.")
+        return pose_reproduction_table(self, demos)
+
     def reproductions(self, demos=None, duration=None) -> Reproductions:
-        """Rollouts from the pose demonstrations' first poses, each for ``duration`` s (default HORIZON x
-        its demo's duration); without pose demonstrations InputError (a pose model starts from poses)."""
+        """Rollouts from the pose demonstrations' first poses, each for ``duration`` s (default HORIZON x its
+        demo's duration); without pose demonstrations InputError (a pose model starts from poses)."""
         self._check_fitted()
         if not isinstance(demos, PoseDemonstrations):
             raise InputError("a pose model is drawn with the pose demonstrations it starts from. Try: --demos "
@@ -360,16 +368,82 @@ class PoseCDSP(MotionModel):
         runs = [self.rollout(np.concatenate([d.pos[0], d.quat[0]]), duration or HORIZON * d.duration) for d in demos]
         return Reproductions(list(demos), runs, self.goal_pos_, self.names(), self.units_)
 
+    # ------------------------------------------------------------------ evidence and files
+    def verify(self, n_samples=None, seed=None) -> PoseCertificateReport:
+        """Each block's certificate check (:meth:`CDSP.verify`)."""
+        self._check_fitted()
+        return PoseCertificateReport(self.position_.verify(n_samples, seed), self.orientation_.verify(n_samples, seed))
+
     def summary(self) -> list[str]:
-        """The 6-D chart model's certificate lines, and how far the end orientations were aligned."""
-        lines = [f"{self.cdsp_.summary()[0]}; on the 6-D chart state (position, rotation vector)",
-                 *self.cdsp_.summary()[1:]]
+        """Both blocks' certificate numbers, still blocks, and how far the end orientations were aligned."""
+        self._check_fitted()
+        pos, ori = self.position_.summary(), self.orientation_.summary()
+        lines = [f"position block: {pos[0]}; orientation block (identity metric: the angle to the goal "
+                 f"orientation never increases): {ori[0]}", *pos[1:]]
+        lines += [f"the {block} does not move in the demonstrations: it is held at the goal (returns at rate "
+                  f"{rate:.3g}/s if pushed)" for block, rate in self.still_.items() if rate is not None]
         if hasattr(self, "orientation_moved_deg_"):
             moved = ", ".join(f"{a:.2g}" for a in self.orientation_moved_deg_)
             lines.append(f"end orientations aligned onto their chordal mean by {moved} deg (refused beyond "
                          f"goal_tol_deg {self.goal_tol_deg:g})")
         return lines
 
+    def content(self) -> dict:
+        """The pose model file's fields (:mod:`.content`): the goal orientation, the still rates and each
+        block's params and state."""
+        self._check_fitted()
+        return {"goal_tol_deg": self.goal_tol_deg, "goal_quat": self.goal_quat_, "still": self.still_,
+                "position": self.position_.content(), "orientation": self.orientation_.content()}
+
+    @classmethod
+    def from_content(cls, content: dict) -> PoseCDSP:
+        """A pose model (not yet verified) from a file's content: :func:`~.content.pose_fields`, each block a
+        CDSP's content, the orientation block the identity-metric, goal-0, warp-free CDSP the angle needs."""
+        goal_quat, still, tol = pose_fields(content)
+        blocks = {}
+        for block in BLOCKS:
+            try:
+                blocks[block] = CDSP.from_content(content[block])
+            except ModelFileError as exc:
+                raise ModelFileError(f"{block}: {exc}") from None
+        params = {k: v for k, v in blocks["position"].get_params().items()
+                  if k != "progress" and not (v is DEFAULTS[k] or v == DEFAULTS[k])}
+        model = cls(tol, **params)
+        model.position_, model.orientation_ = blocks["position"], blocks["orientation"]
+        check_orientation_block(model.orientation_, model.position_)
+        model.goal_quat_, model.still_ = goal_quat, still
+        return model
+
+    def to_python(self, max_speed=None, max_angular_speed=None, **other) -> str:
+        """A standalone module with ``predict_pose(x, quat, goal=None) -> (v, omega)`` (:func:`~sosdyn.lfd.runtime.pose.pose_to_python`)."""
+        self.refuse(other, "to_python")
+        self._check_fitted()
+        return pose_to_python(self, max_speed, max_angular_speed)
+
+    def to_cpp(self, namespace=None, max_speed=None, max_angular_speed=None, **other) -> str:
+        """A header-only C++17 ``NS_pose::predict_pose(x, quat, v, omega, goal)`` (:func:`~sosdyn.lfd.runtime.pose.pose_to_cpp`)."""
+        self.refuse(other, "to_cpp")
+        self._check_fitted()
+        return pose_to_cpp(self, "pose_model" if namespace is None else namespace, max_speed, max_angular_speed)
+
     def iteration_cap(self, rows: list[dict]) -> str | None:
-        """As the 6-D chart model's (:meth:`CDSP.iteration_cap`): its rows are this fit's."""
+        """As a CDSP's (:meth:`CDSP.iteration_cap`) for one block's fit: :meth:`fit` tags each row with its
+        ``block``, and both blocks share ``max_iter`` and ``tol``."""
         return CDSP(**self.cdsp_params).iteration_cap(rows)
+
+
+def tagged(progress, block: str):
+    """``progress`` called with each history row and its ``block`` ("position" or "orientation")."""
+    return lambda row: progress({**row, "block": block})
+
+
+def check_orientation_block(orientation: CDSP, position: CDSP) -> None:
+    """ModelFileError unless the orientation block is a 3-D CDSP with the identity metric (``metric`` and
+    its W), no warp and goal exactly 0, and the position block is 3-D (the angle argument, docs/theory.md)."""
+    M = metric_matrix(orientation)
+    if orientation.metric != "identity" or orientation.warp_ is not None or orientation.dim_ != 3 or \
+            position.dim_ != 3 or M is None or not np.array_equal(M, M[0, 0] * np.eye(3)) or \
+            np.any(orientation.goal_ != 0.0):
+        raise ModelFileError("malformed: the orientation block must be a 3-D CDSP with the identity metric, no warp "
+                             "and goal 0 (the angle to the goal orientation then never increases), and the position "
+                             "block 3-D")

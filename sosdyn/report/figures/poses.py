@@ -67,3 +67,34 @@ def orientation_error(title, demos, trajs, goal_quat, labels=None):
     ax.set_title(f"{title}: orientation error (dashed: demo, solid: rollout)")
     ax.legend(ncol=4, loc="upper right")
     return fig
+
+
+@styled
+def detour_figure(title, cases, diag: float, units: str = ""):
+    """The detour tests over time: angle to the goal orientation (left) and the position's distance from
+    where it started, in % of the data's diagonal (right), one line per case (``cases``: dicts with kind,
+    angle_deg, t, angle, displacement; :func:`sosdyn.evaluation.poses.detour_tests`)."""
+    fig = new_figure(9.0, 3.2)
+    left, right = fig.subplots(1, 2)
+    styles = {"orientation-only start": "-", "goal turn": "--"}
+    angles = sorted({c["angle_deg"] for c in cases})
+    for c in cases:
+        color = ROLLOUT_COLORS[angles.index(c["angle_deg"]) % len(ROLLOUT_COLORS)]
+        label = f"{c['kind']}, {c['angle_deg']:g} deg"
+        first = all(other is c or (other["kind"], other["angle_deg"]) != (c["kind"], c["angle_deg"])
+                    for other in cases[:cases.index(c) + 1])
+        left.plot(c["t"], c["angle"], color=color, ls=styles[c["kind"]], lw=1.2, label=label if first else None)
+        right.plot(c["t"], 100.0 * c["displacement"] / diag, color=color, ls=styles[c["kind"]], lw=1.2)
+    left.axhline(1.0, color="0.4", ls=":", lw=1)
+    left.set_ylim(0, 185)
+    left.set_xlabel("t (s)")
+    left.set_ylabel("angle to goal orientation (deg)")
+    left.legend(fontsize=7, loc="upper right")
+    right.axhline(1.0, color="0.4", ls=":", lw=1)
+    right.set_ylim(-0.05, 1.5)
+    right.set_xlabel("t (s)")
+    right.set_ylabel(f"position moved (% of diagonal {diag:.3g}{' ' + units if units else ''})")
+    worst = max(c["displacement"].max() for c in cases)
+    right.set_title(f"largest: {worst:.3g}{' ' + units if units else ''} (dotted: the 1 % target)", fontsize=9)
+    fig.suptitle(f"{title}: orientation-only starts (solid) and goal turns after arrival (dashed)")
+    return fig

@@ -7,6 +7,7 @@ import pytest
 import sosdyn as sd
 from sosdyn.errors import InputError
 from sosdyn.lfd.data.datasets import DATASETS, DATASETS_DIR, HAMMER_DT, load_dataset
+from sosdyn.lfd.data.pose import PoseDemonstrations
 
 
 def test_every_set_ships_its_licence_readme_and_manifest():
@@ -31,11 +32,17 @@ def test_names_counts_and_units_match_the_readmes():
     assert openbox[0].t[1] == pytest.approx(1 / 60, abs=1e-6)
 
 
-def test_pose_sets_say_positions_only_and_refuse_orientation():
-    with pytest.warns(UserWarning, match="positions only"):
-        load_dataset("pouring")
-    with pytest.raises(InputError, match="positions_only=True"):
-        load_dataset("pouring", positions_only=False)
+def test_pose_sets_load_with_their_orientations():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                            # no "positions only" warning any more
+        poses = load_dataset("robottasks/openbox")
+    assert isinstance(poses, PoseDemonstrations) and len(poses) == 9 and poses.units == "cm (inferred)"
+    positions = load_dataset("robottasks/openbox", positions_only=True)
+    np.testing.assert_array_equal(poses[0].pos, positions[0].pos)
+    np.testing.assert_allclose(np.linalg.norm(poses[0].quat, axis=1), 1.0, atol=1e-12)
+    assert isinstance(load_dataset("pouring", positions_only=False), PoseDemonstrations)
+    with pytest.raises(InputError, match="positions_only must be None, True or False"):
+        load_dataset("pouring", positions_only="yes")
 
 
 def test_hammer_declares_its_time_step():

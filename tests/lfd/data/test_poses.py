@@ -4,7 +4,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import DemonstrationError, InputError
-from sosdyn.lfd.data.pose import (PoseDemonstration, PoseDemonstrations, align_orientations, chart,
+from sosdyn.lfd.data.pose import (PoseDemonstration, PoseDemonstrations, align_orientations, chart, demo_chart,
                                    goal_orientation, pose_columns, read_pose_csv, sign_continuous)
 
 Q30 = Rotation.from_rotvec([0.0, 0.0, np.pi / 6]).as_quat(scalar_first=True)     # 30 deg about z
@@ -71,8 +71,11 @@ def test_goal_is_the_chordal_mean_and_ends_are_aligned():
         align_orientations(demos, g, goal_tol_deg=5.0)
 
 
-def test_chart_refuses_the_cut_locus():
+def test_demo_chart_refuses_the_cut_locus_and_chart_takes_every_rotation():
     near_pi = Rotation.from_rotvec([0, 0, np.deg2rad(175)]).as_quat(scalar_first=True)
-    with pytest.raises(InputError, match="175.0 deg from the goal"):
-        chart(near_pi, [1, 0, 0, 0])
+    with pytest.raises(DemonstrationError, match="175.0 deg from the goal"):
+        demo_chart(near_pi, [1, 0, 0, 0])
     np.testing.assert_allclose(chart(Q30, [1, 0, 0, 0])[0], [0, 0, np.pi / 6])
+    np.testing.assert_allclose(np.linalg.norm(chart(near_pi, [1, 0, 0, 0])), np.deg2rad(175))
+    half = Rotation.from_rotvec([0, np.pi, 0]).as_quat(scalar_first=True)       # the half turn: a logarithm of it
+    assert np.linalg.norm(chart(half, [1, 0, 0, 0])) == pytest.approx(np.pi)

@@ -57,7 +57,8 @@ def test_every_family_loads_as_saved(files):
     ("second", ["state", "M", 0, 0], "state.M"),
     ("second", ["state", "dt"], "state.dt"),
     ("pose", ["goal_quat", 3], "goal_quat"),                         # norm |(1, 0, 0, NaN)| passed before
-    ("pose", ["rot_factor"], "rot_factor"),
+    ("pose", ["goal_tol_deg"], "goal_tol_deg"),
+    ("pose", ["orientation", "state", "goal_", 0], "orientation: malformed: state.goal_"),
     ("first", ["state", "goal_", 0], "state.goal_"),
     ("first", ["state", "mixture_", "means", 0, 0], "state.mixture_.means"),
 ])
@@ -70,7 +71,8 @@ def test_a_null_where_a_number_belongs_is_refused_by_name(files, tmp_path, kind,
 @pytest.mark.parametrize("kind", ["first", "pose", "second"])
 @pytest.mark.parametrize("where", [["comment"], ["state", "comment"]])
 def test_unknown_fields_are_refused_by_name(files, tmp_path, kind, where):
-    path = forged(files[kind], tmp_path, put(where, "added by hand"))
+    block = ["position"] if kind == "pose" and where[0] == "state" else []     # a pose file's blocks hold the states
+    path = forged(files[kind], tmp_path, put(block + where, "added by hand"))
     with pytest.raises(ModelFileError, match=r"unknown field " + r"\.".join(where)):
         sd.load_model(path)
 
@@ -109,7 +111,7 @@ def test_load_work_is_refused_before_it_starts(files, tmp_path):
     wide = forged(files["first"], tmp_path, put(["state", "dim_"], 1000))
     with pytest.raises(ResourceLimitError, match=r"dimension n is 1e\+03, over the limit max_model_dim=32"):
         sd.load_model(wide)
-    many = forged(files["pose"], tmp_path, put(["state", "n_components_"], 500))
+    many = forged(files["pose"], tmp_path, put(["orientation", "state", "n_components_"], 500))
     with pytest.raises(ResourceLimitError, match="max_model_components=32"):
         sd.load_model(many)
 

@@ -1,9 +1,12 @@
 """PoseCDSP against a known answer: xdot = -k (x - x_g), rdot = -k r in the chart at R_g.
 
-For this system |s|^2 is a contraction metric at rate 2k (its Jacobian is -k I), every
+For this system |x - x_g|^2 and |r|^2 are contraction metrics at rate 2k (the Jacobians are -k I), every
 trajectory reaches the goal pose, and the solution is known in closed form:
-x(t) = x_g + e^{-kt} (x0 - x_g), R(t) = R_g exp(e^{-kt} r0).
+x(t) = x_g + e^{-kt} (x0 - x_g), R(t) = R_g exp(e^{-kt} r0). The cascade's properties (the position never
+moves for an orientation-only start or a goal turn; the angle never increases; every start up to 180 deg
+converges) are checked on rollouts, in Python and in the exported C++.
 """
+import re
 import shutil
 import subprocess
 
@@ -12,13 +15,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import InputError, ModelFileError
-from sosdyn.evaluation.poses import angles_deg
+from sosdyn.evaluation.poses import angles_deg, turned
 from sosdyn.lfd.data.pose import PoseDemonstration, PoseDemonstrations, chart
 from sosdyn.lfd.model.cdsp import CDSP
-from sosdyn.lfd.model import pose as pose_module
 from sosdyn.lfd.model.files import load_model, load_pose_model
-from sosdyn.lfd.model.pose import PoseCDSP, body_velocity, chart_bound
-from sosdyn.lfd.runtime.pose import pose_to_cpp, pose_to_python
+from sosdyn.lfd.model.pose import PoseCDSP
+from sosdyn.lfd.runtime.pose import body_velocity, pose_to_cpp, pose_to_python
 
 K_RATE = 0.8
 X_GOAL = np.array([0.4, -0.2, 0.3])
@@ -53,18 +55,44 @@ def test_known_system_certified_and_converges(fitted):
     assert angles_deg(traj.quat, q_true).max() < 1.0                     # follows the true rotation
     assert np.abs(traj.pos - x_true).max() < 0.01
     assert angles_deg(traj.quat[-1], Q_GOAL)[0] < 1.0                    # geodesic error at the end
-    assert np.rad2deg(max(traj.chart_bounds)) < 170                      # the ball provably kept
+    assert "certified=True" in repr(fitted) and "orientation: K=1" in repr(fitted)
 
 
-def test_chart_bound_holds_along_rollouts(fitted):
-    for angle in (0.5, 1.5, 2.5):
-        r0 = angle * np.array([0.6, 0.0, 0.8])
-        p0 = np.concatenate([X_GOAL + 0.3, (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)])
-        traj = fitted.rollout(p0, 10.0, dt=0.05)
-        reached = np.deg2rad(angles_deg(traj.quat, Q_GOAL)).max()
-        assert reached <= traj.chart_bounds[0] + 1e-9
-        s0 = fitted.state(p0[:3], p0[3:], fitted.goal_quat_) - np.concatenate([fitted.goal_pos_, np.zeros(3)])
-        assert chart_bound(fitted.cdsp_, s0 / fitted.cdsp_.scale_, fitted.rot_factor_) == traj.chart_bounds[0]
+AXES = np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [0.6, -0.48, 0.64]])
+
+
+@pytest.mark.parametrize("angle", [90.0, 170.0, 179.0, 180.0])
+def test_orientation_only_start_never_moves_the_position(fitted, angle):
+    """At the goal position, turned up to a half turn: the position stays exactly put (the cascade), the
+    angle to the goal never increases and reaches the goal; no refusal."""
+    g, q = fitted.goal_pos_, fitted.goal_quat_
+    for axis in AXES:
+        traj = fitted.rollout(np.concatenate([g, turned(q, angle, axis)]), 30.0, dt=0.05)
+        assert np.abs(traj.pos - g).max() == 0.0
+        a = angles_deg(traj.quat, q)
+        assert a[0] == pytest.approx(angle, abs=1e-6) and a[-1] < 0.1
+        assert np.all(np.diff(a) <= 1e-9)
+
+
+def test_goal_turn_never_moves_the_position(fitted):
+    g, q = fitted.goal_pos_, fitted.goal_quat_
+    for axis in AXES:
+        new = np.concatenate([g, turned(q, 30.0, axis)])
+        traj = fitted.rollout(np.concatenate([g, q]), 20.0, dt=0.05, goal_changes=[(2.0, new)])
+        assert np.abs(traj.pos - g).max() == 0.0 and angles_deg(traj.quat[-1], new[3:])[0] < 0.1
+
+
+def test_far_starts_converge_and_the_angle_is_monotone(fitted):
+    rng = np.random.default_rng(7)
+    for _ in range(6):
+        axis, angle = rng.normal(size=3), rng.uniform(150.0, 179.9)
+        p0 = np.concatenate([X_GOAL + 0.5 * rng.normal(size=3), turned(fitted.goal_quat_, angle, axis)])
+        traj = fitted.rollout(p0, 30.0, dt=0.05)
+        a = angles_deg(traj.quat, fitted.goal_quat_)
+        assert np.all(np.diff(a) <= 1e-9) and a[-1] < 0.1
+        assert np.linalg.norm(traj.pos[-1] - fitted.goal_pos_) < 1e-3
+        bound = fitted.excursion_bound(p0)                  # the position block's certified reach
+        assert np.linalg.norm(traj.pos - fitted.goal_pos_, axis=1).max() <= bound * (1 + 1e-9)
 
 
 def test_predictor_gives_world_angular_velocity(fitted):
@@ -99,18 +127,26 @@ def test_goal_change_and_push(fitted):
     assert angles_deg(traj.quat[-1], goal2[3:])[0] < 0.1 and np.linalg.norm(traj.pos[-1] - goal2[:3]) < 1e-3
 
 
+BAD_QUATS = [[0, 0, 0, 0], [np.nan, 0, 0, 1], [np.inf, 0, 0, 0], [100, 0, 0, 0], [1, 0, 0]]
+
+
 def test_bad_poses_refused(fitted):
     with pytest.raises(InputError, match="unknown parameters \\['n_comp'\\]"):
         PoseCDSP(n_comp=3)
     with pytest.raises(InputError, match="goal_tol_deg"):
         PoseCDSP(goal_tol_deg=200)
-    with pytest.raises(InputError, match="7-vector"):
+    with pytest.raises(InputError, match="7 finite numbers"):
         fitted.rollout([0, 0, 0], 1.0)
-    with pytest.raises(InputError, match="not unit"):
-        fitted.rollout([0, 0, 0, 3, 0, 0, 0], 1.0)
-    far = (R_GOAL * Rotation.from_rotvec([0, np.deg2rad(175), 0])).as_quat(scalar_first=True)
-    with pytest.raises(InputError, match="cut locus|not defined at 180"):
-        fitted.rollout(np.concatenate([X_GOAL, far]), 1.0)
+    step, x = fitted.predictor(), np.zeros(3)
+    for q in BAD_QUATS:                              # the predictor and the rollout refuse alike, typed
+        with pytest.raises(InputError, match="not a finite unit 4-vector"):
+            step(x, q)
+        with pytest.raises(InputError):
+            fitted.rollout(np.concatenate([x, q]) if len(q) == 4 else [0] * 6, 1.0)
+        with pytest.raises(InputError):
+            step(x, Q_GOAL, goal=np.concatenate([x, q]) if len(q) == 4 else np.zeros(6))
+    with pytest.raises(InputError):
+        step([np.nan, 0, 0], Q_GOAL)
 
 
 def test_save_load_round_trip(fitted, tmp_path):
@@ -120,10 +156,37 @@ def test_save_load_round_trip(fitted, tmp_path):
         assert isinstance(loaded, PoseCDSP) and loaded.certified_
         np.testing.assert_allclose(np.concatenate(loaded.predictor()(x, q)),
                                    np.concatenate(fitted.predictor()(x, q)), rtol=1e-12, atol=1e-14)
-    fitted.cdsp_.save(tmp_path / "chart.json")                     # a position model file is not a pose file
+    fitted.position_.save(tmp_path / "chart.json")                 # a position model file is not a pose file
     with pytest.raises(ModelFileError, match="not a sosdyn-pose file"):
         load_pose_model(tmp_path / "chart.json")
     assert isinstance(load_model(tmp_path / "chart.json"), CDSP)
+
+
+def _forged(path, edit):
+    """The pose file at ``path`` with ``edit`` applied to its content and the checksum recomputed."""
+    import json
+
+    from sosdyn.lfd.model.fileformat import CHECKSUM, _digest
+    doc = json.loads(path.read_text())
+    edit(doc)
+    doc[CHECKSUM] = _digest(doc)
+    path.write_text(json.dumps(doc))
+    return path
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda d: d["goal_quat"].__setitem__(3, None), "goal_quat must hold numbers"),
+    (lambda d: d.__setitem__("rot_factor", 1e308), "unknown field rot_factor"),
+    (lambda d: d["still"].__setitem__("orientation", -1.0), "still.orientation must be a positive number"),
+    (lambda d: d["orientation"]["params"].__setitem__("metric", "learned"), "identity metric"),
+    (lambda d: d["orientation"]["state"].__setitem__("goal_", [0.1, 0.0, 0.0]), "goal 0"),
+    (lambda d: d["orientation"]["state"]["W_"][1][1].__setitem__(0, 4.0), "identity metric|does not check out"),
+    (lambda d: d.__setitem__("version", 1), "older sosdyn"),
+])
+def test_forged_pose_files_refused(fitted, tmp_path, edit, message):
+    path = _forged(fitted.save(tmp_path / "pose.json"), edit)
+    with pytest.raises(ModelFileError, match=message):
+        load_model(path)
 
 
 V_MAX, W_MAX = 0.1, 0.3          # m/s and rad/s: both active at the start below (|v| ~ 0.4, |omega| ~ 1)
@@ -157,7 +220,7 @@ def test_speed_limited_rollout_keeps_the_path_and_the_goal(fitted):
     turn = np.deg2rad(angles_deg(slow.quat[1:], slow.quat[:-1])) / dt
     assert speed.max() <= V_MAX * 1.01 and turn.max() <= W_MAX * 1.01
     assert speed[:10].min() > 0.5 * V_MAX or turn[:10].min() > 0.9 * W_MAX          # a limit is active
-    s_free, s_slow = (np.hstack([tr.pos, fitted.rot_factor_ * chart(tr.quat, Q_GOAL)]) for tr in (free, slow))
+    s_free, s_slow = (np.hstack([tr.pos, chart(tr.quat, Q_GOAL)]) for tr in (free, slow))
     gap = np.min(np.linalg.norm(s_slow[::20, None] - s_free[None], axis=2), axis=1)   # distance to the free path
     assert gap.max() < 0.002 * np.linalg.norm(s_free[0] - s_free[-1])     # per-block limits: 0.07
     assert np.linalg.norm(slow.pos[-1] - X_GOAL) < 1e-3 and angles_deg(slow.quat[-1], Q_GOAL)[0] < 0.1
@@ -192,7 +255,7 @@ int main() {
   double in[14], v[3], w[3];
   while (std::scanf("%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", in, in + 1, in + 2, in + 3, in + 4,
                     in + 5, in + 6, in + 7, in + 8, in + 9, in + 10, in + 11, in + 12, in + 13) == 14) {
-    const bool ok = pose_model_pose::predict_pose(in, in + 3, v, w, in[7] == 0 ? nullptr : in + 7);
+    const bool ok = NAMESPACE::predict_pose(in, in + 3, v, w, in[7] == 0 ? nullptr : in + 7);
     std::printf("%.17g %.17g %.17g %.17g %.17g %.17g %d\\n", v[0], v[1], v[2], w[0], w[1], w[2], ok ? 1 : 0);
   }
 }
@@ -200,10 +263,15 @@ int main() {
 
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="g++ is not on PATH")
-@pytest.mark.parametrize("limits", [(None, None), (V_MAX, W_MAX)])
-def test_cpp_export_returns_the_same_velocities(fitted, tmp_path, limits):
-    (tmp_path / "pose.hpp").write_text(pose_to_cpp(fitted, max_speed=limits[0], max_angular_speed=limits[1]))
-    (tmp_path / "main.cpp").write_text(CPP_MAIN)
+@pytest.mark.parametrize("limits, namespace, pose_ns", [((None, None), "pose_model", "pose_model_pose"),
+                                                       ((V_MAX, W_MAX), "arm_", "arm_pose")])
+def test_cpp_export_returns_the_same_velocities(fitted, tmp_path, limits, namespace, pose_ns):
+    """The header's predict_pose gives the predictor's (v, omega); any valid namespace, one ending in _ too,
+    names no reserved identifier (none with a double underscore)."""
+    source = pose_to_cpp(fitted, namespace, max_speed=limits[0], max_angular_speed=limits[1])
+    assert not re.search(r"[A-Za-z0-9_]*__[A-Za-z0-9_]*", source.replace("__cplusplus", ""))
+    (tmp_path / "pose.hpp").write_text(source)
+    (tmp_path / "main.cpp").write_text(CPP_MAIN.replace("NAMESPACE", pose_ns))
     subprocess.run(["g++", "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(tmp_path / "main"),
                     str(tmp_path / "main.cpp")], check=True, capture_output=True, text=True)
     rng = np.random.default_rng(2)
@@ -215,8 +283,12 @@ def test_cpp_export_returns_the_same_velocities(fitted, tmp_path, limits):
             q = q if rng.random() < 0.5 else -q                        # either sign of the same rotation
             rows.append(np.concatenate([x, q, np.zeros(7) if g is None else g]))
             expected.append(np.concatenate(fitted.predictor(max_speed=limits[0], max_angular_speed=limits[1])(x, q, g)))
-    far = (Rotation.from_quat(fitted.goal_quat_, scalar_first=True) * Rotation.from_rotvec([np.deg2rad(175), 0, 0]))
-    rows.append(np.concatenate([np.zeros(3), far.as_quat(scalar_first=True), np.zeros(7)]))    # near the cut locus
+    for angle in (170.0, 179.0, 179.99):                          # near the cut locus: a velocity, as in Python
+        q = turned(fitted.goal_quat_, angle, [0.3, -0.4, 0.5])
+        rows.append(np.concatenate([fitted.goal_pos_, q, np.zeros(7)]))
+        expected.append(np.concatenate(fitted.predictor(max_speed=limits[0], max_angular_speed=limits[1])(
+            fitted.goal_pos_, q)))
+    rows.append(np.concatenate([np.zeros(3), [0.0, 0.0, 0.0, 0.0], np.zeros(7)]))     # a zero quaternion
     res = subprocess.run([str(tmp_path / "main")], input="\n".join(" ".join(repr(float(v)) for v in r) for r in rows),
                          capture_output=True, text=True, check=True)
     out = np.array([[float(v) for v in line.split()] for line in res.stdout.splitlines()])
@@ -224,33 +296,20 @@ def test_cpp_export_returns_the_same_velocities(fitted, tmp_path, limits):
     np.testing.assert_allclose(out[:-1, :6], np.array(expected), rtol=1e-10, atol=1e-12)
 
 
-def test_rollout_leaving_the_chart_is_refused(fitted, monkeypatch):
-    """Where the a-priori bound says nothing (inf), a chart trajectory reaching 175 deg is refused."""
-    real = pose_module.integrate
-
-    def turning_away(field, s0, **options):
-        traj = real(field, s0, **options)
-        angle = np.linspace(0.5, np.deg2rad(175), len(traj.t))          # |r| growing towards the cut locus
-        traj.pos[:, 3:] = fitted.rot_factor_ * angle[:, None] * np.array([0.0, 0.6, 0.8])
-        return traj
-    monkeypatch.setattr(pose_module, "integrate", turning_away)
-    monkeypatch.setattr("sosdyn.lfd.model.pose.chart_bound", lambda *args: np.inf)
-    with pytest.raises(InputError, match="out of the chart"):
-        fitted.rollout(np.concatenate([fitted.goal_pos_, fitted.goal_quat_]), 1.0, dt=0.05)
-
-
 def test_a_pose_model_through_a_twist_keeps_its_bound_file_and_export(tmp_path):
-    """The known system through a fitted twist (and no bump): certified, the chart bound (|z| <= |u| /
-    b_lo, b_lo = 1 / lam(K) here) holds along a rollout, the file round-trips and the export agrees."""
+    """The known system with the position block through a fitted twist (and no bump; the orientation block
+    never has a warp): certified, the angle never increases along a rollout, the file round-trips and the
+    export agrees."""
     t = np.linspace(0.0, 12.0, 240)
     demos = PoseDemonstrations([PoseDemonstration(t, *exact(x0, r0, t), f"start {i}")
                                 for i, (x0, r0) in enumerate(STARTS)], "known", "m")
     m = PoseCDSP(n_components=1, warp={"n_maps": 0, "twist": 2.0}, max_samples=400).fit(demos)
-    assert m.certified_ and "twist" in m.cdsp_.warp_ and m.verify().passed
+    assert m.certified_ and "twist" in m.position_.warp_ and m.orientation_.warp_ is None and m.verify().passed
     r0 = 2.0 * np.array([0.6, 0.0, 0.8])
     p0 = np.concatenate([X_GOAL + 0.3, (R_GOAL * Rotation.from_rotvec(r0)).as_quat(scalar_first=True)])
     traj = m.rollout(p0, 10.0, dt=0.05)
-    assert np.deg2rad(angles_deg(traj.quat, Q_GOAL)).max() <= traj.chart_bounds[0] + 1e-9
+    a = angles_deg(traj.quat, m.goal_quat_)
+    assert np.all(np.diff(a) <= 1e-9) and a[-1] < 1.0
     x, q = np.array([0.5, 0.1, 0.2]), Rotation.from_rotvec([0.1, 0.2, 0.3]).as_quat(scalar_first=True)
     loaded = load_model(m.save(tmp_path / "twisted_pose.json"))
     np.testing.assert_allclose(np.concatenate(loaded.predictor()(x, q)), np.concatenate(m.predictor()(x, q)),
