@@ -8,6 +8,7 @@ import pytest
 import sosdyn as sd
 from sosdyn.errors import InputError, SolverError, WorkLimitError
 from sosdyn.lfd.rollout import ATOL_REL, motion_scale, parse_events, rollout
+from sosdyn.lfd.rollout.events import WorkMeter
 
 GOAL = np.array([1.0, -2.0])
 
@@ -93,6 +94,20 @@ def test_a_discontinuous_field_is_stopped_early_and_said_so():
                                              r"gating='tempered'") as info:
         rollout(sliding, GOAL + np.array([50.0, 3.0]), duration=20.0, dt=0.1, goal=GOAL)
     assert info.value.calls < 5_000
+
+
+def test_jumps_at_a_cheap_pace_are_a_sliding_mode_not_a_crawl():
+    """A switched field that slides to its goal at little cost (CLF-DM's correction surface: 4,416 calls for
+    5.8 s of 6.3 on LASA BendedLine) is not stopped by its jumps; the same jumps at a crawling pace are."""
+    def jumps(meter, t_of):
+        for k in range(2 * WorkMeter.MAX_JUMPS):
+            meter.tick(t_of(k), np.zeros((1, 2)), GOAL)
+            meter.seen(GOAL + 1.0 + 1e-9 * k, np.array([1.0, (-1.0) ** k]), GOAL)   # turns 90 deg every call
+    cheap = WorkMeter(duration=10.0)
+    jumps(cheap, lambda k: 0.004 * k)              # 2,000 calls for 8 s of 10: 2,500 at this pace
+    assert cheap.jumps == 2 * WorkMeter.MAX_JUMPS - 1
+    with pytest.raises(WorkLimitError, match="the field is discontinuous there: 1000 times"):
+        jumps(WorkMeter(duration=10.0), lambda k: 1e-4 * k)     # 1,000 calls for 0.1 s: 100,000 at this pace
 
 
 def test_a_posterior_model_far_from_its_data_stops_with_the_reason(linear_demos):
