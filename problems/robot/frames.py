@@ -70,7 +70,8 @@ def key_frames_figure(frames: dict, titles: dict, method: str):
         if arrow is not None:                      # the push: from where it started, along the force
             ax.annotate("", xy=arrow[1], xytext=arrow[0],
                         arrowprops=dict(arrowstyle="-|>", color="#D55E00", lw=2.2, mutation_scale=18))
-        ax.set_title(f"{titles.get(label, label)} (t = {t:.1f} s)")
+        when = f"at t = {t - PUSH_LAG:.1f} s, shown {1e3 * PUSH_LAG:.0f} ms later" if label == "push" else f"t = {t:.1f} s"
+        ax.set_title(f"{titles.get(label, label)} ({when})")
         ax.set_axis_off()
     for ax in axes[len(labels):]:
         ax.set_axis_off()
