@@ -26,10 +26,9 @@ from sosdyn.errors import NotFittedError
 from ..fit.gmm import PositionMixture
 from ..fit.second_order import acceleration_at
 from ..fit.second_order.tank import TankField, derivatives_at, initial_tank, scaled_states
-from .codegen import (MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _flat, _literal, check_namespace, cpp_string, cpp_strings,
-                      gating_py)
+from .codegen import MIXTURE_PY, PREAMBLE, RESPONSIBILITIES_PY, _flat, _literal, check_namespace, gating_py
 from .export_cpp import cpp_mixture
-from .second_order_tank import tank_cpp, tank_python
+from .second_order_tank import header_prologue, tank_cpp, tank_python
 from .states import as_state
 
 
@@ -147,22 +146,8 @@ def to_cpp(model, namespace: str = "second_order_model") -> str:
     namespace = check_namespace(namespace, "second_order_model")
     if model.tank_ is not None:
         return head + tank_cpp(model, namespace)
-    K, n, _ = model.C_.shape
-    return head + f"""#pragma once
-#include <array>
-#include <cmath>
-
-namespace {namespace} {{
-
-constexpr const char* units = {cpp_string(str(model.units_))};
-constexpr int P = {n};   // positions (and velocities)
-constexpr int N = {2 * n};   // the scaled state e = ((x - g) / s, v T / s): the gating's dimension
-constexpr int K = {K};   // mixture components
-// the names of the position coordinates (the data's columns)
-constexpr std::array<const char*, P> columns = {{{cpp_strings(model.names())}}};
-constexpr std::array<double, P> goal = {{{_flat(model.goal_)}}};
-constexpr double length_scale = {float(model.length_scale_)!r};   // s
-constexpr double time_scale = {float(model.time_scale_)!r};   // T
+    K = model.C_.shape[0]
+    return head + header_prologue(model, namespace, ": the gating's dimension") + f"""constexpr int K = {K};   // mixture components
 // fields[(k * P + i) * N + j] = C[k, i, j], C_k = [A_k, B_k] in scaled units
 constexpr std::array<double, K * P * N> fields = {{{_flat(model.C_)}}};
 {cpp_mixture(model.mixture_)}

@@ -118,10 +118,10 @@ def acceleration(X, V, goal=None, tank=None):
 '''
 
 
-def tank_cpp(model, namespace: str) -> str:
-    """The body of the C++17 header of a tracking ``model`` in ``namespace`` (checked by the caller)."""
-    num = _numbers(model)
-    n, N = model.dim_, len(num["SAMPLES"])
+def header_prologue(model, namespace: str, state_note: str = "") -> str:
+    """The lines both second-order C++ headers (tracking and mixture fields) open with: includes, the
+    namespace, units, P and N (``state_note`` appended to N's comment), columns, goal and the scales."""
+    n = model.dim_
     return f"""#pragma once
 #include <array>
 #include <cmath>
@@ -130,13 +130,20 @@ namespace {namespace} {{
 
 constexpr const char* units = {cpp_string(str(model.units_))};
 constexpr int P = {n};   // positions (and velocities)
-constexpr int N = {2 * n};   // the scaled state e = ((x - g) / s, v T / s)
-constexpr int S = {N};   // tracked samples
+constexpr int N = {2 * n};   // the scaled state e = ((x - g) / s, v T / s){state_note}
 // the names of the position coordinates (the data's columns)
 constexpr std::array<const char*, P> columns = {{{cpp_strings(model.names())}}};
 constexpr std::array<double, P> goal = {{{_flat(model.goal_)}}};
 constexpr double length_scale = {float(model.length_scale_)!r};   // s
 constexpr double time_scale = {float(model.time_scale_)!r};   // T
+"""
+
+
+def tank_cpp(model, namespace: str) -> str:
+    """The body of the C++17 header of a tracking ``model`` in ``namespace`` (checked by the caller)."""
+    num = _numbers(model)
+    N = len(num["SAMPLES"])
+    return header_prologue(model, namespace) + f"""constexpr int S = {N};   // tracked samples
 constexpr double omega = {num["OMEGA"]!r};   // w
 constexpr double radius = {num["RADIUS"]!r};   // r: near the goal the field fades to the landing
 constexpr double gamma = {num["GAMMA"]!r};   // gamma' = gamma T
