@@ -8,7 +8,11 @@ such places up without moving a single path:
     xdot = sigma(x) f(x),   sigma(x) = min(BOOST, max(1, kappa |x - x*| / |f(x)|))   (sigma = 1 at x*),
 
 i.e. the model moves at least at the relative speed kappa (1/s) towards its goal, at most BOOST
-times faster than f, never slower than f.
+times faster than f, never slower than f. A floor may act only near the goal (``radius`` rho, the
+*settle zone*): kappa is then kappa fade(|x - x*| / rho), fade = 1 up to rho / 2, 0 from rho on, the
+smoothstep between (:func:`fade`, C^1); sigma stays in [1, BOOST], so the theorem below holds as it is.
+The pose models' orientation block settles so (:mod:`.pose`): its field is slow only in the last few
+degrees, where every demonstration ended somewhere else and was turned onto the goal.
 
 *Theorem (time change).* For any sigma(x) in [1, B] the certificate's conclusions hold for
 sigma f: (i) every trajectory of sigma f is a trajectory of f traversed with the clock
@@ -50,65 +54,86 @@ def relative_speeds(X: np.ndarray, Xdot: np.ndarray, goal: np.ndarray) -> np.nda
     return np.linalg.norm(Xdot[far], axis=1) / r[far]
 
 
-def floored(D: np.ndarray, V: np.ndarray, rate, boost=BOOST) -> np.ndarray:
+def fade(u):
+    """The settle zone's weight at u = |x - x*| / rho (array or float): 1 for u <= 1/2, 0 for u >= 1,
+    3 s^2 - 2 s^3 of s = 2 (1 - u) between (continuous with its derivative)."""
+    s = np.clip(2.0 * (1.0 - u), 0.0, 1.0)
+    return s * s * (3.0 - 2.0 * s)
+
+
+def floor_terms(floor: dict) -> tuple[float, float, float]:
+    """(kappa, B, rho) of a model's ``floor_`` ({"rate", "boost"} and, for a settle zone, "radius"; rho =
+    inf: everywhere)."""
+    radius = floor.get("radius")
+    return float(floor["rate"]), float(floor["boost"]), np.inf if radius is None else float(radius)
+
+
+def floored(D: np.ndarray, V: np.ndarray, rate, boost=BOOST, radius=np.inf) -> np.ndarray:
     """sigma V at the rows of D = x - x* and V = f(x) (module docstring; any consistent units): ``rate``
-    kappa and ``boost`` B numbers or columns (k, 1) of per-row values (rate 0: no floor)."""
+    kappa, ``boost`` B and ``radius`` rho numbers or columns (k, 1) of per-row values (rate 0: no floor;
+    rho = inf: everywhere)."""
     speed = np.hypot.reduce(V, axis=1, keepdims=True)          # hypot: no overflow where |v|^2 would
-    want = rate * np.hypot.reduce(D, axis=1, keepdims=True)
+    dist = np.hypot.reduce(D, axis=1, keepdims=True)
+    want = rate * fade(dist / radius) * dist
     with np.errstate(divide="ignore", invalid="ignore"):
         sigma = np.where(speed > 0, np.minimum(boost, np.maximum(1.0, want / speed)), np.where(want > 0, boost, 1.0))
     return V * sigma
 
 
-def arrival_ratios(paths: list[np.ndarray], demos: Demonstrations, dt: float) -> np.ndarray:
-    """Per reproduction ``paths[i]`` (rows every dt from demos[i]'s first sample): the first time within
-    GOAL_FRACTION of the diagonal of the goal over demos[i]'s duration (inf: never)."""
+def arrival_ratios(paths: list[np.ndarray], demos: Demonstrations, dt: float, durations=None) -> np.ndarray:
+    """Per rollout ``paths[i]`` (rows every dt): the first time within GOAL_FRACTION of the demos' diagonal
+    of their goal over ``durations[i]`` (default: demos[i]'s duration, a reproduction from its first
+    sample; inf: never)."""
     X = demos.stacked()[0]
     radius = GOAL_FRACTION * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
     goal = np.asarray(demos.goal, dtype=float)
+    durations = [d.duration for d in demos] if durations is None else durations
     out = []
-    for p, d in zip(paths, demos):
+    for p, T in zip(paths, durations):
         inside = np.flatnonzero(np.linalg.norm(p - goal, axis=1) <= radius)
-        out.append(inside[0] * dt / d.duration if inside.size else np.inf)
+        out.append(inside[0] * dt / T if inside.size else np.inf)
     return np.array(out)
 
 
-def floor_steps(demos: Demonstrations) -> int:
+def floor_steps(demos: Demonstrations, n_starts: int | None = None) -> int:
     """The Euler steps of :func:`floor_choice`'s rollouts, ARRIVAL x the longest duration at the data's
-    step (+ 2), checked for all len(demos) starts against max_rollout_steps before any fit
-    (ResourceLimitError whose hint names what a CDSP user can change)."""
+    step (+ 2), checked for all ``n_starts`` starts (default len(demos)) against max_rollout_steps before
+    any fit (ResourceLimitError whose hint names what a CDSP user can change)."""
     steps = int(np.ceil(ARRIVAL * max(d.duration for d in demos) / sample_step(demos))) + 2
-    check_count(steps * len(demos), "max_rollout_steps",
-                f"The rollouts that choose speed_floor='auto' ({len(demos)} demonstrations x {steps} steps, "
+    n = len(demos) if n_starts is None else n_starts
+    check_count(steps * n, "max_rollout_steps",
+                f"The rollouts that choose speed_floor='auto' ({n} starts x {steps} steps, "
                 f"{ARRIVAL:g}x the longest duration)", "fewer samples per demonstration (demos.subsample(k)), or "
                 "speed_floor='none' or a rate (no choosing rollouts)")
     return steps
 
 
-def floor_choice(field: Callable[[np.ndarray], np.ndarray], goal: np.ndarray, demos: Demonstrations
-                 ) -> tuple[float | None, dict[str, float]]:
-    """(kappa or None, {candidate: worst training arrival ratio, inf beyond ARRIVAL}) for the field
-    ``field`` (x -> xdot, data units) with goal ``goal`` (module docstring): every candidate's rollouts
-    from the demonstrations' first samples in one Euler loop, :func:`floor_steps` steps at the data's step."""
+def floor_choice(field: Callable[[np.ndarray], np.ndarray], goal: np.ndarray, demos: Demonstrations,
+                 starts=None, durations=None, radius: float = np.inf) -> tuple[float | None, dict[str, float]]:
+    """(kappa or None, {candidate: worst arrival ratio, inf beyond ARRIVAL}) for the field ``field``
+    (x -> xdot, data units) with goal ``goal`` (module docstring): every candidate's rollouts in one Euler
+    loop, :func:`floor_steps` steps at the data's step, from the demonstrations' first samples (their
+    durations), or from ``starts`` (k, n) each to arrive within ARRIVAL x ``durations`` (k,); ``radius``:
+    the floor's settle zone (inf: everywhere)."""
     X, Xdot = demos.stacked()
     rates = relative_speeds(X, Xdot, goal)
     candidates = {"none": 0.0} if rates.size == 0 else \
         {"none": 0.0, **{f"q{round(100 * q)}": float(np.quantile(rates, q)) for q in RATE_QUANTILES}}
     kappas = np.array(list(candidates.values()))
-    dt, m, steps = sample_step(demos), len(demos), floor_steps(demos)
-    starts = np.tile(np.array([d.pos[0] for d in demos]), (len(kappas), 1))
+    starts = np.array([d.pos[0] for d in demos]) if starts is None else np.asarray(starts, dtype=float)
+    dt, m, steps = sample_step(demos), len(starts), floor_steps(demos, len(starts) * len(kappas))
 
     def blocks(Xb, live):
         rate = np.repeat(kappas[live], m)[:, None]
-        return floored(Xb - goal, field(Xb), rate)
+        return floored(Xb - goal, field(Xb), rate, BOOST, radius)
 
-    runs = euler_blocks_until_rest(blocks, starts, len(kappas), dt=dt, max_steps=steps, vel_tol=np.finfo(float).tiny,
-                                   window=1)
-    worst = {name: float(np.max(arrival_ratios(r, demos, dt))) if isinstance(r, list) else np.inf
+    runs = euler_blocks_until_rest(blocks, np.tile(starts, (len(kappas), 1)), len(kappas), dt=dt, max_steps=steps,
+                                   vel_tol=np.finfo(float).tiny, window=1)
+    worst = {name: float(np.max(arrival_ratios(r, demos, dt, durations))) if isinstance(r, list) else np.inf
              for name, r in zip(candidates, runs)}
     ok = [name for name in candidates if worst[name] <= ARRIVAL]
     return (candidates[ok[0] if ok else list(candidates)[-1]] or None), worst
 
 
-__all__ = ["ARRIVAL", "BOOST", "RATE_QUANTILES", "arrival_ratios", "floor_choice", "floor_steps", "floored",
-           "relative_speeds"]
+__all__ = ["ARRIVAL", "BOOST", "RATE_QUANTILES", "arrival_ratios", "fade", "floor_choice", "floor_steps", "floor_terms",
+           "floored", "relative_speeds"]

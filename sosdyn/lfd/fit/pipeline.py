@@ -44,7 +44,7 @@ from ..data.demonstrations import Demonstrations, sample_step
 from .certificate import CertificateReport, certify, check_certificate, collapse_diagnostic, extract_certificate
 from .contraction import eval_fields, field_exponents, metric_exponents
 from .corrective import score_steps
-from .floor import BOOST, floor_choice, floor_steps, floored
+from .floor import BOOST, floor_choice, floor_steps, floor_terms, floored
 from .gmm import (FADE, MIN_SAMPLES_PER_COMPONENT, PositionMixture, block_log_joint, fit_joint_gmm, gate_bound, gmr_cost,
                   responsibilities_of, weights_from, with_bound)
 from .learner import History, Settings, learn, subsample
@@ -265,12 +265,12 @@ def block_core(models: list, rows: int):
 
 def field_at(X, goal, scale, mixture, C, fexps, warp, floor=None):
     """xdot at the rows of X for ``goal`` (the field translated to it): s f(z), or through the warp
-    s J_phi(z)^{-1} f(phi(z)), z = (x - goal) / s; with a speed ``floor`` ({"rate", "boost"}) times
-    sigma(x) (:func:`~.floor.floored`)."""
+    s J_phi(z)^{-1} f(phi(z)), z = (x - goal) / s; with a speed ``floor`` ({"rate", "boost"}, and
+    "radius" for a settle zone) times sigma(x) (:func:`~.floor.floored`)."""
     Z = (X - goal) / scale
     core = lambda U: core_field(U, mixture, C, fexps)       # noqa: E731
     V = (core(Z) if warp is None else pulled_back(Z, warp, core)) * scale
-    return V if floor is None else floored(X - goal, V, floor["rate"], floor["boost"])
+    return V if floor is None else floored(X - goal, V, *floor_terms(floor))
 
 
 def block_field(fits: list):
@@ -297,9 +297,9 @@ def block_field(fits: list):
         floors = [getattr(fits[b], "floor_", None) for b in live]
         if all(f is None for f in floors):
             return V
-        rate = np.repeat([0.0 if f is None else f["rate"] for f in floors], rows)[:, None]
-        boost = np.repeat([1.0 if f is None else f["boost"] for f in floors], rows)[:, None]
-        return floored(X - goal, V, rate, boost)
+        terms = np.array([(0.0, 1.0, np.inf) if f is None else floor_terms(f) for f in floors])
+        rate, boost, radius = (np.repeat(terms[:, i], rows)[:, None] for i in range(3))
+        return floored(X - goal, V, rate, boost, radius)
     return field
 
 

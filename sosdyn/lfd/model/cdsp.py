@@ -363,7 +363,8 @@ class CDSP(MotionModel):
             lines.append(f"warp candidates, training deviation (lower is better): {listed} -> kept "
                          f"{min(scores, key=scores.get)} (the lowest)")
         if self.floor_ is not None:
-            lines.append(f"speed floor: at least {self.floor_['rate']:.3g}/s x the distance to the goal, at most "
+            zone = "" if "radius" not in self.floor_ else f", within {self.floor_['radius']:.3g} of it (settle zone)"
+            lines.append(f"speed floor: at least {self.floor_['rate']:.3g}/s x the distance to the goal{zone}, at most "
                          f"{self.floor_['boost']:g}x the field's speed (a time change: same paths, same certificate)")
         return lines
 

@@ -213,15 +213,17 @@ def validate_state(st: dict, n_components, field_degree: int, metric_degree: int
 
 
 def _floor(f) -> dict | None:
-    """None, or the speed floor {"rate": kappa > 0 (1/s), "boost": B >= 1} (:mod:`~sosdyn.lfd.fit.floor`)."""
+    """None, or the speed floor {"rate": kappa > 0 (1/s), "boost": B >= 1} and, for a settle zone,
+    "radius": rho > 0 (data units; :mod:`~sosdyn.lfd.fit.floor`)."""
     if f is None:
         return None
-    if not isinstance(f, dict) or set(f) != {"rate", "boost"}:
-        raise ModelFileError('malformed: state.floor_ must be null or an object with exactly "rate" and "boost"')
+    if not isinstance(f, dict) or not {"rate", "boost"} <= set(f) <= {"rate", "boost", "radius"}:
+        raise ModelFileError('malformed: state.floor_ must be null or an object with "rate", "boost" and optionally '
+                             '"radius"')
     rate, boost = positive(f["rate"], "state.floor_.rate"), positive(f["boost"], "state.floor_.boost")
     if boost < 1:
         raise ModelFileError(f"malformed: state.floor_.boost must be >= 1 (the floor never slows the field), got {boost!r}")
-    return {"rate": rate, "boost": boost}
+    return {"rate": rate, "boost": boost, **({"radius": positive(f["radius"], "state.floor_.radius")} if "radius" in f else {})}
 
 
 def _warp(w, n) -> dict | None:

@@ -11,8 +11,10 @@ so the position never depends on the orientation: an orientation-only start or a
 orientation moves the position by exactly 0. The orientation's certificate makes the geodesic angle
 |r| = angle(R, R_g) decrease, d|r|^2/dt <= -gamma |r|^2, along every trajectory, so a state that starts
 in the chart (|r| < pi, any orientation but the exact half turn, which has two logarithms and takes
-either) never leaves it: every start converges, with no refusal. A block that does not move in the
-demonstrations is fitted as a still block (:func:`~sosdyn.lfd.fit.pose.still_block`, ``still_``).
+either) never leaves it: every start converges, with no refusal. The orientation block's rate is
+0.5 / T (T the demos' median duration) and it settles: a speed floor within goal_tol_deg of the goal, a
+time change with factor >= 1 that keeps all of the above (:func:`~sosdyn.lfd.fit.pose.settle_floor`).
+A block that does not move in the demonstrations is fitted as a still block (:func:`~sosdyn.lfd.fit.pose.still_block`, ``still_``).
 
 The predictor evaluates one pose in plain floats (:mod:`~sosdyn.lfd.runtime.pose`, the same formulas).
 
@@ -39,7 +41,7 @@ from ..data.pose import (GOAL_TOL_DEG, PoseDemonstrations, align_orientations, c
                          split_demonstrations)
 from ..data.pose_preprocess import preprocess_poses
 from ..fit.params import preset_params
-from ..fit.pose import check_moves, isotropic_demonstrations, orientation_params, still_block
+from ..fit.pose import check_moves, isotropic_demonstrations, orientation_params, settle_floor, still_block
 from ..rollout import ATOL_REL, rollout as integrate
 from ..rollout.quality import HORIZON
 from ..runtime.pose import (body_velocity_one, chart_one, check_limits, pose_speed_factor, pose_to_cpp, pose_to_python,
@@ -156,7 +158,8 @@ class PoseCDSP(MotionModel):
         pos, rot = split_demonstrations(aligned, goal_quat)
         still = {"position": still_block(pos, "position"), "orientation": still_block(rot, "orientation")}
         check_moves(still["position"], still["orientation"], demos.name)
-        params = {"position": self.cdsp_params, "orientation": orientation_params(self.cdsp_params)}
+        duration = float(np.median([d.duration for d in demos]))
+        params = {"position": self.cdsp_params, "orientation": orientation_params(self.cdsp_params, duration)}
         goals = {"position": pos.goal, "orientation": np.zeros(3)}
         for block, data in (("position", pos), ("orientation", rot)):
             rate = still[block]
@@ -166,6 +169,9 @@ class PoseCDSP(MotionModel):
                          progress=self.progress and tagged(self.progress, block)).fit(data)
             if rate is not None or block == "orientation":
                 model.goal_ = goals[block]    # exactly (aligned ends, or symmetric synthetic ones: at round-off)
+            if block == "orientation" and self.cdsp_params.get("speed_floor", "auto") == "auto":
+                model.floor_, model.floor_arrivals_ = settle_floor(lambda R, m=model: m.field(R, m.goal_), data,
+                                                                   np.deg2rad(self.goal_tol_deg))
             setattr(self, f"{block}_", model)
         self.goal_quat_, self.still_ = goal_quat, still
         return self

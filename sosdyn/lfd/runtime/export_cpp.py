@@ -5,10 +5,34 @@ states the formula), every number written out in full precision.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from ..fit.floor import floor_terms
 from .codegen import _check, _flat, _header, _twist, _warp, check_namespace, cpp_string, cpp_strings
 from .states import CPP_SPEED_LIMIT, check_max_speed
+
+
+def _floor_cpp(rate: float, boost: float, radius: float) -> str:
+    """The speed floor's lines (:mod:`~sosdyn.lfd.fit.floor`): xdot scaled by sigma, the rate faded out
+    from radius / 2 to radius when the floor has a settle zone."""
+    fade = "" if math.isinf(radius) else f"""  // the settle zone: the rate faded from 1 at radius / 2 to 0 at radius (smoothstep)
+  const double s = std::fmin(1.0, std::fmax(0.0, 2.0 * (1.0 - dmax * std::sqrt(d2) / {radius!r})));
+  want *= s * s * (3.0 - 2.0 * s);
+"""
+    return f"""  // the speed floor: xdot scaled by min(boost, max(1, rate |x - g| / |xdot|))
+  double dmax = 0.0, vmax = 0.0, d2 = 0.0, v2 = 0.0;     // norms scaled by the largest entry: no overflow
+  for (int i = 0; i < N; ++i) {{ dmax = std::fmax(dmax, std::fabs(x[i] - g[i])); vmax = std::fmax(vmax, std::fabs(xdot[i])); }}
+  for (int i = 0; i < N; ++i) {{
+    if (dmax > 0.0) d2 += ((x[i] - g[i]) / dmax) * ((x[i] - g[i]) / dmax);
+    if (vmax > 0.0) v2 += (xdot[i] / vmax) * (xdot[i] / vmax);
+  }}
+  double want = {rate!r} * dmax * std::sqrt(d2);
+{fade}  const double speed = vmax * std::sqrt(v2), boost = {boost!r};
+  const double sigma = speed > 0.0 ? std::fmin(boost, std::fmax(1.0, want / speed)) : (want > 0.0 ? boost : 1.0);
+  for (int i = 0; i < N; ++i) xdot[i] *= sigma;
+"""
 
 
 def to_cpp(model, namespace: str = "cdsp_model", max_speed: float | None = None) -> str:
@@ -126,18 +150,7 @@ inline bool solve(double* A, double* b) {{
   for (int i = 0; i < N; ++i) finite = finite && std::isfinite(xdot[i]);
 """
     limit = "" if max_speed is None else "  if (finite) limit_speed(xdot, N, max_speed);\n"
-    floor = "" if model.floor_ is None else f"""  // the speed floor: xdot scaled by min(boost, max(1, rate |x - g| / |xdot|))
-  double dmax = 0.0, vmax = 0.0, d2 = 0.0, v2 = 0.0;     // norms scaled by the largest entry: no overflow
-  for (int i = 0; i < N; ++i) {{ dmax = std::fmax(dmax, std::fabs(x[i] - g[i])); vmax = std::fmax(vmax, std::fabs(xdot[i])); }}
-  for (int i = 0; i < N; ++i) {{
-    if (dmax > 0.0) d2 += ((x[i] - g[i]) / dmax) * ((x[i] - g[i]) / dmax);
-    if (vmax > 0.0) v2 += (xdot[i] / vmax) * (xdot[i] / vmax);
-  }}
-  const double want = {float(model.floor_["rate"])!r} * dmax * std::sqrt(d2), speed = vmax * std::sqrt(v2);
-  const double boost = {float(model.floor_["boost"])!r};
-  const double sigma = speed > 0.0 ? std::fmin(boost, std::fmax(1.0, want / speed)) : (want > 0.0 ? boost : 1.0);
-  for (int i = 0; i < N; ++i) xdot[i] *= sigma;
-"""
+    floor = "" if model.floor_ is None else _floor_cpp(*floor_terms(model.floor_))
     speed_def = "" if max_speed is None else (
         f"// the largest |xdot| (units/s): the speed limit below\n"
         f"constexpr double max_speed = {max_speed!r};\n")

@@ -38,9 +38,11 @@ positive factor as every other path.
 from __future__ import annotations
 
 import inspect
+import math
 
 import numpy as np
 
+from ..fit.floor import BOOST, fade, floor_terms, floored
 from .codegen import MIXTURE_PY, RESPONSIBILITIES_PY, _check, _header, _literal, _twist, _warp, gating_py
 from .predictor import (_monomial, field2, fieldn, floor_factor, gating, tables, twist_back, twist_forward, twist_tables, warp_back,
                         warp_back2, warp_forward, warp_forward2, warp_tables)
@@ -52,6 +54,18 @@ from .states import (SPEED_KNEE, check_max_speed, joint_ratio, limit_speed, limi
 #: one state in plain floats, arrays, and the joint factor of two limits (the pose export).
 SPEED_LIMIT_PY = "\n\n".join(inspect.getsource(f) for f in (saturated_speed, limit_speed_one, speed_ratio, saturated_speeds,
                                                            saturation_factor, limit_speed, joint_ratio))
+
+
+#: The speed floor's functions on arrays (:mod:`~sosdyn.lfd.fit.floor`, source embedded).
+FLOOR_PY = "\n\n".join(inspect.getsource(f) for f in (fade, floored))
+
+
+def _floor_literal(floor) -> str:
+    """FLOOR's literal: None, (rate, boost), or (rate, boost, radius) for a settle zone."""
+    if floor is None:
+        return "None"
+    rate, boost, radius = floor_terms(floor)
+    return repr((rate, boost) if math.isinf(radius) else (rate, boost, radius))
 
 
 def to_python(model, max_speed: float | None = None) -> str:
@@ -123,8 +137,9 @@ GOAL = np.array({_literal(model.goal_)})
 SCALE = {float(model.scale_)!r}
 MAX_SPEED = {max_speed!r}     # None, or the largest |xdot| (units/s): the speed limit below
 SPEED_KNEE = {SPEED_KNEE!r}    # velocities slower than SPEED_KNEE * MAX_SPEED are not changed
-# None, or the speed floor (RATE 1/s, BOOST): xdot scaled by min(BOOST, max(1, RATE |x - goal| / |xdot|))
-FLOOR = {None if model.floor_ is None else (float(model.floor_["rate"]), float(model.floor_["boost"]))!r}
+# None, or the speed floor (RATE 1/s, BOOST[, RADIUS]): xdot scaled by min(BOOST, max(1, RATE |x - goal| / |xdot|)),
+# RATE faded to 0 from RADIUS / 2 to RADIUS (the settle zone; none given: everywhere)
+FLOOR = {_floor_literal(model.floor_)}
 # the mixture of h_k(z), in z coordinates: weights pi_k, means mu_k, covariances S_k
 WEIGHTS = np.array({_literal(mix.weights)})
 MEANS = np.array({_literal(mix.means)})
@@ -171,11 +186,7 @@ def predict(X, goal=None):
         raise ValueError(f"X row {{bad[0]}} is so far from the data (scale {{SCALE:.3g}}) that the field "
                          "overflows float. Try: states within a few orders of magnitude of the data.")
     if FLOOR is not None:
-        speed = np.hypot.reduce(V, axis=1, keepdims=True)
-        want = FLOOR[0] * np.hypot.reduce(X - goal, axis=1, keepdims=True)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            V = V * np.where(speed > 0, np.minimum(FLOOR[1], np.maximum(1.0, want / speed)),
-                             np.where(want > 0, FLOOR[1], 1.0))
+        V = floored(X - goal, V, *FLOOR)
     if MAX_SPEED is not None:
         V = limit_speed(V, MAX_SPEED)
     return V[0] if single else V
@@ -183,6 +194,10 @@ def predict(X, goal=None):
 
 # The speed limit: sosdyn.lfd.runtime.states's own functions.
 {SPEED_LIMIT_PY}
+
+# The speed floor on arrays: sosdyn.lfd.fit.floor's own functions.
+BOOST = {BOOST!r}
+{FLOOR_PY}
 
 # One state in plain floats: the predictor's own functions (sosdyn.lfd.runtime.predictor).
 {one_state}'''

@@ -59,6 +59,7 @@ from operator import mul
 import numpy as np
 
 from sosdyn.errors import InputError
+from ..fit.floor import floor_terms
 from ..fit.gmm import PositionMixture
 from .states import as_state, check_max_speed, limit_speed_one
 
@@ -70,7 +71,8 @@ class StatePredictor:
     goal x* (n,), scale s, the position mixture, coefficients C (K, n, m), exponents E (m, n),
     the warp (centers, vectors, sigmas) in z-units or None, the speed limit or None, the twist
     after the warp's bumps (plane, amplitudes, widths; z-units) or None, and the speed floor
-    ({"rate", "boost"}, :mod:`~sosdyn.lfd.fit.floor`) or None (applied before the speed limit).
+    ({"rate", "boost"}, and "radius" for a settle zone; :mod:`~sosdyn.lfd.fit.floor`) or None (applied
+    before the speed limit).
     """
 
     def __init__(self, goal: np.ndarray, scale: float, mixture: PositionMixture, C: np.ndarray,
@@ -86,7 +88,7 @@ class StatePredictor:
         self._forward, self._back = (warp_forward2, warp_back2) if n == 2 else (warp_forward, warp_back)
         self.max_speed = check_max_speed(max_speed)
         self._field = field2 if n == 2 else fieldn
-        self._floor = None if floor is None else (float(floor["rate"]), float(floor["boost"]))
+        self._floor = None if floor is None else floor_terms(floor)
 
     def __call__(self, x, goal=None) -> np.ndarray:
         """xdot (n,) at the state x (n,), in the data's units, for the goal ``goal`` (None: the
@@ -207,10 +209,13 @@ def fieldn(T: tuple, z: list, far) -> list:
         return [math.inf] * n
 
 
-def floor_factor(d: list, v: list, rate: float, boost: float) -> float:
-    """sigma = min(boost, max(1, rate |d| / |v|)) for d = x - x* and v = f(x) (data units; the speed
-    floor, :func:`~sosdyn.lfd.fit.floor.floored`): 1 at the goal, boost where v = 0 elsewhere."""
-    want, speed = rate * math.hypot(*d), math.hypot(*v)       # hypot: no overflow where |v|^2 would
+def floor_factor(d: list, v: list, rate: float, boost: float, radius: float = math.inf) -> float:
+    """sigma = min(boost, max(1, rate fade(|d| / radius) |d| / |v|)) for d = x - x* and v = f(x) (data
+    units; the speed floor, :func:`~sosdyn.lfd.fit.floor.floored`, with its settle zone's fade written
+    out): 1 at the goal, boost where v = 0 elsewhere in the zone."""
+    dist, speed = math.hypot(*d), math.hypot(*v)              # hypot: no overflow where |v|^2 would
+    s = min(1.0, max(0.0, 2.0 * (1.0 - dist / radius)))
+    want = rate * s * s * (3.0 - 2.0 * s) * dist
     if speed > 0:
         return min(boost, max(1.0, want / speed))
     return boost if want > 0 else 1.0

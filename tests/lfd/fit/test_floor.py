@@ -10,7 +10,7 @@ import pytest
 
 from sosdyn.errors import InputError, ModelFileError
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
-from sosdyn.lfd.fit.floor import ARRIVAL, BOOST, floor_choice, floored, relative_speeds
+from sosdyn.lfd.fit.floor import ARRIVAL, BOOST, fade, floor_choice, floored, relative_speeds
 from sosdyn.lfd.fit.pipeline import with_floor
 from sosdyn.lfd.model.cdsp import CDSP
 from sosdyn.lfd.model.fileformat import _digest
@@ -30,6 +30,19 @@ def test_the_factor_by_hand():
     assert out.tolist() == [[1.0, 0.0], [0.1, 0.0], [0.0, 0.0], [0.0, 0.0]]
     assert floored(D[:1], V[:1], 30.0, 1e4)[0, 0] == pytest.approx(150.0)        # sigma = 30 * 5 / 0.1 = 1500
     assert floored(D[:1], V[:1], 30.0, 1e3)[0, 0] == pytest.approx(100.0)        # capped at 1000
+
+
+def test_the_settle_zone_by_hand():
+    """fade = 1 up to rho / 2, 0 from rho, 1/2 at 3 rho / 4 (the smoothstep's midpoint), continuous slope; a
+    floor with a zone is the whole floor within rho / 2 and no floor beyond rho."""
+    assert fade(np.array([0.0, 0.5, 0.75, 1.0, 3.0])).tolist() == [1.0, 1.0, 0.5, 0.0, 0.0]
+    u = np.array([0.5, 1.0])
+    assert np.abs((fade(u + 1e-7) - fade(u - 1e-7)) / 2e-7).max() < 1e-6          # C^1 at both ends
+    D = np.array([[0.3, 0.4], [3.0, 4.0], [1.2, 1.6]])           # |d| = 0.5, 5, 2 against rho = 2
+    V = np.full((3, 2), 0.01)
+    out = floored(D, V, 1.0, 10.0, 2.0)
+    assert out[0] == pytest.approx(floored(D[:1], V[:1], 1.0, 10.0)[0])          # within rho / 2: the floor
+    assert out[1:].tolist() == V[1:].tolist()                                      # from rho on: none
 
 
 def test_relative_speeds_leave_out_the_goal():
@@ -102,8 +115,17 @@ def test_a_bad_floor_setting_is_refused(bad, linear_demos):
         CDSP(speed_floor=bad).fit(linear_demos)
 
 
-def test_predictor_and_exports_carry_the_floor(slow, tmp_path):
+@pytest.mark.parametrize("radius", [None, 1.2])
+def test_predictor_and_exports_carry_the_floor(slow, tmp_path, radius):
+    """The same numbers in the model, the predictor and both exports, with the floor everywhere or within
+    a settle zone of radius 1.2 scales (the states reach 2.8 scales: inside, in the fade, and beyond)."""
     _, fast = slow
+    if radius is not None:
+        fast.save(tmp_path / "fast.json")
+        fast = load_model(tmp_path / "fast.json")
+        fast.floor_ = dict(fast.floor_, radius=radius * fast.scale_)
+        fast.save(tmp_path / "zone.json")                   # the zone survives the file
+        assert load_model(tmp_path / "zone.json").floor_ == fast.floor_
     X = fast.goal_ + fast.scale_ * np.random.default_rng(3).uniform(-2, 2, (400, 2))
     V = fast.predict(X)
     gen, step = import_source(to_python(fast), tmp_path / "floor.py"), fast.predictor()
@@ -140,8 +162,10 @@ def test_the_floor_in_a_model_file(slow, tmp_path):
     del old["state"]["floor_"]                      # a file older than the floor: none
     del old["params"]["speed_floor"]
     assert load_model(_write(old, tmp_path / "old.json")).floor_ is None
-    for bad, match in (({"rate": 2.0}, "exactly"), ({"rate": -1.0, "boost": 10.0}, "rate must be a positive"),
-                       ({"rate": 1.0, "boost": 0.5}, "boost must be >= 1")):
+    for bad, match in (({"rate": 2.0}, "optionally"), ({"rate": -1.0, "boost": 10.0}, "rate must be a positive"),
+                       ({"rate": 1.0, "boost": 0.5}, "boost must be >= 1"),
+                       ({"rate": 1.0, "boost": 2.0, "radius": 0.0}, "radius must be a positive"),
+                       ({"rate": 1.0, "boost": 2.0, "radius": 1.0, "zone": 1}, "optionally")):
         data["state"]["floor_"] = bad
         with pytest.raises(ModelFileError, match=match):
             load_model(_write(data, tmp_path / "bad.json"))
