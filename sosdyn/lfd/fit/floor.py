@@ -102,7 +102,8 @@ def floor_steps(demos: Demonstrations, n_starts: int | None = None) -> int:
     steps = int(np.ceil(ARRIVAL * max(d.duration for d in demos) / sample_step(demos))) + 2
     n = len(demos) if n_starts is None else n_starts
     check_count(steps * n, "max_rollout_steps",
-                f"The rollouts that choose speed_floor='auto' ({n} starts x {steps} steps, "
+                f"The rollouts that choose speed_floor='auto' ({n} {'demonstrations' if n_starts is None else 'starts'} x "
+                f"{steps} steps, "
                 f"{ARRIVAL:g}x the longest duration)", "fewer samples per demonstration (demos.subsample(k)), or "
                 "speed_floor='none' or a rate (no choosing rollouts)")
     return steps
@@ -120,8 +121,9 @@ def floor_choice(field: Callable[[np.ndarray], np.ndarray], goal: np.ndarray, de
     candidates = {"none": 0.0} if rates.size == 0 else \
         {"none": 0.0, **{f"q{round(100 * q)}": float(np.quantile(rates, q)) for q in RATE_QUANTILES}}
     kappas = np.array(list(candidates.values()))
+    steps = floor_steps(demos, None if starts is None else len(starts))
     starts = np.array([d.pos[0] for d in demos]) if starts is None else np.asarray(starts, dtype=float)
-    dt, m, steps = sample_step(demos), len(starts), floor_steps(demos, len(starts) * len(kappas))
+    dt, m = sample_step(demos), len(starts)
 
     def blocks(Xb, live):
         rate = np.repeat(kappas[live], m)[:, None]
