@@ -36,7 +36,7 @@ import numpy as np
 
 from sosdyn.errors import DemonstrationError
 from ..data.demonstrations import Demonstration, Demonstrations
-from .floor import BOOST, floor_choice
+from .floor import BOOST, floor_choice, floor_steps
 
 STILL_RELATIVE = 1e-9        # positions spreading less than this x their magnitude do not move
 STILL_ANGLE = 1e-6           # rad: orientations all within this of the goal do not move
@@ -69,6 +69,12 @@ def settle_floor(field, demos: Demonstrations, radius: float) -> tuple[dict | No
     durations = [d.duration for d in demos] + [settle] * len(edge)
     rate, arrivals = floor_choice(field, np.zeros(3), demos, starts, durations, radius)
     return (None if rate is None else {"rate": rate, "boost": BOOST, "radius": float(radius)}), arrivals
+
+
+def check_settle_size(demos: Demonstrations) -> None:
+    """:func:`settle_floor`'s rollouts (the demos' starts and the zone's edge starts) checked against
+    max_rollout_steps before any fit (ResourceLimitError with the remedies)."""
+    floor_steps(demos, len(demos) + len(edge_directions()))
 
 
 def edge_directions() -> np.ndarray:

@@ -41,7 +41,8 @@ from ..data.pose import (GOAL_TOL_DEG, PoseDemonstrations, align_orientations, c
                          split_demonstrations)
 from ..data.pose_preprocess import preprocess_poses
 from ..fit.params import preset_params
-from ..fit.pose import check_moves, isotropic_demonstrations, orientation_params, settle_floor, still_block
+from ..fit.pose import (check_moves, check_settle_size, isotropic_demonstrations, orientation_params, settle_floor,
+                        still_block)
 from ..rollout import ATOL_REL, rollout as integrate
 from ..rollout.quality import HORIZON
 from ..runtime.pose import (body_velocity_one, chart_one, check_limits, pose_speed_factor, pose_to_cpp, pose_to_python,
@@ -161,6 +162,9 @@ class PoseCDSP(MotionModel):
         duration = float(np.median([d.duration for d in demos]))
         params = {"position": self.cdsp_params, "orientation": orientation_params(self.cdsp_params, duration)}
         goals = {"position": pos.goal, "orientation": np.zeros(3)}
+        settle = self.cdsp_params.get("speed_floor", "auto") == "auto"
+        if settle and still["orientation"] is None:
+            check_settle_size(rot)
         for block, data in (("position", pos), ("orientation", rot)):
             rate = still[block]
             if rate is not None:
@@ -169,7 +173,7 @@ class PoseCDSP(MotionModel):
                          progress=self.progress and tagged(self.progress, block)).fit(data)
             if rate is not None or block == "orientation":
                 model.goal_ = goals[block]    # exactly (aligned ends, or symmetric synthetic ones: at round-off)
-            if block == "orientation" and self.cdsp_params.get("speed_floor", "auto") == "auto":
+            if block == "orientation" and settle and rate is None:
                 model.floor_, model.floor_arrivals_ = settle_floor(lambda R, m=model: m.field(R, m.goal_), data,
                                                                    np.deg2rad(self.goal_tol_deg))
             setattr(self, f"{block}_", model)

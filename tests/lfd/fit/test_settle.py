@@ -6,6 +6,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import sosdyn as sd
+from sosdyn.lfd.model.cdsp import CDSP
+from sosdyn.lfd.model.pose import PoseCDSP
+
 from sosdyn.lfd.data.demonstrations import Demonstration, Demonstrations
 from sosdyn.lfd.fit.floor import ARRIVAL, GOAL_FRACTION, floored
 from sosdyn.lfd.fit.pose import ORIENTATION_GAMMA, edge_directions, orientation_params, settle_floor
@@ -84,3 +88,16 @@ def test_the_orientation_parameters():
     assert orientation_params({"speed_floor": 0.7}, 10.0)["speed_floor"] == 0.7
     assert orientation_params({"speed_floor": "none"}, 10.0)["speed_floor"] == "none"
     assert orientation_params({"metric": "learned"}, 10.0)["metric"] == "identity"
+
+
+def test_too_many_settling_rollouts_are_refused_before_any_fit(monkeypatch):
+    """The settle zone's rollouts (every demo's start and 14 edge starts) are counted against max_rollout_steps
+    before either block is fitted, and the refusal names the remedies."""
+    demos = sd.load_dataset("robottasks/openbox")
+
+    def no_fit(self, data):
+        raise AssertionError("a block was fitted")
+    monkeypatch.setattr(CDSP, "fit", no_fit)
+    with sd.limits(max_rollout_steps=1000), pytest.raises(sd.ResourceLimitError) as info:
+        PoseCDSP().fit(demos)
+    assert f"({len(demos) + 14} starts x" in str(info.value) and "speed_floor='none' or a rate" in str(info.value)
