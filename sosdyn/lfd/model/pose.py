@@ -385,13 +385,19 @@ class PoseCDSP(MotionModel):
         return PoseCertificateReport(self.position_.verify(n_samples, seed), self.orientation_.verify(n_samples, seed))
 
     def summary(self) -> list[str]:
-        """Both blocks' certificate numbers, still blocks, and how far the end orientations were aligned."""
+        """Both blocks' certificate numbers, the orientation's rate and speed floor, still blocks, and how far
+        the end orientations were aligned."""
         self._check_fitted()
         pos, ori = self.position_.summary(), self.orientation_.summary()
         lines = [f"position block: {pos[0]}; orientation block (identity metric: the angle to the goal "
                  f"orientation never increases): {ori[0]}", *pos[1:]]
         lines += [f"the {block} does not move in the demonstrations: it is held at the goal (returns at rate "
                   f"{rate:.3g}/s if pushed)" for block, rate in self.still_.items() if rate is not None]
+        floor = self.orientation_.floor_
+        lines.append(f"orientation block: certified rate {self.orientation_.gamma:.3g}/s" + (
+            "" if floor is None else f"; speed floor {floor['rate']:.3g}/s" + (
+                f" within {np.rad2deg(floor['radius']):.3g} deg of the goal (settle zone)" if "radius" in floor else "")
+            + " (a time change: same paths, same certificate)"))
         if hasattr(self, "orientation_moved_deg_"):
             moved = ", ".join(f"{a:.2g}" for a in self.orientation_moved_deg_)
             lines.append(f"end orientations aligned onto their chordal mean by {moved} deg (refused beyond "
