@@ -100,10 +100,9 @@ def floor_steps(demos: Demonstrations, n_starts: int | None = None) -> int:
     step (+ 2), checked for all ``n_starts`` starts (default len(demos)) against max_rollout_steps before
     any fit (ResourceLimitError whose hint names what a CDSP user can change)."""
     steps = int(np.ceil(ARRIVAL * max(d.duration for d in demos) / sample_step(demos))) + 2
-    n = len(demos) if n_starts is None else n_starts
+    n, what = (len(demos), "demonstrations") if n_starts is None else (n_starts, "starts")
     check_count(steps * n, "max_rollout_steps",
-                f"The rollouts that choose speed_floor='auto' ({n} {'demonstrations' if n_starts is None else 'starts'} x "
-                f"{steps} steps, "
+                f"The rollouts that choose speed_floor='auto' ({n} {what} x {steps} steps, "
                 f"{ARRIVAL:g}x the longest duration)", "fewer samples per demonstration (demos.subsample(k)), or "
                 "speed_floor='none' or a rate (no choosing rollouts)")
     return steps

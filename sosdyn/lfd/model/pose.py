@@ -14,7 +14,8 @@ in the chart (|r| < pi, any orientation but the exact half turn, which has two l
 either) never leaves it: every start converges, with no refusal. The orientation block's rate is
 0.5 / T (T the demos' median duration) and it settles: a speed floor within goal_tol_deg of the goal, a
 time change with factor >= 1 that keeps all of the above (:func:`~sosdyn.lfd.fit.pose.settle_floor`).
-A block that does not move in the demonstrations is fitted as a still block (:func:`~sosdyn.lfd.fit.pose.still_block`, ``still_``).
+A block that does not move in the demonstrations is fitted as a still block
+(:func:`~sosdyn.lfd.fit.pose.still_block`, ``still_``).
 
 The predictor evaluates one pose in plain floats (:mod:`~sosdyn.lfd.runtime.pose`, the same formulas).
 
