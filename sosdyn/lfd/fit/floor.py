@@ -68,6 +68,14 @@ def floor_terms(floor: dict) -> tuple[float, float, float]:
     return float(floor["rate"]), float(floor["boost"]), np.inf if radius is None else float(radius)
 
 
+def describe(floor: dict, zone: str = "") -> str:
+    """One line for a model's summary: the floor's rate and factor cap; ``zone``: how the caller writes its
+    settle zone's radius (in its own units), e.g. "20 deg"."""
+    within = f", within {zone} of it (settle zone)" if zone else ""
+    return (f"speed floor: at least {floor['rate']:.3g}/s x the distance to the goal{within}, at most "
+            f"{floor['boost']:g}x the field's speed (a time change: same paths, same certificate)")
+
+
 def floored(D: np.ndarray, V: np.ndarray, rate, boost=BOOST, radius=np.inf) -> np.ndarray:
     """sigma V at the rows of D = x - x* and V = f(x) (module docstring; any consistent units): ``rate``
     kappa, ``boost`` B and ``radius`` rho numbers or columns (k, 1) of per-row values (rate 0: no floor;
@@ -136,5 +144,5 @@ def floor_choice(field: Callable[[np.ndarray], np.ndarray], goal: np.ndarray, de
     return (candidates[ok[0] if ok else list(candidates)[-1]] or None), worst
 
 
-__all__ = ["ARRIVAL", "BOOST", "RATE_QUANTILES", "arrival_ratios", "fade", "floor_choice", "floor_steps", "floor_terms",
+__all__ = ["ARRIVAL", "BOOST", "RATE_QUANTILES", "arrival_ratios", "describe", "fade", "floor_choice", "floor_steps", "floor_terms",
            "floored", "relative_speeds"]

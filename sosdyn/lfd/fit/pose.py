@@ -52,7 +52,12 @@ def orientation_params(params: dict, duration: float) -> dict:
     ORIENTATION_GAMMA / ``duration``, then ``params``, then ORIENTATION_FIXED; its speed floor "none" where
     ``params`` leave it "auto" (:func:`settle_floor` then chooses one)."""
     out = {**ORIENTATION_DEFAULTS, "gamma": ORIENTATION_GAMMA / duration, **params, **ORIENTATION_FIXED}
-    return {**out, "speed_floor": "none"} if out.get("speed_floor", "auto") == "auto" else out
+    return {**out, "speed_floor": "none"} if settles(params) else out
+
+
+def settles(params: dict) -> bool:
+    """Whether the orientation block gets a settle zone: ``params`` leave its speed floor "auto"."""
+    return params.get("speed_floor", "auto") == "auto"
 
 
 def settle_floor(field, demos: Demonstrations, radius: float) -> tuple[dict | None, dict[str, float]]:

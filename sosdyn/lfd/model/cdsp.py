@@ -34,6 +34,7 @@ from threadpoolctl import threadpool_limits
 from sosdyn.errors import InputError, ModelFileError, NotFittedError
 from ..fit.certificate import DEFAULT_SAMPLES, CertificateReport
 from ..fit.corrective import MIN_DIST, ROUNDS, TAU
+from ..fit.floor import describe
 from ..data.demonstrations import check_demonstrations
 from ..data.pose import PoseDemonstrations
 from ..fit.learner import Settings, capped, reuse_steps
@@ -363,9 +364,8 @@ class CDSP(MotionModel):
             lines.append(f"warp candidates, training deviation (lower is better): {listed} -> kept "
                          f"{min(scores, key=scores.get)} (the lowest)")
         if self.floor_ is not None:
-            zone = "" if "radius" not in self.floor_ else f", within {self.floor_['radius']:.3g} of it (settle zone)"
-            lines.append(f"speed floor: at least {self.floor_['rate']:.3g}/s x the distance to the goal{zone}, at most "
-                         f"{self.floor_['boost']:g}x the field's speed (a time change: same paths, same certificate)")
+            zone = f"{self.floor_['radius']:.3g} {self.units_}".strip() if "radius" in self.floor_ else ""
+            lines.append(describe(self.floor_, zone))
         return lines
 
     def iteration_cap(self, rows: list[dict]) -> str | None:

@@ -41,9 +41,10 @@ from sosdyn.errors import InputError, ModelFileError, NotFittedError
 from ..data.pose import (GOAL_TOL_DEG, PoseDemonstrations, align_orientations, chart, from_chart, goal_orientation,
                          split_demonstrations)
 from ..data.pose_preprocess import preprocess_poses
+from ..fit.floor import describe
 from ..fit.params import preset_params
 from ..fit.pose import (check_moves, check_settle_size, isotropic_demonstrations, orientation_params, settle_floor,
-                        still_block)
+                        settles, still_block)
 from ..rollout import ATOL_REL, rollout as integrate
 from ..rollout.quality import HORIZON
 from ..runtime.pose import (body_velocity_one, chart_one, check_limits, pose_speed_factor, pose_to_cpp, pose_to_python,
@@ -163,7 +164,7 @@ class PoseCDSP(MotionModel):
         duration = float(np.median([d.duration for d in demos]))
         params = {"position": self.cdsp_params, "orientation": orientation_params(self.cdsp_params, duration)}
         goals = {"position": pos.goal, "orientation": np.zeros(3)}
-        settle = self.cdsp_params.get("speed_floor", "auto") == "auto"
+        settle = settles(self.cdsp_params)
         if settle and still["orientation"] is None:
             check_settle_size(rot)
         for block, data in (("position", pos), ("orientation", rot)):
@@ -395,10 +396,9 @@ class PoseCDSP(MotionModel):
         lines += [f"the {block} does not move in the demonstrations: it is held at the goal (returns at rate "
                   f"{rate:.3g}/s if pushed)" for block, rate in self.still_.items() if rate is not None]
         floor = self.orientation_.floor_
-        lines.append(f"orientation block: certified rate {self.orientation_.gamma:.3g}/s" + (
-            "" if floor is None else f"; speed floor {floor['rate']:.3g}/s" + (
-                f" within {np.rad2deg(floor['radius']):.3g} deg of the goal (settle zone)" if "radius" in floor else "")
-            + " (a time change: same paths, same certificate)"))
+        zone = f"{np.rad2deg(floor['radius']):.3g} deg" if floor is not None and "radius" in floor else ""
+        lines.append(f"orientation block: certified rate {self.orientation_.gamma:.3g}/s" +
+                     ("" if floor is None else f"; {describe(floor, zone)}"))
         if hasattr(self, "orientation_moved_deg_"):
             moved = ", ".join(f"{a:.2g}" for a in self.orientation_moved_deg_)
             lines.append(f"end orientations aligned onto their chordal mean by {moved} deg (refused beyond "
