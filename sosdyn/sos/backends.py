@@ -21,11 +21,8 @@ solver's working memory is estimated (:func:`solver_bytes`) and compared with
 """
 from __future__ import annotations
 
-import os
 import sys
-import tempfile
 import time
-from contextlib import contextmanager
 
 import clarabel
 import numpy as np
@@ -38,6 +35,7 @@ from .conic import affine_cones, check_data, cvxpy_block_vars
 from .csc import csc, vstack
 from .gram import svec_pairs, svec_to_matrix
 from .kkt import factor_entries
+from .native import native_stderr
 from .objective import is_cvxpy
 from .solution import Solution
 
@@ -176,35 +174,6 @@ def _cvxpy(program, data, solver, verbose, settings):
     if all(c.dual_value is not None for c in psd_cons):
         info["psd_duals"] = [np.asarray(c.dual_value, dtype=float) for c in psd_cons]
     return status, np.asarray(value, dtype=float), raw, seconds, info
-
-
-class Captured:
-    """The text a native library wrote to file descriptor 2 inside :func:`native_stderr`."""
-
-    text: str = ""
-
-
-@contextmanager
-def native_stderr():
-    """File descriptor 2 redirected into a temporary file for the duration (a Rust panic in
-    Clarabel prints its message and backtrace there, past Python's sys.stderr); yields a
-    :class:`Captured` whose ``text`` is set on exit."""
-    out = Captured()
-    try:
-        sys.stderr.flush()
-        saved = os.dup(2)
-    except (OSError, ValueError):          # no descriptor 2 (an embedded interpreter): nothing to hide
-        yield out
-        return
-    with tempfile.TemporaryFile() as tmp:
-        os.dup2(tmp.fileno(), 2)
-        try:
-            yield out
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-            tmp.seek(0)
-            out.text = tmp.read().decode(errors="replace")
 
 
 def solver_bytes(data, solver: str, backend: str) -> float:

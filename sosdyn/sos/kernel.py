@@ -28,7 +28,10 @@ from __future__ import annotations
 import math
 from fractions import Fraction
 
+import clarabel
 import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
 
 from ..errors import UnverifiedSolutionError
 from ..poly import Polynomial
@@ -36,13 +39,16 @@ from .conic import positions
 from .gram import SQRT2, exact, exact_solution, float_down, proven_min_eig, svec_pairs, svec_to_matrix
 from .objective import affine_rows
 from .identity import identity_of
+from .native import native_stderr
 from .rigorous import Bound, _exps_in, constraint_map
 
 KERNEL_TOLS = (1e-9, 1e-7, 1e-5)   # eigenvalues below this x the block's largest are its kernel, tried in turn
-DENOMINATOR = 1000       # largest denominator of a kernel vector's entries
-ROUNDING = 1e-3          # how far the floats' echelon form may be from its rounding (an interior-point
-#                          solver's face is known to about the square root of its tolerance)
-MAX_ROWS = 400           # coefficient equations up to which the exact system is solved
+#: (largest denominator of a kernel vector's entries, how far the floats' echelon form may be from
+#: its rounding), tried in turn: an interior-point solver's face is known to about the square root
+#: of its tolerance, worse on an ill-conditioned face (dense chained Rosenbrock: 4e-2), where only
+#: integers are far enough apart to be read
+ROUNDINGS = ((1, 0.1), (1000, 1e-3))
+MAX_ROWS = 1000          # coefficient equations up to which the exact system is solved
 SPAN_TOL = 1e-2         # singular values of the kernel's span below this are the solver's noise
 GRID = 2.0**-40          # the solver's numbers are rounded to this grid (relative) first: short rationals
 
@@ -55,11 +61,12 @@ def on_grid(v: float, step: float) -> Fraction:
     return round(Fraction(v) / h) * h
 
 
-def rational_face(Q, keep_row=None, tol=1e-7, zero_rows=()):
+def rational_face(Q, keep_row=None, tol=1e-7, zero_rows=(), rounding=ROUNDINGS[-1]):
     """U (n x r, Fractions; columns span the orthogonal complement of Q's rational kernel), or
     None when the kernel has no rational echelon form. ``keep_row``: the kernel is restricted to
     vectors vanishing there (the constant monomial of a bound, which lowering gamma reaches);
-    ``zero_rows``: coordinate vectors added to it (rows the polynomial does not need, :mod:`.proof`)."""
+    ``zero_rows``: coordinate vectors added to it (rows the polynomial does not need, :mod:`.proof`);
+    ``rounding``: (largest denominator, largest distance of an entry from it) (ROUNDINGS)."""
     n = Q.shape[0]
     w, V = np.linalg.eigh(Q)
     top = max(float(w.max(initial=0.0)), 0.0)
@@ -85,8 +92,9 @@ def rational_face(Q, keep_row=None, tol=1e-7, zero_rows=()):
         others = np.arange(R.shape[0]) != row
         R[others] -= np.outer(R[others, col], R[row])
         pivots.append(int(col))
-    E = [[Fraction(float(v)).limit_denominator(DENOMINATOR) for v in r] for r in R]
-    if max(abs(float(e) - v) for r, fr in zip(R, E) for e, v in zip(fr, r)) > ROUNDING:
+    denominator, distance = rounding
+    E = [[Fraction(float(v)).limit_denominator(denominator) for v in r] for r in R]
+    if max(abs(float(e) - v) for r, fr in zip(R, E) for e, v in zip(fr, r)) > distance:
         return None
     free = [c for c in range(n) if c not in pivots]
     U = [[Fraction(0)] * len(free) for _ in range(n)]
@@ -98,25 +106,86 @@ def rational_face(Q, keep_row=None, tol=1e-7, zero_rows=()):
 
 
 def _face_terms(U, size):
-    """Q_ij for i <= j as {R unknown (a, c), a <= c: exact coefficient}, Q = U R U^T."""
-    r = len(U[0]) if U else 0
+    """Q_ij for i <= j as {R unknown (a, c), a <= c: exact coefficient}, Q = U R U^T (over the
+    nonzeros of U's rows: most are one coordinate)."""
+    nonzero = [[(a, v) for a, v in enumerate(row) if v] for row in U]
     out = {}
     for i, j in zip(*svec_pairs(size)):
         terms = {}
-        for a in range(r):
-            for c in range(a, r):
-                v = U[i][a] * U[j][c] + (U[i][c] * U[j][a] if a != c else 0)
-                if v:
-                    terms[(a, c)] = v
-        out[(int(i), int(j))] = terms
+        for a, u in nonzero[i]:
+            for c, w in nonzero[j]:
+                key = (a, c) if a <= c else (c, a)
+                terms[key] = terms.get(key, 0) + u * w
+        out[(int(i), int(j))] = {k: v for k, v in terms.items() if v}
     return out
 
 
-def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7, zero_squares: bool = False) -> Bound:
+def face_solve(rows, ge_rows, faces, start, gain) -> dict | None:
+    """The program again on the faces, in floating point: every coefficient equation in ``rows``
+    (an independent subset) and ``ge_rows`` (c + sum a u >= 0) over the free decisions and the
+    R of each face (``faces``, each R >= 0), ``gain`` ({unknown: coefficient}) maximised, by
+    Clarabel. On the face of every certificate the reduced program has an interior, so its answer
+    is accurate where the first, on a program without one, was not (the re-solve of Permenter &
+    Parrilo's facial reduction). The unknowns as ``start`` has them, on the grid; None without an
+    answer."""
+    free = sorted(u for u in start if not isinstance(u, tuple))
+    col = {u: k for k, u in enumerate(free)}
+    sizes = []
+    for b, U in faces:
+        r = len(U[0]) if U else 0
+        for a, c in zip(*svec_pairs(r)):
+            col[("R", id(b.psd), int(a), int(c))] = len(col)
+        sizes.append(r)
+    scale = {u: 1.0 if not isinstance(u, tuple) or u[2] == u[3] else 1 / SQRT2 for u in col}   # R_ac = s / sqrt2
+
+    def matrix(lines):
+        A = np.zeros((len(lines), len(col)))
+        for i, (_, lin) in enumerate(lines):
+            for u, a in lin.items():
+                A[i, col[u]] += float(a) * scale[u]
+        return A, np.array([-float(c) for c, _ in lines])
+    A, b = matrix(rows)
+    if A.size:
+        _, Rr, order = sla.qr(A.T, mode="economic", pivoting=True)
+        d = np.abs(np.diag(Rr))
+        use = np.sort(order[:int((d > 1e-10 * d.max(initial=0.0)).sum())])
+        A, b = A[use], b[use]
+    G, h = matrix(ge_rows)
+    psd = np.zeros((sum(r * (r + 1) // 2 for r in sizes), len(col)))
+    psd[:, len(free):] = -np.eye(psd.shape[0])                     # s = svec(R) in the PSD cones
+    q = np.zeros(len(col))
+    for u, c in gain.items():
+        q[col[u]] -= float(c) * scale[u]
+    cones = ([clarabel.ZeroConeT(A.shape[0])] if A.shape[0] else []) + \
+        ([clarabel.NonnegativeConeT(G.shape[0])] if G.shape[0] else []) + [clarabel.PSDTriangleConeT(r) for r in sizes if r]
+    opts = clarabel.DefaultSettings()
+    opts.verbose = False
+    with native_stderr():
+        try:
+            result = clarabel.DefaultSolver(sp.csc_matrix((len(col), len(col))), q, sp.csc_matrix(np.vstack([A, -G, psd])),
+                                            np.concatenate([b, -h, np.zeros(psd.shape[0])]), cones, opts).solve()
+        except BaseException as exc:      # a Rust panic (no answer, like a failed solve)
+            if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
+                raise
+            return None
+    if str(result.status) not in ("Solved", "AlmostSolved") or not np.isfinite(result.x).all():
+        return None
+    y = np.array([result.x[col[u]] * scale[u] for u in start])
+    top = {}
+    for u, v in zip(start, y):
+        if isinstance(u, tuple):
+            top[u[1]] = max(top.get(u[1], 0.0), abs(v))
+    return {u: on_grid(v, GRID * (top[u[1]] if isinstance(u, tuple) else abs(v))) for u, v in zip(start, y)}
+
+
+def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7, zero_squares: bool = False,
+                 rounding=ROUNDINGS[-1]) -> Bound:
     """The exact certificate of the module docstring near x (ordered as ``data.ids``); a Bound
     (``proven`` None for a program without objective), or UnverifiedSolutionError. ``zero_squares``:
     the rows of a constraint's Gram block whose square no other term of its identity reaches (its
-    coefficient in the polynomial is 0: the diagonal rule of facial reduction) join the kernel."""
+    coefficient in the polynomial is 0: the diagonal rule of facial reduction) join the kernel;
+    ``rounding``: how the kernel is read (:func:`rational_face`). The exact correction starts from
+    the program solved again on the faces (:func:`face_solve`), else from x on them."""
     sense, expr = program.objective or (None, None)
     if program.cvxpy_constraints or (sense is not None and not isinstance(expr, Polynomial)):
         raise UnverifiedSolutionError("only affine objectives and no cvxpy constraints have an exact form",
@@ -142,7 +211,7 @@ def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7, zero_
         if keep_constant and b.psd.role in ("gram", "clique"):
             keep = next((k for con in program.sos_constraints for basis, psd in con.gram_blocks if psd is b.psd
                          for k in np.flatnonzero(~basis.exps.any(axis=1))[:1]), None)
-        U = rational_face(Q, keep, tol, zeros.get(id(b.psd), ()) if zero_squares else ())
+        U = rational_face(Q, keep, tol, zeros.get(id(b.psd), ()) if zero_squares else (), rounding)
         if U is None:
             raise UnverifiedSolutionError(f"block {b.name!r}: its kernel has no small rational form", "unverified")
         Uf = np.array([[float(v) for v in row] for row in U]) if U and U[0] else np.zeros((Q.shape[0], 0))
@@ -185,7 +254,17 @@ def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7, zero_
     rows = [(c, lin) for c, lin in rows if c or lin]
     if len(rows) > MAX_ROWS:
         raise UnverifiedSolutionError(f"{len(rows)} coefficient equations, above {MAX_ROWS}", "unverified")
-    avoid = [] if sense is None else [int(d) for d in affine_rows([expr])[2]]
+    ge_rows, ge_names = [], []
+    for lin_rows in (r for r in program.linear if r.role == "user" and r.kind == "ge"):
+        ges = [[-exact(v), {}] for v in lin_rows.rhs]
+        for r, d, v in zip(lin_rows.rows, lin_rows.ids, lin_rows.vals):
+            ges[r][1][int(d)] = ges[r][1].get(int(d), 0) + exact(v)
+        ge_rows += [(c, substitute(lin)) for c, lin in ges]
+        ge_names += [lin_rows.name] * len(ges)
+    c0, C, ids = affine_rows([expr]) if sense is not None else (None, np.zeros((1, 0)), [])
+    gain = substitute({int(d): exact(c) * (1 if sense == "max" else -1) for c, d in zip(C[0], ids)})
+    start = face_solve(rows, ge_rows, faces, start, gain) or start
+    avoid = [int(d) for d in ids]
     delta = exact_solution(rows, start, avoid)
     if delta is None:
         raise UnverifiedSolutionError("the coefficient equations are inconsistent on the kernel's face", "unverified")
@@ -203,16 +282,12 @@ def kernel_bound(program, data, x, keep_constant: bool, tol: float = 1e-7, zero_
         margins[b.name] = lb
     def exact_value(d):
         return sum((values[u] * w for u, w in entry[d].items()), Fraction(0)) if d in entry else values[d]
-    for lin_rows in (r for r in program.linear if r.role == "user" and r.kind == "ge"):
-        lhs = [-exact(v) for v in lin_rows.rhs]
-        for r, d, v in zip(lin_rows.rows, lin_rows.ids, lin_rows.vals):
-            lhs[r] += exact(v) * exact_value(int(d))
-        if any(v < 0 for v in lhs):
-            raise UnverifiedSolutionError(f"inequality {lin_rows.name!r} fails at the exact point", "unverified")
+    for (c, lin), name in zip(ge_rows, ge_names):
+        if c + sum((a * values[u] for u, a in lin.items()), Fraction(0)) < 0:
+            raise UnverifiedSolutionError(f"inequality {name!r} fails at the exact point", "unverified")
     point = np.array([float(exact_value(int(d))) for d in data.ids])
     if sense is None:
         return Bound(None, None, None, "kernel face", point, margins)
-    c0, C, ids = affine_rows([expr])
     value = exact(c0[0]) + sum((exact(c) * exact_value(int(d)) for c, d in zip(C[0], ids)), Fraction(0))
     proven = float_down(value) if sense == "max" else -float_down(-value)
     solver = float(c0[0] + C[0] @ x[positions(data.ids, ids)])

@@ -27,12 +27,13 @@ the solver's tolerance.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from itertools import product
 
 import numpy as np
 
 from ..errors import ResourceLimitError, UnverifiedSolutionError
 from .conic import objective_value, positions
-from .kernel import KERNEL_TOLS, kernel_bound
+from .kernel import KERNEL_TOLS, ROUNDINGS, kernel_bound
 from .posterior import posterior_point
 from .proof import certificate_point, prove_program
 from .rigorous import QUICK_TIGHTENINGS, Bound, confirm, prove_bound
@@ -142,14 +143,19 @@ def full_proof(solution, pending: Pending) -> Proof:
     small = entries <= EXACT_MAX
     if small:
         for keep in (False, True):
-            why, found = [], []
-            for tol, squares in ((t, z) for t in KERNEL_TOLS for z in (False, True)):
+            why, found, skip = [], [], set()
+            for rounding, tol, squares in product(ROUNDINGS, KERNEL_TOLS, (False, True)):
+                if rounding in skip:
+                    continue
                 try:
-                    found.append(kernel_bound(program, solution.data, solution.x, keep, tol, squares))
+                    found.append(kernel_bound(program, solution.data, solution.x, keep, tol, squares, rounding))
                 except UnverifiedSolutionError as exc:
-                    why.append(f"{tol:.0e}{', zero squares' if squares else ''}: {exc.detail}")
-                    if "coefficient equations" in exc.detail or "exact form" in exc.detail:
-                        break                                       # the same at any tolerance
+                    why.append(f"{tol:.0e}{', zero squares' if squares else ''}, denominators <= {rounding[0]}: "
+                               f"{exc.detail}")
+                    if "coefficient equations," in exc.detail or "exact form" in exc.detail:
+                        break                                       # the same at any tolerance and rounding
+                    if "inconsistent" in exc.detail:
+                        skip.add(rounding)                          # read so, the kernel is not the face's
                 if found and min(found[-1].margins.values(), default=1.0) > 0:
                     break                         # a face with a margin: the one to report
             if found:
