@@ -81,6 +81,21 @@ def test_an_answer_failing_the_check_is_retried_until_one_passes(monkeypatch):
         assert "Tried" in str(exc)
 
 
+@pytest.mark.parametrize("n, sparsity", [(4, None), (8, "correlative")])
+def test_chained_singular_is_never_bounded_above_its_minimum(n, sparsity):
+    # f(0) = 0 and f >= 0 (a sum of even powers): min f = 0. Its certificates are singular where no
+    # remedy has reached them; whatever the remedies find, a returned bound is <= 0, else the
+    # refusal is typed and says what was tried
+    f = chained_singular(n)
+    assert f([[0.0] * n])[0] == 0.0
+    try:
+        lb = minimize_on(f, sparsity=sparsity)
+    except sd.UnverifiedSolutionError as exc:
+        assert "Tried" in str(exc)
+    else:
+        assert lb.value <= 0.0
+
+
 def test_remedies_never_override_a_setting_the_user_gave():
     sol, _ = lower_bound(chained_singular(16), static_regularization_constant=1e-8)
     for a in sol.info["attempts"]:

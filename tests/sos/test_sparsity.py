@@ -29,7 +29,7 @@ def block_variables(con):
     return [int((b.exps.sum(axis=0) > 0).sum()) for b, _ in con.gram_blocks]
 
 
-@pytest.mark.parametrize("n", [10, 20])
+@pytest.mark.parametrize("n", [6, 8, 10, 20])
 def test_chained_rosenbrock_correlative_bound_is_zero(n):
     # sum 100 (x_(i+1) - x_i^2)^2 + (1 - x_i)^2: a sum of squares, minimum 0 at x = 1, each clique's
     # block singular along z(1) and the last along x_n - x_(n-1)^2 in every exact certificate (no
@@ -65,6 +65,18 @@ def test_a_bad_clique_block_fails_the_independent_check():
     assert set(failed) == {con.name, psd.name}          # the identity and the block itself
     assert failed[psd.name].min_eig == pytest.approx(-1.0)
     assert failed[psd.name].kind == "clique"
+
+
+@pytest.mark.parametrize("n", [6, 8])
+def test_dense_chained_rosenbrock_bound_is_proven_and_below_the_minimum(n):
+    # f(1, ..., 1) = 0 and f is a sum of squares: the minimum and the dense relaxation's optimum are
+    # 0. Every dense Gram matrix of f - 0 is singular (along z(1), x_n + x_(n-1)^2 and the rows
+    # x_(n-1) x_j, j < n - 1, which no certificate uses), so the bound needs a proof on that face
+    f = rosenbrock(n)
+    assert f([[1.0] * n])[0] == 0.0
+    lb = minimize_on(f)
+    assert lb.solution.verified
+    assert -1e-6 <= lb.value <= 0.0
 
 
 def test_dense_chained_rosenbrock_at_n20_is_refused_with_a_sparsity_hint():
