@@ -136,6 +136,7 @@ ROWS = {**{f"x^2+24x^3+0.1x^4: {k}": (lambda w=w: bound_program(w), P1_MIN, "low
                                                     0.0, "lower", False),
         "chained Rosenbrock n = 20, correlative (minimiser x = 1)": (
             lambda: sd.minimize_on(rosenbrock(20), sparsity="correlative"), 0.0, "lower", True),
+        "chained Rosenbrock n = 8, dense (minimiser x = 1)": (lambda: sd.minimize_on(rosenbrock(8)), 0.0, "lower", False),
         "min x, unit disc and y >= 1/2 (atoms)": (disc_cut, -math.sqrt(3) / 2, "lower", True),
         "min sum x_i, x_i^2 + x_(i+1)^2 <= 1, n = 12 (atoms)": (chain_sum, -6 * math.sqrt(2), "lower", True),
         "v v^T + I is an SOS matrix (1 = verified)": (vv_t, 1.0, "equal", True),

@@ -4,24 +4,35 @@ Some certificates have no floating-point margin on any face of coordinates: ever
 of Beale's function is singular along (0, 1, 1, 1, 1) in the basis (1, x, xy, xy^2, xy^3)
 (its x^2-part vanishes at y = 1, a zero at infinity) and along z(3, 1/2) (its zero); every Gram
 matrix of the SOS matrix [[1 + x^2, x y^2], [x y^2, 1 + y^4]] = v v^T + I along
-y_0 x - y_1 y^2; the last clique of the chained Rosenbrock function along x_n - x_(n-1)^2. The
-solver's Gram matrix Q shows these directions as its (numerical) kernel. Here each block's
-kernel is read in rational numbers: the reduced echelon form of its eigenvectors of eigenvalue
-below ``tol`` x the largest (tol in KERNEL_TOLS), by complete pivoting -- each pivot the largest
-entry left, so the solver's noise is never divided by a small one -- with entries rounded to
-small denominators, at most ROUNDING from the floats (an interior-point solver approaches its
-face only to about the square root of its tolerance); and the block restricted to the face Q = U R U^T, U a rational basis of the kernel's orthogonal
-complement (Permenter & Parrilo's facial reduction with the solver's kernel as the certificate
-candidate). The coefficient matching over the R's and the free decisions is then solved exactly:
-an exact rational correction of the solver's numbers rounded to a grid (GRID), on unknowns
-chosen in floating point (:func:`exact_solution`) (Peyrl & Parrilo 2008, *Computing
-sum of squares decompositions with rational coefficients*), and every R proven PSD
-(:func:`~.gram.proven_min_eig`). On the right face R has a margin (for v v^T + I the identity),
-and the objective is whatever the exact system makes it (Beale's bound is exactly 0).
+y_0 x - y_1 y^2; the last clique of the chained Rosenbrock function along x_n - x_(n-1)^2; its
+dense Gram matrices along z(1), x_n + x_(n-1)^2 and the rows x_(n-1) x_j, j < n - 1 (along
+x_(n-2) = t^(1/2), x_(n-1) = t, x_n = t^2 the function grows like t^2, so no square may hold
+x_(n-1) x_j). The solver's Gram matrix Q shows these directions as its (numerical) kernel. Here
+each block's kernel is read in rational numbers: the reduced echelon form of its eigenvectors of
+eigenvalue below ``tol`` x the largest (tol in KERNEL_TOLS), by complete pivoting -- each pivot
+the largest entry left, so the solver's noise is never divided by a small one -- with entries
+rounded to small denominators (ROUNDINGS: integers within 0.1 first, then denominators up to
+1000 within 1e-3; an interior-point solver approaches its face only to about the square root of
+its tolerance, and on the ill-conditioned face of dense chained Rosenbrock the echelon entries
+were off by up to 4e-2); and the block restricted to the face Q = U R U^T, U a rational basis
+of the kernel's orthogonal complement (Permenter & Parrilo's facial reduction with the solver's
+kernel as the certificate candidate). On the face the program has an interior, so it is solved
+again there, in floating point (:func:`face_solve`; the first answer, on a program without one,
+is too far from the face: dense chained Rosenbrock n = 6's, projected onto its face, missed the
+coefficient equations by 1e-2 against R's smallest eigenvalue 1e-3). The coefficient matching
+over the R's and the free decisions is then solved exactly: an exact rational correction of the
+re-solved numbers (else the solver's) rounded to a grid (GRID), on unknowns chosen in floating
+point (:func:`exact_solution`) (Peyrl & Parrilo 2008, *Computing sum of squares decompositions
+with rational coefficients*), and every R proven PSD (:func:`~.gram.proven_min_eig`). On the
+right face R has a margin (for v v^T + I the identity; dense chained Rosenbrock n = 6, 8, 10:
+0.10, 0.067, 0.053 against a largest 200), and the objective is whatever the exact system makes
+it (Beale's and chained Rosenbrock's bound are exactly 0).
 
 A kernel that is not the face's (a rounding of an irrational zero, a direction of one solver's
-point only) makes the system inconsistent or R indefinite: nothing is claimed. Only for programs
-of at most MAX_ROWS coefficient equations (rational elimination is cubic in them).
+point only) makes the system inconsistent or R indefinite: nothing is claimed. Any U gives a
+restriction Q = U R U^T, R >= 0, of the program, so what is proven is a certificate whatever
+the face. Only for programs of at most MAX_ROWS coefficient equations (rational elimination is
+cubic in them).
 """
 from __future__ import annotations
 
