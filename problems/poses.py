@@ -78,11 +78,13 @@ def _table(head, rows) -> str:
 def write_html(results: dict, out_dir: Path) -> Path:
     """reports/poses/index.html: the accuracy table, the detour and far-start tests, the figures."""
     accuracy = _table(
-        ("task", "certified", "pos DTWD / copy", "ori DTW / copy", "ori floor / copy", "final pos (% diag)",
+        ("task", "certified", "pos DTWD / copy", "ori DTW / copy", "pos / copy at nearest start",
+         "ori / copy at nearest start", "ori floor / copy", "final pos (% diag)",
          "final ori (deg)",
          "arrival / duration (max)", "excursion bound (× diag)", "fit (s)"),
         [(r["task"], fmt(r["certified"]), f"{r['pos_ratio']:.2f} ({r['pos_dtwd']:.0f} / {r['copy_pos']:.0f})",
-          f"{r['ori_ratio']:.2f} ({r['ori_dtw']:.0f} / {r['copy_ori']:.0f})", fmt(r["ori_floor_ratio"]),
+          f"{r['ori_ratio']:.2f} ({r['ori_dtw']:.0f} / {r['copy_ori']:.0f})", fmt(r["pos_start_ratio"]),
+          fmt(r["ori_start_ratio"]), fmt(r["ori_floor_ratio"]),
           fmt(100 * r["final_pos_frac"], 3),
           fmt(r["final_ang_deg"], 3), fmt(r["arrival_ratio"]), fmt(r["excursion_bound"]), fmt(r["fit_s"], 1))
          for r in results["tasks"]])
@@ -140,7 +142,10 @@ position CDSP and an orientation CDSP in the identity metric (docs/theory.md, "P
 rest-trimmed, smoothed, ends aligned), the other 3 test (rest trimmed only); every 2nd sample; reproductions by explicit
 Euler (0.01 s) from each test demo's 20th kept sample until both parts rest, <b>read at the demo's own period</b>
 (1/30 s) before the cumulative DTW. DTWD (positions, cm) and orientation DTW (geodesic angle, deg) are sums along the
-alignment, means over the test demos; "copy" replays the nearest training demo as recorded. Final errors: worst test
+alignment, means over the test demos; "copy" replays the training demo nearest to the test demo as recorded (the
+issue's target, ≤ 1.5× copy: a pick made with the test demo in hand, as no robot could); "copy at nearest start"
+replays the training demo whose first sample is nearest the reproduction's start (|Δp| / diag + angle / 180°), what a
+robot given only the start could do. Final errors: worst test
 reproduction, to the model's goal pose. Arrival: within 1 % of the diagonal and 1° of the goal pose, over the demo's
 remaining duration. Orientation floor: the test demo itself with its end turned onto the model's goal orientation
 (a reproduction that is exact but ends at the goal, as a certified model must), over copy: the part of the ratio the

@@ -108,14 +108,16 @@ def poses(r: dict) -> tuple[str, dict]:
     for t in r["tasks"]:
         numbers[f"{t['task']}: position DTWD ÷ copy"] = t["pos_ratio"]
         numbers[f"{t['task']}: orientation DTW ÷ copy"] = t["ori_ratio"]
-    pos = [v for k, v in numbers.items() if "position" in k]
-    ori = [v for k, v in numbers.items() if "orientation" in k]
+        numbers[f"{t['task']}: position DTWD ÷ copy at nearest start"] = t["pos_start_ratio"]
+        numbers[f"{t['task']}: orientation DTW ÷ copy at nearest start"] = t["ori_start_ratio"]
+    ratios = {key: [t[key] for t in r["tasks"]] for key in ("pos_ratio", "ori_ratio", "pos_start_ratio", "ori_start_ratio")}
     n = len(r["tasks"])
     certified = sum(bool(t["targets"].get("certified")) for t in r["tasks"])
     every = sum(all(t["targets"].values()) for t in r["tasks"])
     return (f"PoseCDSP() on {n} pose tasks: certified on {certified} of {n}; held-out position DTWD "
-            f"{span(pos)}× and orientation DTW {span(ori)}× copying the nearest training demo; "
-            f"every target of the page met on {every} of {n}.", numbers)
+            f"{span(ratios['pos_ratio'])}× and orientation DTW {span(ratios['ori_ratio'])}× copying the training demo "
+            f"nearest to each test demo ({span(ratios['pos_start_ratio'])}× and {span(ratios['ori_start_ratio'])}× "
+            f"copying the one whose start is nearest); every target of the page met on {every} of {n}.", numbers)
 
 
 def robot(r: dict) -> tuple[str, dict]:

@@ -22,7 +22,10 @@ Held-out protocol (:func:`evaluate_pose_set`), the steps of :mod:`.realdata` on 
    :func:`~.realdata.stop_rule`'s horizon; then **read at the test demo's own sampling period** (linear
    interpolation of x and r), so both curves of a DTW are sampled alike;
 4. scores per test demo: position DTWD and orientation DTW to the whole kept test demo; copy = the
-   smallest over the recorded training demos; the orientation floor = the DTW of the test demo itself
+   smallest over the recorded training demos (picked with the test demo in hand, as no robot could);
+   copy at the nearest start = the recorded training demo whose first sample is nearest the
+   reproduction's start (:func:`nearest_start`: what a robot given only the start could replay); the
+   orientation floor = the DTW of the test demo itself
    with its end turned onto the model's goal orientation (:func:`ended_at`: a perfect reproduction must
    end there, the test demos end elsewhere); the final distance to the goal position / diag and the
    final angle to the goal orientation; arrival (within 1 % of diag and 1 deg) over the demo's
@@ -142,6 +145,13 @@ def reproduce_poses(model, recorded: PoseDemonstrations, test: PoseDemonstration
     return out
 
 
+def nearest_start(recorded: PoseDemonstrations, pos, quat, diag: float) -> int:
+    """The index of the demo of ``recorded`` whose first sample is nearest the pose (pos, quat):
+    least |p_0 - pos| / diag + angle(q_0, quat) / 180 deg (a diagonal counts as much as a half turn)."""
+    return int(np.argmin([np.linalg.norm(d.pos[0] - pos) / diag + angles_deg(d.quat[0], quat)[0] / 180.0
+                          for d in recorded]))
+
+
 def ended_at(demo: PoseDemonstration, goal_quat) -> PoseDemonstration:
     """``demo`` with its end orientation turned onto ``goal_quat`` (:func:`~sosdyn.lfd.data.pose.align_orientations`,
     no tolerance): what a model that reproduced it exactly would do, since it ends at its own goal."""
@@ -151,7 +161,8 @@ def ended_at(demo: PoseDemonstration, goal_quat) -> PoseDemonstration:
 def evaluate_pose_set(fit_fn, demos: PoseDemonstrations) -> dict:
     """The whole protocol (module docstring) on one set: ``fit_fn(train)`` returns a fitted PoseCDSP.
     Returns the per-test rows (``tests``), the mean ratios ``pos_ratio`` / ``ori_ratio`` (model over
-    copy, means over the test demos), the worst final errors and arrival, the largest certified
+    copy, means over the test demos), ``pos_start_ratio`` / ``ori_start_ratio`` (over the copy at the
+    nearest start), the worst final errors and arrival, the largest certified
     excursion bound, ``ori_floor_ratio`` (the floor over copy), ``fit_s``, ``certified``, the preprocessing
     lines, the model and the reproductions."""
     train, recorded, test, report = prepare_poses(demos)
@@ -164,11 +175,13 @@ def evaluate_pose_set(fit_fn, demos: PoseDemonstrations) -> dict:
     rows = []
     for (t, S), d, bound in zip(reps, test, bounds):
         quat = from_chart(S[:, 3:], model.goal_quat_)
+        near = recorded[nearest_start(recorded, d.pos[dsopt.START_INDEX], d.quat[dsopt.START_INDEX], diag)]
         arrive = arrival_index(S[:, :3], quat, model.goal_pos_, model.goal_quat_, POS_TOL * diag, ANG_TOL)
         remaining = float(d.t[-1] - d.t[dsopt.START_INDEX])
         rows.append({"pos_dtwd": dtwd(S[:, :3], d.pos).total, "ori_dtw": orientation_dtw(quat, d.quat).total,
                      "copy_pos": min(dtwd(tr.pos, d.pos).total for tr in recorded),
                      "copy_ori": min(orientation_dtw(tr.quat, d.quat).total for tr in recorded),
+                     "start_copy_pos": dtwd(near.pos, d.pos).total, "start_copy_ori": orientation_dtw(near.quat, d.quat).total,
                      "floor_ori": orientation_dtw(ended_at(d, model.goal_quat_).quat, d.quat).total,
                      "final_pos_frac": float(np.linalg.norm(S[-1, :3] - model.goal_pos_) / diag),
                      "final_ang_deg": float(np.rad2deg(np.linalg.norm(S[-1, 3:]))),
@@ -176,12 +189,14 @@ def evaluate_pose_set(fit_fn, demos: PoseDemonstrations) -> dict:
                      "start_angle_deg": float(np.rad2deg(np.linalg.norm(S[0, 3:]))),
                      "max_angle_deg": float(np.rad2deg(np.linalg.norm(S[:, 3:], axis=1).max())),
                      "excursion_bound": bound, "n_points": len(t)})
-    mean = {k: float(np.mean([r[k] for r in rows])) for k in ("pos_dtwd", "ori_dtw", "copy_pos", "copy_ori", "floor_ori")}
+    mean = {k: float(np.mean([r[k] for r in rows])) for k in ("pos_dtwd", "ori_dtw", "copy_pos", "copy_ori", "start_copy_pos",
+                                                    "start_copy_ori", "floor_ori")}
     arrivals = [r["arrival_ratio"] for r in rows]
     return {"name": demos.name, "n_train": len(train), "n_test": len(test), "fit_s": fit_s,
             "certified": model.certified_, "preprocess": report.lines(demos.units), "diag": diag,
             "tests": rows, **mean, "pos_ratio": mean["pos_dtwd"] / mean["copy_pos"],
-            "ori_ratio": mean["ori_dtw"] / mean["copy_ori"], "ori_floor_ratio": mean["floor_ori"] / mean["copy_ori"],
+            "ori_ratio": mean["ori_dtw"] / mean["copy_ori"], "pos_start_ratio": mean["pos_dtwd"] / mean["start_copy_pos"],
+            "ori_start_ratio": mean["ori_dtw"] / mean["start_copy_ori"], "ori_floor_ratio": mean["floor_ori"] / mean["copy_ori"],
             "final_pos_frac": max(r["final_pos_frac"] for r in rows), "final_ang_deg": max(r["final_ang_deg"] for r in rows),
             "arrival_ratio": None if None in arrivals else max(arrivals),
             "excursion_bound": None if None in bounds else max(bounds),

@@ -39,7 +39,7 @@ import numpy as np
 
 from sosdyn.limits import check_count
 from ..data.demonstrations import Demonstrations, sample_step
-from ..rollout import euler_blocks_until_rest
+from ..rollout import euler_arrival_times
 from ..rollout.quality import GOAL_FRACTION
 
 BOOST = 10.0                    # the floor speeds the field up at most this many times
@@ -88,21 +88,6 @@ def floored(D: np.ndarray, V: np.ndarray, rate, boost=BOOST, radius=np.inf) -> n
     return V * sigma
 
 
-def arrival_ratios(paths: list[np.ndarray], demos: Demonstrations, dt: float, durations=None) -> np.ndarray:
-    """Per rollout ``paths[i]`` (rows every dt): the first time within GOAL_FRACTION of the demos' diagonal
-    of their goal over ``durations[i]`` (default: demos[i]'s duration, a reproduction from its first
-    sample; inf: never)."""
-    X = demos.stacked()[0]
-    radius = GOAL_FRACTION * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
-    goal = np.asarray(demos.goal, dtype=float)
-    durations = [d.duration for d in demos] if durations is None else durations
-    out = []
-    for p, T in zip(paths, durations):
-        inside = np.flatnonzero(np.linalg.norm(p - goal, axis=1) <= radius)
-        out.append(inside[0] * dt / T if inside.size else np.inf)
-    return np.array(out)
-
-
 def floor_steps(demos: Demonstrations, n_starts: int | None = None) -> int:
     """The Euler steps of :func:`floor_choice`'s rollouts, ARRIVAL x the longest duration at the data's
     step (+ 2), checked for all ``n_starts`` starts (default len(demos)) against max_rollout_steps before
@@ -118,31 +103,38 @@ def floor_steps(demos: Demonstrations, n_starts: int | None = None) -> int:
 
 def floor_choice(field: Callable[[np.ndarray], np.ndarray], goal: np.ndarray, demos: Demonstrations,
                  starts=None, durations=None, radius: float = np.inf) -> tuple[float | None, dict[str, float]]:
-    """(kappa or None, {candidate: worst arrival ratio, inf beyond ARRIVAL}) for the field ``field``
-    (x -> xdot, data units) with goal ``goal`` (module docstring): every candidate's rollouts in one Euler
-    loop, :func:`floor_steps` steps at the data's step, from the demonstrations' first samples (their
-    durations), or from ``starts`` (k, n) each to arrive within ARRIVAL x ``durations`` (k,); ``radius``:
-    the floor's settle zone (inf: everywhere)."""
+    """(kappa or None, {candidate tried: worst arrival ratio, inf beyond ARRIVAL}) for the field ``field``
+    (x -> xdot, data units) with goal ``goal`` (module docstring). Rollouts by explicit Euler at the
+    data's step (:func:`~sosdyn.lfd.rollout.euler_arrival_times`, each stopped once it has arrived
+    within GOAL_FRACTION of the diagonal or is overdue) from the demonstrations' first samples (their
+    durations), or from ``starts`` (k, n) each to arrive within ARRIVAL x ``durations`` (k,); the
+    candidates in increasing kappa: "none" alone first (the common case: the field arrives), then the
+    others in one loop. ``radius``: the floor's settle zone (inf: everywhere)."""
     X, Xdot = demos.stacked()
     rates = relative_speeds(X, Xdot, goal)
     candidates = {"none": 0.0} if rates.size == 0 else \
         {"none": 0.0, **{f"q{round(100 * q)}": float(np.quantile(rates, q)) for q in RATE_QUANTILES}}
-    kappas = np.array(list(candidates.values()))
-    steps = floor_steps(demos, None if starts is None else len(starts))
+    floor_steps(demos, None if starts is None else len(starts))
     starts = np.array([d.pos[0] for d in demos]) if starts is None else np.asarray(starts, dtype=float)
-    dt, m = sample_step(demos), len(starts)
+    durations = np.array([d.duration for d in demos] if durations is None else durations, dtype=float)
+    near = GOAL_FRACTION * float(np.linalg.norm(X.max(axis=0) - X.min(axis=0)))
+    m = len(starts)
 
-    def blocks(Xb, live):
-        rate = np.repeat(kappas[live], m)[:, None]
-        return floored(Xb - goal, field(Xb), rate, BOOST, radius)
+    def worst(kappas: list[float]) -> np.ndarray:
+        rate = np.repeat(kappas, m)[:, None]
+        times = euler_arrival_times(lambda Xb, rows: floored(Xb - goal, field(Xb), rate[rows], BOOST, radius),
+                                    np.tile(starts, (len(kappas), 1)), goal, near, np.tile(ARRIVAL * durations, len(kappas)),
+                                    dt=sample_step(demos))
+        ratios = (times / np.tile(durations, len(kappas))).reshape(len(kappas), m).max(axis=1)
+        return np.where(ratios <= ARRIVAL, ratios, np.inf)
 
-    runs = euler_blocks_until_rest(blocks, np.tile(starts, (len(kappas), 1)), len(kappas), dt=dt, max_steps=steps,
-                                   vel_tol=np.finfo(float).tiny, window=1)
-    worst = {name: float(np.max(arrival_ratios(r, demos, dt, durations))) if isinstance(r, list) else np.inf
-             for name, r in zip(candidates, runs)}
-    ok = [name for name in candidates if worst[name] <= ARRIVAL]
-    return (candidates[ok[0] if ok else list(candidates)[-1]] or None), worst
+    names = list(candidates)
+    tried = dict(zip(names[:1], worst([0.0]).tolist()))
+    if tried["none"] > ARRIVAL and len(names) > 1:
+        tried.update(zip(names[1:], worst([candidates[k] for k in names[1:]]).tolist()))
+    ok = [name for name in tried if tried[name] <= ARRIVAL]
+    return (candidates[ok[0] if ok else names[-1]] or None), tried
 
 
-__all__ = ["ARRIVAL", "BOOST", "RATE_QUANTILES", "arrival_ratios", "describe", "fade", "floor_choice", "floor_steps", "floor_terms",
+__all__ = ["ARRIVAL", "BOOST", "RATE_QUANTILES", "describe", "fade", "floor_choice", "floor_steps", "floor_terms",
            "floored", "relative_speeds"]

@@ -98,6 +98,37 @@ def euler_blocks_until_rest(field: Callable[[np.ndarray, list], np.ndarray], sta
             return done
 
 
+def euler_arrival_times(field: Callable[[np.ndarray, np.ndarray], np.ndarray], starts, goal, radius: float,
+                        deadlines, *, dt: float) -> np.ndarray:
+    """First arrival times of explicit-Euler trajectories from the rows of ``starts`` (m, n) at once:
+    x_0 = starts[s], x_{i+1} = x_i + dt v_i with ``v = field(X, rows)`` (X the states of the rows
+    ``rows`` still running, in increasing order). Returns per start the first i dt with
+    |x_i - goal| <= ``radius``, or inf when there is none with i dt <= ``deadlines[s]`` or the state
+    stops being finite. A start stops once it has arrived or is overdue: only first arrivals are
+    computed, so nothing of a trajectory is stored (memory O(m)) and no step runs past the last one
+    that can still decide an arrival."""
+    X = np.array(starts, dtype=float, ndmin=2)
+    goal, deadlines = np.asarray(goal, dtype=float), np.broadcast_to(np.asarray(deadlines, dtype=float), len(X))
+    if X.ndim != 2 or not np.all(np.isfinite(X)) or goal.shape != X.shape[1:]:
+        raise InputError(f"starts must be a finite array (m, n) and goal a vector (n,), got shapes {X.shape} "
+                         f"and {goal.shape}.")
+    for name, value in (("dt", dt), ("radius", radius)):
+        if not (isinstance(value, (int, float, np.floating)) and np.isfinite(value) and value > 0):
+            raise InputError(f"{name} must be a positive number, got {value!r}.")
+    out = np.full(len(X), np.inf)
+    live, i = np.arange(len(X)), 0
+    while live.size:
+        Xl = X[live]
+        arrived = np.linalg.norm(Xl - goal, axis=1) <= radius
+        out[live[arrived]] = i * dt
+        live = live[~arrived & (i * dt < deadlines[live]) & np.isfinite(Xl).all(axis=1)]
+        if live.size:
+            with np.errstate(over="ignore", invalid="ignore"):
+                X[live] = X[live] + dt * np.asarray(field(X[live], live), dtype=float)
+        i += 1
+    return out
+
+
 def semi_implicit_euler(acceleration: Callable[[np.ndarray, np.ndarray], np.ndarray], X0, V0, *, dt: float,
                         steps: int) -> np.ndarray:
     """Second-order trajectories from all rows of (X0, V0) (m, n) at once, by semi-implicit

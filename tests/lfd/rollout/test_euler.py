@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from sosdyn.errors import InputError, SolverError
-from sosdyn.lfd.rollout import euler_blocks_until_rest, euler_until_rest
+from sosdyn.lfd.rollout import euler_arrival_times, euler_blocks_until_rest, euler_until_rest
 
 
 def test_euler_on_xdot_minus_x_is_the_geometric_sequence_and_stops_at_rest():
@@ -48,6 +48,33 @@ def test_blocks_stop_on_their_own_and_a_diverging_block_leaves_the_others_alone(
     assert calls[0] == [0, 1, 2] and calls[-1] == [1]         # stopped blocks are no longer evaluated
     with pytest.raises(InputError, match="equal blocks"):
         euler_blocks_until_rest(field, [[1.0], [2.0], [3.0]], 2, **kw)
+
+
+def test_arrival_times_are_the_geometric_sequence_s_first_entry_and_stop_each_start_on_its_own():
+    """xdot = -a x: |x_i| = (1 - a dt)^i |x_0|, first within r at i = ceil(log(r / |x_0|) / log(1 - a dt)).
+    Starts whose deadline comes before that, or whose state blows up, never arrive (inf); the field
+    sees only the starts still running."""
+    dt, r, a = 0.01, 0.05, np.array([1.0, 2.0, 1.0, 1.0])
+    starts = np.array([[3.0, 4.0], [0.0, -2.0], [1.0, 0.0], [0.0, 0.01]])
+    seen = []
+
+    def field(X, rows):
+        seen.append(rows.copy())
+        return -a[rows, None] * X
+
+    deadlines = np.array([100.0, 100.0, 0.5, 100.0])
+    times = euler_arrival_times(field, starts, np.zeros(2), r, deadlines, dt=dt)
+    first = np.ceil(np.log(r / np.linalg.norm(starts, axis=1)[:3]) / np.log(1 - a[:3] * dt))
+    np.testing.assert_allclose(times[:2], first[:2] * dt, rtol=1e-12)
+    assert first[2] * dt > deadlines[2] and times[2] == np.inf
+    assert times[3] == 0.0                                   # starts inside: arrived at t = 0
+    assert all(np.all(np.diff(s) > 0) for s in seen) and seen[0].tolist() == [0, 1, 2]
+    assert len(seen) == first[0] and all(len(s) < 3 for s in seen[int(first[1]):])
+    with np.errstate(over="ignore"):
+        blown = euler_arrival_times(lambda X, rows: X ** 2, [[10.0]], np.zeros(1), 0.1, 100.0, dt=0.5)
+    assert blown[0] == np.inf
+    with pytest.raises(InputError, match="radius"):
+        euler_arrival_times(field, starts, np.zeros(2), 0.0, deadlines, dt=dt)
 
 
 def test_semi_implicit_euler_keeps_an_oscillator_bounded():
