@@ -361,7 +361,9 @@ def second_order_state(st: dict, field: str = "mixture") -> dict:
 
 # ---------------------------------------------------------------------- the pose model's own fields
 def pose_fields(content: dict) -> tuple[np.ndarray, dict, float]:
-    """(goal_quat, still, goal_tol_deg) of a pose file: a unit quaternion (norm 1 to 1e-9), the still rates
+    """(goal_quat, still, goal_tol_deg) of a pose file: a unit quaternion (norm 1 to 1e-9; kept as stored, so a
+    model and its reloaded copy hold the same numbers, and every use goes through scipy's Rotation, which
+    normalises), the still rates
     ({"position", "orientation"}: null or a number > 0) and a tolerance in (0, 180) degrees, all finite
     numbers; each block (``position``, ``orientation``) must be an object of a first-order file's fields."""
     q = array(need(content, "goal_quat", ""), "goal_quat", (4,))
@@ -375,4 +377,4 @@ def pose_fields(content: dict) -> tuple[np.ndarray, dict, float]:
         raise ModelFileError(f"malformed: goal_tol_deg must be in (0, 180), got {tol!r}")
     for block in BLOCKS:
         check_fields(need(content, block, "", dict), TOP_LEVEL[FORMAT], block)
-    return q / np.linalg.norm(q), rates, tol
+    return q, rates, tol
