@@ -8,6 +8,14 @@ Qhull's facets up to :data:`HULL_MAX_DIM` dimensions and above that by one small
 candidate (find lambda >= 0, sum lambda = 1, S^T lambda = point; Qhull's facet count explodes
 with the dimension: chained Rosenbrock in 22 variables did not finish in 20 s).
 
+A basis that misses a monomial some Gram matrix needs makes a feasible program infeasible, so
+the facets are trusted only after a self-check. Every facet row h, b is linear in the point, so
+for p = sum_j lambda_j s_j in conv(S), h.p + b = sum_j lambda_j (h.s_j + b) <= max_j (h.s_j + b):
+if every support point passes the facet test, every point of the hull passes it too. When Qhull
+fails (a degenerate support: chained Rosenbrock in 12 variables has a "flat initial simplex")
+or a support point tests outside its own hull, membership falls back to the LPs, and an LP that
+ends without a verdict keeps its monomial (an extra monomial only enlarges the Gram matrix).
+
 The basis is checked against ``sosdyn.limits`` (max_bytes) before it is returned: coefficient
 matching over a basis of b monomials builds arrays over all s = b(b+1)/2 pairs
 (:func:`gram_matching_bytes`), so a basis too large to match is refused before the Gram
@@ -35,7 +43,7 @@ def in_hull_lp(points: np.ndarray, support: np.ndarray) -> np.ndarray:
     for k in np.flatnonzero(~inside):
         res = linprog(np.zeros(S.shape[0]), A_eq=A, b_eq=np.append(points[k].astype(float), 1.0),
                       bounds=(0, None), method="highs")
-        inside[k] = res.status == 0
+        inside[k] = res.status != 2        # dropped only when the LP proves it infeasible
     return inside
 
 
@@ -60,9 +68,12 @@ def in_hull(points: np.ndarray, support: np.ndarray, tol: float = 1e-9) -> np.nd
         return ~off_plane & (coords[:, 0] >= lo) & (coords[:, 0] <= hi)
     try:
         eq = ConvexHull(ys).equations
-    except QhullError:  # degenerate after projection: fall back to joggled input
-        eq = ConvexHull(ys, qhull_options="QJ").equations
-    inside = (coords @ eq[:, :-1].T + eq[:, -1] <= tol * (1 + np.abs(ys).max())).all(axis=1)
+    except QhullError:  # a degenerate support Qhull cannot start on: decide by LPs
+        return ~off_plane & in_hull_lp(points, support)
+    margin = tol * (1 + np.abs(ys).max())
+    if (ys @ eq[:, :-1].T + eq[:, -1] > margin).any():  # a support point outside its own hull
+        return ~off_plane & in_hull_lp(points, support)
+    inside = (coords @ eq[:, :-1].T + eq[:, -1] <= margin).all(axis=1)
     return ~off_plane & inside
 
 

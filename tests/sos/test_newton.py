@@ -1,6 +1,9 @@
 """Gram bases from the Newton polytope, and the size check of coefficient matching."""
+import itertools
+
 import numpy as np
 import pytest
+from scipy.optimize import linprog
 
 import sosdyn as sd
 from sosdyn.sos import newton_basis
@@ -35,6 +38,22 @@ def test_newton_basis_of_chained_rosenbrock_by_hull_and_by_lp(n):
     b = newton_basis(f.exps)
     assert b.shape[0] == 1 + n + (n - 1) + (n - 1) * (n - 2) // 2
     assert not (b[:, -1] == 2).any() and b.sum(axis=1).max() == 2
+
+
+def test_newton_basis_in_12_variables_is_every_half_point_of_the_hull():
+    # chained Rosenbrock in 12 variables: a support Qhull cannot start on (a flat initial simplex);
+    # the basis must be exactly the monomials a, |a| <= 2, with 2a a convex combination of the
+    # support's exponents, each decided here by its own LP (lambda >= 0, sum 1, S^T lambda = 2a)
+    n = 12
+    xs = sd.variables(" ".join(f"x{i}" for i in range(n)))
+    f = sum(100 * (xs[i + 1] - xs[i] ** 2) ** 2 + (1 - xs[i]) ** 2 for i in range(n - 1))
+    S = f.exps.astype(float)
+    A = np.vstack([S.T, np.ones(len(S))])
+    cands = [np.bincount(c, minlength=n) for d in range(3) for c in itertools.combinations_with_replacement(range(n), d)]
+    half = {tuple(int(v) for v in a) for a in cands
+            if linprog(np.zeros(len(S)), A_eq=A, b_eq=np.append(2.0 * a, 1.0), bounds=(0, None)).status == 0}
+    assert {tuple(int(v) for v in r) for r in newton_basis(f.exps)} == half
+    assert len(half) == 1 + n + (n - 1) + (n - 1) * (n - 2) // 2      # the closed form above
 
 
 def test_hull_membership_by_lp_agrees_with_qhull():
