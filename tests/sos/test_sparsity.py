@@ -67,7 +67,7 @@ def test_a_bad_clique_block_fails_the_independent_check():
     assert failed[psd.name].kind == "clique"
 
 
-@pytest.mark.parametrize("n", [6, 8])
+@pytest.mark.parametrize("n", [6, 8, pytest.param(12, marks=pytest.mark.slow)])   # 12: a support Qhull cannot start on
 def test_dense_chained_rosenbrock_bound_is_proven_and_below_the_minimum(n):
     # f(1, ..., 1) = 0 and f is a sum of squares: the minimum and the dense relaxation's optimum are
     # 0. Every dense Gram matrix of f - 0 is singular (along z(1), x_n + x_(n-1)^2 and the rows
