@@ -28,13 +28,14 @@ solve and at every degree:
   is computed again for f(c + u), c the minimiser the moment matrix gives (:func:`recentred`);
 * **refined**: a bound that lost more than GAP (relative) to the solver's value in floating point
   (not an exact certificate: its value is the exact system's) is solved again under each of the
-  solver settings of :data:`~.remedies.REMEDIES` in turn (:func:`sharpening` first), until one's bound is within GAP of its
-  solver's value, and the best proven bound is kept (:func:`refined`). Each is the objective at a
-  proven point of the same program, so the best is a bound. What loses the margin is the solver's
-  last iterate: where its Gram block is indefinite off the constant row (T_7(t - 2) on [1, 3]:
-  lambda_min -1.5e-8; Broyden tridiagonal n = 10: -6e-9), no move of gamma repairs it, and the
-  re-solve held above zero, then back, lost up to 1.7e-5 on some OpenBLAS kernels; with tighter
-  iterative refinement (or tolerances) the iterate is one the correction proves;
+  solver settings of :data:`~.remedies.REMEDIES` in turn (:func:`sharpening` first), until one's
+  bound is within GAP of its solver's value; the best proven bound is kept (:func:`refined`).
+  Each is the objective at a proven point of the same program, so the best is a bound. What
+  loses the margin is the solver's last iterate: where its Gram block is indefinite off the
+  constant row (T_7(t - 2) on [1, 3]: lambda_min -1.5e-8; Broyden tridiagonal n = 10: -6e-9),
+  no move of gamma repairs it, and the re-solve held above zero, then back, lost up to 1.7e-5 on
+  some OpenBLAS kernels; with tighter iterative refinement (or tolerances) the iterate is one the
+  correction proves;
 * **lower degree**: when no point of the degree-d relaxation is proven (UnverifiedSolutionError,
   or a solver error), degrees d - 2, d - 4, ... are tried and the first proven bound returned
   (``LowerBound.degree`` says which): a bound valid at a lower degree is never refused at a

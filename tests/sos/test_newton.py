@@ -49,7 +49,8 @@ def test_newton_basis_in_12_variables_is_every_half_point_of_the_hull():
     f = sum(100 * (xs[i + 1] - xs[i] ** 2) ** 2 + (1 - xs[i]) ** 2 for i in range(n - 1))
     S = f.exps.astype(float)
     A = np.vstack([S.T, np.ones(len(S))])
-    cands = [np.bincount(c, minlength=n) for d in range(3) for c in itertools.combinations_with_replacement(range(n), d)]
+    cands = [np.bincount(c, minlength=n) for d in range(3)
+             for c in itertools.combinations_with_replacement(range(n), d)]
     half = {tuple(int(v) for v in a) for a in cands
             if linprog(np.zeros(len(S)), A_eq=A, b_eq=np.append(2.0 * a, 1.0), bounds=(0, None)).status == 0}
     assert {tuple(int(v) for v in r) for r in newton_basis(f.exps)} == half
