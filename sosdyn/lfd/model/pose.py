@@ -133,10 +133,10 @@ class PoseCDSP(MotionModel):
     def prepare(cls, demos, smooth_window="auto", trim_rest=True, align="auto", max_shift=None):
         """(demos preprocessed, notes, []): :func:`~sosdyn.lfd.data.pose_preprocess.preprocess_poses` on both
         parts (the end orientations are left to :meth:`fit`, which aligns them within ``goal_tol_deg``), and
-        what reading changed (renormalised quaternions, sign flips)."""
+        what reading changed (renormalised quaternions, sign flips, merged time stamps)."""
         result, report = preprocess_poses(demos, smooth_window=smooth_window, trim_rest=trim_rest, align=align,
                                           max_shift=max_shift, goal_tol_deg=None)
-        read = [f"read: {n}" for n in demos.notes if "renormalised" in n or "sign-flipped" in n]
+        read = [f"read: {n}" for n in demos.notes if any(k in n for k in ("renormalised", "sign-flipped", "repeated"))]
         return result, read + [f"preprocess: {line}" for line in report.lines(demos.units)], []
 
     def __repr__(self) -> str:
