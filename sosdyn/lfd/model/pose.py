@@ -310,11 +310,12 @@ class PoseCDSP(MotionModel):
         x, q = self._pose(x0, "x0")
         gx, gq = self._goal(goal)
         try:
-            events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in perturbations] +
-                            [(float(t), 1, np.concatenate(self._pose(g, "goal change"))) for t, g in goal_changes],
-                            key=lambda e: e[:2])
+            pushes = [(float(t), np.asarray(d, dtype=float)) for t, d in perturbations]
+            goals = [(float(t), g) for t, g in goal_changes]
         except (TypeError, ValueError):
             raise InputError("pushes and goal_changes must be lists of pairs (time, vector).") from None
+        events = sorted([(t, 0, d) for t, d in pushes] +
+                        [(t, 1, np.concatenate(self._pose(g, "goal change"))) for t, g in goals], key=lambda e: e[:2])
         if any(not 0 <= e[0] < duration for e in events) or \
                 any(k == 0 and (d.shape != (6,) or not np.isfinite(d).all()) for _, k, d in events):
             raise InputError(f"events must lie in [0, duration = {duration}) and pushes be 6 finite numbers "
