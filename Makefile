@@ -7,7 +7,7 @@ PYTEST  := $(BIN)/python -m pytest
 # Small-matrix workloads: a multi-threaded OpenBLAS spin-waits (10-100x slower on 2 cores).
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: venv run test test-slow wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes crossing-letters winding winding-shapes warp-figure demo3d demo7d sweep report learner-table poses robot docs clean
+.PHONY: venv run test test-slow test-kernels wheel bench bench-sos fig1 fig2 fig3 fig4 lasa-all lasa-dsopt real-data second-order crossing-shapes crossing-letters winding winding-shapes warp-figure demo3d demo7d sweep report learner-table poses robot docs clean
 
 venv: $(STAMP)
 $(STAMP): pyproject.toml
@@ -28,6 +28,13 @@ XDIST    := $(if $(filter 0,$(TEST_JOBS)),,-n $(TEST_JOBS) --dist loadfile)
 test: venv
 	$(BIN)/lint-imports
 	$(PYTEST) -q -m "not slow" $(XDIST)
+
+# The suite under other OpenBLAS kernels (OPENBLAS_CORETYPE: each rounds differently), as on another
+# machine's CPU; ~3 min per kernel. The suite must pass under every one of them.
+KERNELS ?= Haswell Sandybridge Nehalem SkylakeX
+test-kernels: venv
+	@for k in $(KERNELS); do echo "== OPENBLAS_CORETYPE=$$k"; \
+	  OPENBLAS_CORETYPE=$$k $(PYTEST) -q -m "not slow" $(XDIST) -p no:cacheprovider || exit 1; done
 
 # Experiment-sized runs (quick versions of the experiments, benchmarks, the wheel): not in `make test`.
 test-slow: venv

@@ -21,7 +21,8 @@ Held-out protocol (:func:`evaluate_pose_set`), the steps of :mod:`.realdata` on 
    (:func:`~sosdyn.lfd.rollout.euler_until_rest` on x / diag and r / angle), at most
    :func:`~.realdata.stop_rule`'s horizon; then **read at the test demo's own sampling period** (linear
    interpolation of x and r), so both curves of a DTW are sampled alike;
-4. scores per test demo: position DTWD and orientation DTW to the whole kept test demo; copy = the
+4. scores per test demo: position DTWD and orientation DTW to the whole kept test demo; the same of each
+   recorded training demo (``train_pos`` / ``train_ori``, in recording order); copy = the
    smallest over the recorded training demos (picked with the test demo in hand, as no robot could);
    copy at the nearest start = the recorded training demo whose first sample is nearest the
    reproduction's start (:func:`nearest_start`: what a robot given only the start could replay); the
@@ -175,13 +176,14 @@ def evaluate_pose_set(fit_fn, demos: PoseDemonstrations) -> dict:
     rows = []
     for (t, S), d, bound in zip(reps, test, bounds):
         quat = from_chart(S[:, 3:], model.goal_quat_)
-        near = recorded[nearest_start(recorded, d.pos[dsopt.START_INDEX], d.quat[dsopt.START_INDEX], diag)]
+        near = nearest_start(recorded, d.pos[dsopt.START_INDEX], d.quat[dsopt.START_INDEX], diag)
         arrive = arrival_index(S[:, :3], quat, model.goal_pos_, model.goal_quat_, POS_TOL * diag, ANG_TOL)
         remaining = float(d.t[-1] - d.t[dsopt.START_INDEX])
+        each_pos = [dtwd(tr.pos, d.pos).total for tr in recorded]
+        each_ori = [orientation_dtw(tr.quat, d.quat).total for tr in recorded]
         rows.append({"pos_dtwd": dtwd(S[:, :3], d.pos).total, "ori_dtw": orientation_dtw(quat, d.quat).total,
-                     "copy_pos": min(dtwd(tr.pos, d.pos).total for tr in recorded),
-                     "copy_ori": min(orientation_dtw(tr.quat, d.quat).total for tr in recorded),
-                     "start_copy_pos": dtwd(near.pos, d.pos).total, "start_copy_ori": orientation_dtw(near.quat, d.quat).total,
+                     "train_pos": each_pos, "train_ori": each_ori, "copy_pos": min(each_pos), "copy_ori": min(each_ori),
+                     "start_copy_pos": each_pos[near], "start_copy_ori": each_ori[near],
                      "floor_ori": orientation_dtw(ended_at(d, model.goal_quat_).quat, d.quat).total,
                      "final_pos_frac": float(np.linalg.norm(S[-1, :3] - model.goal_pos_) / diag),
                      "final_ang_deg": float(np.rad2deg(np.linalg.norm(S[-1, 3:]))),

@@ -8,6 +8,7 @@ import pytest
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
 from sosdyn.report import figures as F
+from sosdyn.report.figures.poses import drift_figure
 
 GOAL = np.zeros(2)
 
@@ -210,3 +211,14 @@ def test_saved_svg_is_reproducible(tmp_path, results):
     a = F.save_figure(F.accuracy_bars(results["accuracy"]), tmp_path / "a")["svg"].read_bytes()
     b = F.save_figure(F.accuracy_bars(results["accuracy"]), tmp_path / "b")["svg"].read_bytes()
     assert a == b
+
+
+def test_the_drift_figure_draws_each_training_demo_over_copy_and_the_model_at_the_end():
+    """Two test demos, three training demos: demo k's point is mean_t DTW(k, t) / mean copy."""
+    task = {"task": "toy", "train_pos": [[4.0, 2.0, 1.0], [6.0, 4.0, 1.0]], "train_ori": [[3.0, 3.0, 3.0], [1.0, 2.0, 3.0]],
+            "copy_pos": 1.0, "copy_ori": 2.0, "pos_ratio": 1.2, "ori_ratio": 0.9}
+    fig = drift_figure([task], 1.5)
+    pos, ori = fig.axes[:2]
+    np.testing.assert_allclose(pos.lines[0].get_ydata(), [5.0, 3.0, 1.0])
+    np.testing.assert_allclose(ori.lines[0].get_ydata(), [1.0, 1.25, 1.5])
+    assert pos.lines[1].get_xydata().tolist() == [[3.5, 1.2]] and ori.lines[1].get_xydata().tolist() == [[3.5, 0.9]]

@@ -39,7 +39,7 @@ from scipy.spatial.transform import Rotation
 
 from sosdyn.errors import DemonstrationError, InputError
 from .columns import TIME_UNITS, check_duration, check_time_units, time_header_names, time_unit
-from .demonstrations import Demonstration, Demonstrations, time_problem
+from .demonstrations import Demonstration, Demonstrations, merge_repeated_stamps, time_problem
 from .preprocess import blend_shift
 
 POSITION_COLUMNS = ("x", "y", "z")
@@ -179,7 +179,10 @@ def is_pose_file(path) -> bool:
 
 def read_pose_csv(path, dt: float | None = None, time_units: str | None = None) -> tuple[PoseDemonstration, list[str]]:
     """One pose demonstration from a CSV with a header (:func:`pose_columns`); without a time column
-    the samples are ``dt`` s apart. Returns it and notes (order read, renormalisation, flips)."""
+    the samples are ``dt`` s apart; samples sharing a time stamp become one (positions: their mean;
+    quaternions, made sign-continuous first: their normalised mean, the chordal mean of nearby rotations),
+    as :func:`~.demonstrations.merge_repeated_stamps` does for position files. Returns it and notes (order
+    read, renormalisation, flips, merged stamps)."""
     path = Path(path)
     rows = _csv_rows(path)
     if len(rows) < 2:
@@ -201,12 +204,19 @@ def read_pose_csv(path, dt: float | None = None, time_units: str | None = None) 
         check_duration(t, unit, str(path), f"time column {column!r}")
     quat, dev = unit_quaternions(data[:, q_i], str(path))
     quat, flips = sign_continuous(quat)
+    t, merged, dropped, averaged = merge_repeated_stamps(t, np.column_stack([data[:, pos_i], quat]))
+    pos, quat = merged[:, :len(pos_i)], merged[:, len(pos_i):]
+    quat /= np.linalg.norm(quat, axis=1, keepdims=True)      # a stamp's mean quaternion (sign-continuous rows)
     notes = [f"{path.name}: quaternion read {order} (w x y z from columns {[rows[0][i] for i in q_i]})"]
+    if dropped or averaged:
+        notes.append(f"{path.name}: repeated time stamps: one sample per stamp kept, {dropped} identical row(s) "
+                     f"dropped and {averaged} differing row(s) averaged into their stamp's sample (quaternions: "
+                     "their normalised mean)")
     if dev > NORM_REPORT:
         notes.append(f"{path.name}: quaternions renormalised (largest | |q| - 1 | = {dev:.2e})")
     if flips:
         notes.append(f"{path.name}: {flips} samples sign-flipped for continuity (q and -q are one rotation)")
-    return PoseDemonstration(t, data[:, pos_i], quat, str(path)), notes
+    return PoseDemonstration(t, pos, quat, str(path)), notes
 
 
 def load_pose_demos(paths, units: str = "", name: str = "", dt: float | None = None,

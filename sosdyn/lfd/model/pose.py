@@ -133,10 +133,10 @@ class PoseCDSP(MotionModel):
     def prepare(cls, demos, smooth_window="auto", trim_rest=True, align="auto", max_shift=None):
         """(demos preprocessed, notes, []): :func:`~sosdyn.lfd.data.pose_preprocess.preprocess_poses` on both
         parts (the end orientations are left to :meth:`fit`, which aligns them within ``goal_tol_deg``), and
-        what reading changed (renormalised quaternions, sign flips)."""
+        what reading changed (renormalised quaternions, sign flips, merged time stamps)."""
         result, report = preprocess_poses(demos, smooth_window=smooth_window, trim_rest=trim_rest, align=align,
                                           max_shift=max_shift, goal_tol_deg=None)
-        read = [f"read: {n}" for n in demos.notes if "renormalised" in n or "sign-flipped" in n]
+        read = [f"read: {n}" for n in demos.notes if any(k in n for k in ("renormalised", "sign-flipped", "repeated"))]
         return result, read + [f"preprocess: {line}" for line in report.lines(demos.units)], []
 
     def __repr__(self) -> str:
@@ -310,11 +310,12 @@ class PoseCDSP(MotionModel):
         x, q = self._pose(x0, "x0")
         gx, gq = self._goal(goal)
         try:
-            events = sorted([(float(t), 0, np.asarray(d, dtype=float)) for t, d in perturbations] +
-                            [(float(t), 1, np.concatenate(self._pose(g, "goal change"))) for t, g in goal_changes],
-                            key=lambda e: e[:2])
+            pushes = [(float(t), np.asarray(d, dtype=float)) for t, d in perturbations]
+            goals = [(float(t), g) for t, g in goal_changes]
         except (TypeError, ValueError):
             raise InputError("pushes and goal_changes must be lists of pairs (time, vector).") from None
+        events = sorted([(t, 0, d) for t, d in pushes] +
+                        [(t, 1, np.concatenate(self._pose(g, "goal change"))) for t, g in goals], key=lambda e: e[:2])
         if any(not 0 <= e[0] < duration for e in events) or \
                 any(k == 0 and (d.shape != (6,) or not np.isfinite(d).all()) for _, k, d in events):
             raise InputError(f"events must lie in [0, duration = {duration}) and pushes be 6 finite numbers "

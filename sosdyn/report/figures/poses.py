@@ -98,3 +98,30 @@ def detour_figure(title, cases, diag: float, units: str = ""):
     right.set_title(f"largest: {worst:.3g}{' ' + units if units else ''} (dotted: the 1 % target)", fontsize=9)
     fig.suptitle(f"{title}: orientation-only starts (solid) and goal turns after arrival (dashed)")
     return fig
+
+
+@styled
+def drift_figure(tasks, target: float):
+    """Each recorded training demo as a reproduction of the test demos, in recording order: its mean DTW
+    over the test demos divided by the mean of the nearest copy (left: position DTWD, right: orientation
+    DTW), one line per task, the model's ratio drawn at the right end, ``target`` dotted. ``tasks``: dicts
+    with task, train_pos / train_ori ((tests, demos) DTWs), copy_pos / copy_ori and pos_ratio / ori_ratio."""
+    fig = new_figure(9.0, 3.2)
+    axes = fig.subplots(1, 2, sharey=True)
+    for ax, part, name in zip(axes, ("pos", "ori"), ("position DTWD", "orientation DTW")):
+        for i, t in enumerate(tasks):
+            each = np.mean(t[f"train_{part}"], axis=0) / t[f"copy_{part}"]
+            color = ROLLOUT_COLORS[i % len(ROLLOUT_COLORS)]
+            ax.plot(np.arange(len(each)), each, "o-", color=color, lw=1.2, ms=4, label=t["task"])
+            ax.plot(len(each) + 0.5, t[f"{part}_ratio"], "*", color=color, ms=11)
+        ax.axhline(target, color="0.4", ls=":", lw=1)
+        ax.axhline(1.0, color="0.7", lw=0.8)
+        n = max(len(np.mean(t[f"train_{part}"], axis=0)) for t in tasks)
+        ax.set_xticks(list(range(n)) + [n + 0.5], [str(k + 1) for k in range(n)] + ["model"])
+        ax.set_xlabel("training demo, in recording order")
+        ax.set_title(f"{name} / copy", fontsize=9)
+    axes[0].set_ylabel("mean over the test demos / copy")
+    axes[0].set_ylim(0, None)
+    axes[1].legend(fontsize=7, loc="upper right")
+    fig.suptitle("each training demo replayed against the (later) test demos; the star: the model")
+    return fig

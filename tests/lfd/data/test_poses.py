@@ -38,6 +38,21 @@ def test_scalar_last_file_reads_the_same_rotation(tmp_path):
                                                           for n in notes)
 
 
+def test_repeated_stamps_become_one_sample_with_the_mean_pose(tmp_path):
+    """A robot log repeats stamps: rows (t, x, q) sharing t become one; x the mean, q the normalised mean of the
+    sign-continuous rows (here q and -q of 10 deg and 20 deg turns: the 15 deg turn between them, to the
+    chordal mean's accuracy); identical repeats are dropped; a note says so."""
+    turn = [Rotation.from_rotvec([0.0, 0.0, np.deg2rad(a)]).as_quat(scalar_first=True) for a in (0.0, 10.0, 20.0, 30.0)]
+    rows = [[0.0, 0.0, 0, 0, *turn[0]], [0.1, 1.0, 0, 0, *turn[1]], [0.1, 3.0, 0, 0, *(-turn[2])],
+            [0.2, 4.0, 0, 0, *turn[3]], [0.2, 4.0, 0, 0, *turn[3]], [0.3, 5.0, 0, 0, *turn[3]]]
+    demo, notes = read_pose_csv(write_csv(tmp_path / "log.csv", ["t", "x", "y", "z", "qw", "qx", "qy", "qz"], rows))
+    np.testing.assert_array_equal(demo.t, [0.0, 0.1, 0.2, 0.3])
+    np.testing.assert_allclose(demo.pos[:, 0], [0.0, 2.0, 4.0, 5.0])
+    angle = np.rad2deg(Rotation.from_quat(demo.quat, scalar_first=True).as_rotvec()[:, 2])
+    np.testing.assert_allclose(angle, [0.0, 15.0, 30.0, 30.0], atol=1e-9)    # symmetric pair: exactly between
+    assert any("1 identical row(s) dropped and 1 differing row(s) averaged" in n for n in notes)
+
+
 def test_non_unit_rows_refused(tmp_path):
     rows = [[0.1 * k, k, 0, 0, 2.0, 0, 0, 0] for k in range(12)]
     with pytest.raises(DemonstrationError, match="norm 2"):

@@ -145,6 +145,9 @@ def test_bad_poses_refused(fitted):
             fitted.rollout(np.concatenate([x, q]) if len(q) == 4 else [0] * 6, 1.0)
         with pytest.raises(InputError):
             step(x, Q_GOAL, goal=np.concatenate([x, q]) if len(q) == 4 else np.zeros(6))
+        if len(q) == 4:                              # a goal change's quaternion: its own message
+            with pytest.raises(InputError, match="goal change(: the quaternion| must be 7 finite numbers)"):
+                fitted.rollout(np.concatenate([x, Q_GOAL]), 1.0, goal_changes=[(0.5, np.concatenate([x, q]))])
     with pytest.raises(InputError):
         step([np.nan, 0, 0], Q_GOAL)
 
