@@ -35,7 +35,7 @@ from .conic import affine_cones, check_data, cvxpy_block_vars
 from .csc import csc, vstack
 from .gram import svec_pairs, svec_to_matrix
 from .kkt import factor_entries
-from .native import native_stderr
+from .native import INTERRUPTS, native_stderr
 from .objective import is_cvxpy
 from .solution import Solution
 
@@ -286,7 +286,7 @@ def solve_program(program, solver, backend, scale, verbose, build=0.0, **setting
         except InputError:
             raise
         except BaseException as exc:   # a solver crash (Clarabel's Rust panics too) becomes a status
-            if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
+            if isinstance(exc, INTERRUPTS):
                 raise
             crashed = True
             status, x, raw, seconds, info = ("solver_error", np.full(data.n, np.nan),

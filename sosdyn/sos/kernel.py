@@ -50,7 +50,7 @@ from .conic import positions
 from .gram import SQRT2, exact, exact_solution, float_down, proven_min_eig, svec_pairs, svec_to_matrix
 from .objective import affine_rows
 from .identity import identity_of
-from .native import native_stderr
+from .native import INTERRUPTS, native_stderr
 from .rigorous import Bound, _exps_in, constraint_map
 
 KERNEL_TOLS = (1e-9, 1e-7, 1e-5)   # eigenvalues below this x the block's largest are its kernel, tried in turn
@@ -177,7 +177,7 @@ def face_solve(rows, ge_rows, faces, start, gain) -> dict | None:
             result = clarabel.DefaultSolver(sp.csc_matrix((len(col), len(col))), q, sp.csc_matrix(np.vstack([A, -G, psd])),
                                             np.concatenate([b, -h, np.zeros(psd.shape[0])]), cones, opts).solve()
         except BaseException as exc:      # a Rust panic (no answer, like a failed solve)
-            if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
+            if isinstance(exc, INTERRUPTS):
                 raise
             return None
     if str(result.status) not in ("Solved", "AlmostSolved") or not np.isfinite(result.x).all():

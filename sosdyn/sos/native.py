@@ -9,6 +9,11 @@ import tempfile
 from contextlib import contextmanager
 
 
+#: what a ``except BaseException`` around a native call re-raises: the user's or the interpreter's
+#: stop, not a crash of the solver (a Rust panic arrives as a BaseException of its own)
+INTERRUPTS = (KeyboardInterrupt, SystemExit, GeneratorExit)
+
+
 class Captured:
     """The text a native library wrote to file descriptor 2 inside :func:`native_stderr`."""
 
